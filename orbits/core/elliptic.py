@@ -1,0 +1,356 @@
+"""Elliptic integrals and Jacobi elliptic functions as numba kernels.
+
+Every routine here takes the *complementary* modulus ``kc = sqrt(1 - m)``
+(or ``kc**2``) instead of the parameter ``m``.  Near the separatrix of the
+rigid top ``1 - m`` is the small, physically meaningful quantity; callers
+compute it in factored form and pass it in, so nothing here ever forms
+``1 - m`` by subtraction.
+
+Algorithms (implemented from the published descriptions):
+
+* ``cel`` -- R. Bulirsch, "Numerical calculation of elliptic integrals and
+  elliptic functions. III", Numer. Math. 13, 305-315 (1969): the general
+  complete integral
+
+  .. math:: \\mathrm{cel}(k_c, p, a, b) = \\int_0^{\\pi/2}
+            \\frac{a\\cos^2\\varphi + b\\sin^2\\varphi}
+                 {(\\cos^2\\varphi + p\\sin^2\\varphi)
+                  \\sqrt{\\cos^2\\varphi + k_c^2\\sin^2\\varphi}}\\,d\\varphi
+
+  evaluated by a quadratically convergent Landen/AGM-type iteration.
+  ``K(m) = cel(kc, 1, 1, 1)`` and ``Pi(n|m) = cel(kc, 1-n, 1, 1)``.
+* ``carlson_rf``, ``carlson_rj``, ``carlson_rc`` -- B. C. Carlson, "Numerical
+  computation of real or complex elliptic integrals", Numer. Algorithms 10,
+  13-26 (1995); DLMF 19.36.1-19.36.2.
+* ``jacobi_amplitude`` -- descending Landen transformation (arithmetic-
+  geometric mean), Abramowitz & Stegun 16.4; DLMF 22.20(ii).
+"""
+
+import math
+
+import numpy as np
+from numba import njit
+
+HALF_PI = 0.5 * math.pi
+
+# cel: relative AGM gap at which to stop.  The iteration converges
+# quadratically, so a gap of 1e-9 leaves a relative error near 1e-18.
+_CEL_GAP = 1.0e-9
+# Carlson duplication: stop when 4**-m * Q < |A|; with r = 1e-16 the
+# truncated Taylor series of DLMF 19.36.1-2 has error below 1e-16.
+_CARLSON_R = 1.0e-16
+_AGM_GAP = 1.0e-17
+_MAX_AGM = 40
+
+
+@njit(cache=True, nogil=True)
+def cel(kc, p, a, b):
+    """Bulirsch's general complete elliptic integral ``cel(kc, p, a, b)``.
+
+    Parameters
+    ----------
+    kc : float
+        Complementary modulus, ``kc**2 = 1 - m``; must be nonzero.
+    p : float
+        Must be positive (all uses in ``orbits`` are; the Cauchy
+        principal-value case ``p < 0`` is not needed here).
+    a, b : float
+        Coefficients of ``cos**2`` and ``sin**2`` in the numerator.
+
+    Returns
+    -------
+    float
+        The integral; NaN when ``kc == 0`` (logarithmic divergence) or
+        ``p <= 0``.
+
+    Notes
+    -----
+    Bulirsch (1969), Numer. Math. 13, 305.  Each pass applies the Landen
+    transformation that maps ``(kc, p, a, b)`` to an equivalent integral
+    with ``kc -> 2 sqrt(kc) / (1 + kc)``; the integral is invariant, and
+    once the AGM pair has met the integrand is elementary.
+    """
+    if kc == 0.0 or not (p > 0.0):
+        return np.nan
+    kc = abs(kc)
+    gm = 1.0          # running arithmetic mean of the AGM pair (1, kc)
+    e = kc            # product of the pair, kc * gm
+    root_p = math.sqrt(p)
+    b = b / root_p
+    for _ in range(_MAX_AGM):
+        inv_root_p = 1.0 / root_p
+        f = a
+        a = a + b * inv_root_p
+        g = e * inv_root_p
+        b = 2.0 * (b + f * g)
+        root_p = g + root_p
+        previous = gm
+        gm = kc + gm
+        if abs(previous - kc) <= previous * _CEL_GAP:
+            break
+        kc = 2.0 * math.sqrt(e)
+        e = kc * gm
+    return HALF_PI * (b + a * gm) / (gm * (gm + root_p))
+
+
+@njit(cache=True, nogil=True)
+def cel_pair(kc, p, a1, b1, a2, b2):
+    """Two ``cel`` integrals sharing ``kc`` and ``p`` in one AGM loop.
+
+    ``cel`` is linear in ``(a, b)`` and the iteration for ``kc`` and ``p``
+    does not depend on them, so both integrals ride the same loop.  Used to
+    get ``K`` (``a = 1, b = p``) together with ``I1 K + (I3 - I1) Pi``.
+    """
+    if kc == 0.0 or not (p > 0.0):
+        return np.nan, np.nan
+    kc = abs(kc)
+    gm = 1.0
+    e = kc
+    root_p = math.sqrt(p)
+    b1 = b1 / root_p
+    b2 = b2 / root_p
+    for _ in range(_MAX_AGM):
+        inv_root_p = 1.0 / root_p
+        f1 = a1
+        f2 = a2
+        a1 = a1 + b1 * inv_root_p
+        a2 = a2 + b2 * inv_root_p
+        g = e * inv_root_p
+        b1 = 2.0 * (b1 + f1 * g)
+        b2 = 2.0 * (b2 + f2 * g)
+        root_p = g + root_p
+        previous = gm
+        gm = kc + gm
+        if abs(previous - kc) <= previous * _CEL_GAP:
+            break
+        kc = 2.0 * math.sqrt(e)
+        e = kc * gm
+    scale = HALF_PI / (gm * (gm + root_p))
+    return (b1 + a1 * gm) * scale, (b2 + a2 * gm) * scale
+
+
+@njit(cache=True, nogil=True)
+def ellipk_kc(kc):
+    """Complete elliptic integral of the first kind, ``K(m)``, from ``kc``.
+
+    ``K = pi / (2 AGM(1, kc))`` (DLMF 19.8.5).
+    """
+    a = 1.0
+    g = abs(kc)
+    if g == 0.0:
+        return np.inf
+    for _ in range(_MAX_AGM):
+        if abs(a - g) <= _AGM_GAP * a:
+            break
+        a, g = 0.5 * (a + g), math.sqrt(a * g)
+    return math.pi / (a + g)
+
+
+@njit(cache=True, nogil=True)
+def carlson_rc(x, y):
+    """Carlson's degenerate integral ``R_C(x, y)`` for ``x >= 0, y > 0``.
+
+    Closed forms, DLMF 19.2.17-19.2.18 (with a series near ``x = y``).
+    """
+    if x == y:
+        return 1.0 / math.sqrt(x)
+    if y > x:
+        d = y - x
+        t = math.sqrt(d / x) if x > 0.0 else np.inf
+        if t < 1.0e-4:
+            # atan(t)/t series avoids 0/0 when x ~ y
+            t2 = t * t
+            return (1.0 - t2 / 3.0 + t2 * t2 / 5.0) / math.sqrt(x)
+        return math.atan(t) / math.sqrt(d)
+    d = x - y
+    t = math.sqrt(d / x)
+    if t < 1.0e-4:
+        t2 = t * t
+        return (1.0 + t2 / 3.0 + t2 * t2 / 5.0) / math.sqrt(x)
+    if t < 0.5:
+        return math.atanh(t) / math.sqrt(d)
+    # atanh(t) = ln((sqrt x + sqrt d) / sqrt y): no cancellation as t -> 1
+    return math.log((math.sqrt(x) + math.sqrt(d)) / math.sqrt(y)) / math.sqrt(d)
+
+
+@njit(cache=True, nogil=True)
+def _rc_unit(e):
+    """``R_C(1, 1 + e)`` for ``e > -1``, taking ``e`` itself.
+
+    In the R_J duplication sum ``e`` is often tiny; forming ``1 + e`` first
+    would throw away its digits.  Series ``sum (-e)^k / (2k + 1)`` near 0.
+    """
+    if abs(e) < 1.0e-3:
+        return 1.0 + e * (-1.0 / 3.0 + e * (1.0 / 5.0 + e * (-1.0 / 7.0 + e * (
+            1.0 / 9.0 + e * (-1.0 / 11.0 + e / 13.0)))))
+    if e > 0.0:
+        t = math.sqrt(e)
+        return math.atan(t) / t
+    t = math.sqrt(-e)
+    if t < 0.5:
+        return math.atanh(t) / t
+    return 0.5 * math.log((1.0 + t) * (1.0 + t) / (1.0 + e)) / t
+
+
+@njit(cache=True, nogil=True)
+def carlson_rf(x, y, z):
+    """Carlson's symmetric integral ``R_F(x, y, z)``, at most one argument 0.
+
+    Duplication theorem with the fifth-order series of DLMF 19.36.1.
+    """
+    x0 = x
+    y0 = y
+    a0 = (x + y + z) / 3.0
+    q = max(abs(a0 - x), abs(a0 - y), abs(a0 - z)) / _CARLSON_R ** (1.0 / 6.0)
+    a = a0
+    scale = 1.0  # 4**-m
+    for _ in range(60):
+        if scale * q < abs(a):
+            break
+        sx = math.sqrt(x)
+        sy = math.sqrt(y)
+        sz = math.sqrt(z)
+        lam = sx * sy + sx * sz + sy * sz
+        x = 0.25 * (x + lam)
+        y = 0.25 * (y + lam)
+        z = 0.25 * (z + lam)
+        a = 0.25 * (a + lam)
+        scale *= 0.25
+    big_x = (a0 - x0) / a * scale
+    big_y = (a0 - y0) / a * scale
+    big_z = -(big_x + big_y)
+    e2 = big_x * big_y - big_z * big_z
+    e3 = big_x * big_y * big_z
+    series = (1.0 - e2 / 10.0 + e3 / 14.0 + e2 * e2 / 24.0
+              - 3.0 * e2 * e3 / 44.0)
+    return series / math.sqrt(a)
+
+
+@njit(cache=True, nogil=True)
+def carlson_rj(x, y, z, p):
+    """Carlson's symmetric integral ``R_J(x, y, z, p)`` for ``p > 0``.
+
+    ``x, y, z >= 0`` with at most one zero.  Duplication theorem with the
+    series of DLMF 19.36.2; the ``R_C`` terms of the duplication sum are
+    evaluated in closed form.
+    """
+    x0 = x
+    y0 = y
+    z0 = z
+    a0 = (x + y + z + p + p) / 5.0
+    delta = (p - x) * (p - y) * (p - z)
+    q = max(abs(a0 - x), abs(a0 - y), abs(a0 - z), abs(a0 - p)) \
+        / _CARLSON_R ** (1.0 / 6.0)
+    a = a0
+    scale = 1.0          # 4**-m
+    total = 0.0
+    for _ in range(60):
+        if scale * q < abs(a):
+            break
+        sx = math.sqrt(x)
+        sy = math.sqrt(y)
+        sz = math.sqrt(z)
+        sp = math.sqrt(p)
+        lam = sx * sy + sx * sz + sy * sz
+        d = (sp + sx) * (sp + sy) * (sp + sz)
+        e = delta * scale * scale * scale / (d * d)
+        total += scale * _rc_unit(e) / d
+        x = 0.25 * (x + lam)
+        y = 0.25 * (y + lam)
+        z = 0.25 * (z + lam)
+        p = 0.25 * (p + lam)
+        a = 0.25 * (a + lam)
+        scale *= 0.25
+    big_x = (a0 - x0) / a * scale
+    big_y = (a0 - y0) / a * scale
+    big_z = (a0 - z0) / a * scale
+    big_p = -(big_x + big_y + big_z) / 2.0
+    e2 = big_x * big_y + big_x * big_z + big_y * big_z - 3.0 * big_p * big_p
+    e3 = big_x * big_y * big_z + 2.0 * e2 * big_p + 4.0 * big_p ** 3
+    e4 = (2.0 * big_x * big_y * big_z + e2 * big_p + 3.0 * big_p ** 3) * big_p
+    e5 = big_x * big_y * big_z * big_p * big_p
+    series = (1.0 - 3.0 * e2 / 14.0 + e3 / 6.0 + 9.0 * e2 * e2 / 88.0
+              - 3.0 * e4 / 22.0 - 9.0 * e2 * e3 / 52.0 + 3.0 * e5 / 26.0)
+    return scale * series / (a * math.sqrt(a)) + 6.0 * total
+
+
+@njit(cache=True, nogil=True)
+def ellippi_complete_carlson(n, kc):
+    """Complete ``Pi(n|m)`` from Carlson's forms, for ``n < 1``.
+
+    ``Pi = R_F(0, kc^2, 1) + (n/3) R_J(0, kc^2, 1, 1 - n)`` (DLMF 19.25.2).
+    Independent of ``cel``; the exact-motion layer uses it so that the
+    check of ``phi(T)`` against the closed form compares two algorithms.
+    """
+    k2 = kc * kc
+    return carlson_rf(0.0, k2, 1.0) + n / 3.0 * carlson_rj(0.0, k2, 1.0, 1.0 - n)
+
+
+@njit(cache=True, nogil=True)
+def ellipf_kc(phi, kc):
+    """Incomplete ``F(phi|m)`` for any real ``phi``, from ``kc``.
+
+    Reduced to ``|phi| <= pi/2`` with ``F(phi + j pi) = 2 j K + F(phi)``,
+    then ``F = s R_F(c^2, c^2 + kc^2 s^2, 1)`` (DLMF 19.25.5), written so
+    that ``1 - m s^2`` is never formed by subtraction.
+    """
+    j = math.floor(phi / math.pi + 0.5)
+    r = phi - j * math.pi
+    s = math.sin(r)
+    c = math.cos(r)
+    value = s * carlson_rf(c * c, c * c + kc * kc * s * s, 1.0)
+    if j != 0.0:
+        value += 2.0 * j * ellipk_kc(kc)
+    return value
+
+
+@njit(cache=True, nogil=True)
+def jacobi_amplitude(u, kc):
+    """Jacobi amplitude and ``sn, cn, dn`` of real ``u`` with modulus ``kc``.
+
+    Parameters
+    ----------
+    u : float
+        Argument.
+    kc : float
+        Complementary modulus, ``kc**2 = 1 - m``, ``0 < kc <= 1``.
+
+    Returns
+    -------
+    am, sn, cn, dn, j, r : float
+        ``am(u|m)``; the three functions; the half-period index ``j`` and
+        the reduced argument ``r = u - 2 j K`` in ``[-K, K]`` (so that
+        ``am(u) = j pi + am(r)``).
+
+    Notes
+    -----
+    ``u`` is first reduced by the half period ``2K`` so that long time
+    grids keep full accuracy; ``am(r)`` then follows from the descending
+    Landen (AGM) recurrence, A&S 16.4.  ``dn`` is formed as
+    ``sqrt(cn^2 + kc^2 sn^2)``, which keeps its relative accuracy when
+    ``m -> 1`` and ``dn`` is small.
+    """
+    ka = np.empty(_MAX_AGM + 1)
+    kcn = np.empty(_MAX_AGM + 1)   # c_n of the AGM, = (a_{n-1} - b_{n-1}) / 2
+    a = 1.0
+    b = kc
+    ka[0] = a
+    kcn[0] = math.sqrt((1.0 - kc) * (1.0 + kc))
+    n = 0
+    while n < _MAX_AGM and abs(kcn[n]) > _AGM_GAP * a:
+        c_prev = kcn[n]
+        a, b = 0.5 * (a + b), math.sqrt(a * b)
+        n += 1
+        ka[n] = a
+        kcn[n] = c_prev * c_prev / (4.0 * a)   # = (a_{n-1} - b_{n-1}) / 2, stably
+    quarter = HALF_PI / a                     # K(m)
+    j = math.floor(u / (2.0 * quarter) + 0.5)
+    r = u - 2.0 * j * quarter
+    phi = (2.0 ** n) * a * r
+    for level in range(n, 0, -1):
+        phi = 0.5 * (phi + math.asin(kcn[level] / ka[level] * math.sin(phi)))
+    s = math.sin(phi)
+    c = math.cos(phi)
+    dn = math.sqrt(c * c + kc * kc * s * s)
+    sign = 1.0 - 2.0 * (j % 2.0 != 0.0)
+    return j * math.pi + phi, sign * s, sign * c, dn, j, r
