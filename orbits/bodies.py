@@ -1,0 +1,309 @@
+"""Rigid bodies: principal moments of inertia and their constructors.
+
+A :class:`Body` holds its three principal moments sorted ascending,
+``I1 < I2 < I3``, exactly as given (not normalised: the phases do not
+depend on the scale, and normalising would round away the small
+differences of nearly symmetric bodies).  The paper's normalisation
+``|I| = 1`` is available as :attr:`Body.normalized_moments`.
+
+Units: moments in any consistent unit (the paper writes J s^2 so that
+energies come out in J for ``|omega| = 1 rad/s``); constructors from
+lengths assume unit mass.
+"""
+
+import math
+
+import numpy as np
+
+from .errors import NonPhysicalBodyError, SymmetricTopError
+
+# Relative slack for I3 <= I1 + I2: a flat body built in floating point
+# may exceed the bound by a few rounding errors.
+_FLAT_SLACK = 8.0 * np.finfo(float).eps
+
+
+def validate_moments(moments):
+    """Check an array of sorted moments, shape (..., 3); raise on bad rows.
+
+    Parameters
+    ----------
+    moments : ndarray
+        Sorted ascending along the last axis.
+
+    Raises
+    ------
+    NonPhysicalBodyError
+        A moment is NaN, infinite or not positive, or ``I3 > I1 + I2``.
+    SymmetricTopError
+        Two moments are equal.
+    """
+    flat = moments.reshape(-1, 3)
+    bad = ~np.all(np.isfinite(flat), axis=1)
+    if bad.any():
+        raise NonPhysicalBodyError(
+            f"moments {_row(flat, bad)} are not all finite")
+    bad = flat[:, 0] <= 0.0
+    if bad.any():
+        raise NonPhysicalBodyError(
+            f"moments {_row(flat, bad)} must all be positive")
+    excess = flat[:, 2] - (flat[:, 0] + flat[:, 1])
+    bad = excess > _FLAT_SLACK * flat[:, 2]
+    if bad.any():
+        raise NonPhysicalBodyError(
+            f"moments {_row(flat, bad)} violate the triangle inequality "
+            "I3 <= I1 + I2 that every rigid body satisfies")
+    bad = (flat[:, 0] == flat[:, 1]) | (flat[:, 1] == flat[:, 2])
+    if bad.any():
+        raise SymmetricTopError(
+            f"moments {_row(flat, bad)} describe a symmetric top (two equal "
+            "moments): it has no separatrix and its elliptic modulus "
+            "degenerates, so the total-phase formula needs I1 < I2 < I3")
+
+
+def _row(flat, bad):
+    index = int(np.flatnonzero(bad)[0])
+    where = f" (body #{index})" if flat.shape[0] > 1 else ""
+    return "(" + ", ".join(f"{v:.17g}" for v in flat[index]) + ")" + where
+
+
+def as_moments(body_or_moments):
+    """Sorted, validated moments of shape (..., 3) from a Body or array."""
+    if isinstance(body_or_moments, Body):
+        return body_or_moments.moments
+    moments = np.asarray(body_or_moments, dtype=float)
+    if moments.ndim == 0 or moments.shape[-1] != 3:
+        raise NonPhysicalBodyError(
+            f"moments must have shape (..., 3), got {moments.shape}")
+    moments = np.sort(moments, axis=-1)
+    validate_moments(moments)
+    return moments
+
+
+class Body:
+    """An asymmetric rigid body given by its principal moments of inertia.
+
+    Parameters
+    ----------
+    moments : array_like, shape (3,)
+        Principal moments in any order and any positive scale.
+    name : str, optional
+        Label carried into catalogs and figure titles.
+
+    Raises
+    ------
+    NonPhysicalBodyError
+        Moments not finite or not positive, or ``I3 > I1 + I2``.
+    SymmetricTopError
+        Two equal moments.
+
+    Notes
+    -----
+    The moments are kept sorted, ``I1 < I2 < I3`` (the paper's labelling).
+    :attr:`frame` maps the caller's axes to the sorted principal axes with
+    a proper rotation: a vector ``v`` in the caller's frame has principal
+    components ``frame @ v``.  When sorting needs an odd permutation of
+    the caller's axes, the third principal axis is reversed so that the
+    principal frame stays right-handed.
+    """
+
+    def __init__(self, moments, *, name=None, frame=None):
+        given = np.asarray(moments, dtype=float)
+        if given.shape != (3,):
+            raise NonPhysicalBodyError(
+                f"a body needs exactly 3 principal moments, got shape "
+                f"{given.shape}")
+        order = np.argsort(given, kind="stable")
+        sorted_moments = given[order]
+        validate_moments(sorted_moments)
+        if frame is None:
+            frame = np.zeros((3, 3))
+            frame[np.arange(3), order] = 1.0
+            if np.linalg.det(frame) < 0.0:
+                frame[2] *= -1.0
+        else:
+            frame = np.asarray(frame, dtype=float)[order]
+            if np.linalg.det(frame) < 0.0:
+                frame[2] *= -1.0
+        self._moments = sorted_moments
+        self._moments.setflags(write=False)
+        self._permutation = tuple(int(i) for i in order)
+        self._frame = frame
+        self._frame.setflags(write=False)
+        self.name = name
+
+    # -- constructors --------------------------------------------------
+    @classmethod
+    def t_handle(cls, l1, l2, w, *, name=None):
+        """The paper's T-shaped handle of unit mass (eqn:IsforT).
+
+        Parameters
+        ----------
+        l1 : float
+            Length of the cross piece (along the body x axis).
+        l2 : float
+            Length of the shaft (along y), attached at the middle of the
+            cross piece.
+        w : float
+            Side of the square cross-section of both bars.
+
+        Notes
+        -----
+        eqn:IsforT gives the moments about the cross-piece axis (x), the
+        shaft axis (y) and the normal to the plane of the T (z); a short
+        cross piece reorders them, which :class:`Body` handles by sorting
+        (the footnote to eqn:ellipsoid).
+        """
+        for label, value in (("l1", l1), ("l2", l2), ("w", w)):
+            if not (math.isfinite(value) and value > 0.0):
+                raise NonPhysicalBodyError(
+                    f"T-handle {label} must be a positive length, got {value}")
+        total = l1 + l2
+        ix = (6 * l1 * l2 * w**2 + 2 * l1**2 * w**2 + l2**2 * w * (6 * l1 + w)
+              + l2**4 + 4 * l1 * l2**3) / (12 * total**2)
+        iy = ((l1 + 2 * l2) * w**2 + l1**3) / (12 * total)
+        iz = (l1 * l2 * (l1**2 + 5 * w**2 + 4 * l2**2) + l1**2 * (l1**2 + w**2)
+              + l2**2 * w * (6 * l1 + w) + l2**4) / (12 * total**2)
+        return cls((ix, iy, iz), name=name)
+
+    @classmethod
+    def ellipsoid(cls, b, c, *, name=None):
+        """The paper's unit-norm body from two ellipsoid semi-axes (eqn:isforellipsoid).
+
+        ``I1 = b^2 + c^2``, ``I2 = (c^2 - b^2 + S)/2``,
+        ``I3 = (b^2 - c^2 + S)/2`` with ``S = sqrt(2 - 3b^4 - 2b^2c^2 - 3c^4)``,
+        so that ``|I| = 1``; the third semi-axis is
+        ``a = sqrt((S - b^2 - c^2)/2)``.  Needs ``0 < c < b < a``.
+        """
+        for label, value in (("b", b), ("c", c)):
+            if not (math.isfinite(value) and value >= 0.0):
+                raise NonPhysicalBodyError(
+                    f"ellipsoid semi-axis {label} must be finite and "
+                    f">= 0, got {value}")
+        root_sq = 2.0 - 3.0 * b**4 - 2.0 * b**2 * c**2 - 3.0 * c**4
+        if root_sq < 0.0:
+            raise NonPhysicalBodyError(
+                f"ellipsoid semi-axes b={b}, c={c} are too large for a "
+                "unit-norm moment of inertia (2 - 3b^4 - 2b^2c^2 - 3c^4 < 0)")
+        root = math.sqrt(root_sq)
+        if root - b * b - c * c <= 0.0:
+            raise NonPhysicalBodyError(
+                f"ellipsoid semi-axes b={b}, c={c} leave no real third "
+                "semi-axis a (need sqrt(2-3b^4-2b^2c^2-3c^4) > b^2 + c^2)")
+        moments = (b * b + c * c, 0.5 * (c * c - b * b + root),
+                   0.5 * (b * b - c * c + root))
+        return cls(moments, name=name)
+
+    @classmethod
+    def from_inertia_tensor(cls, tensor, *, name=None):
+        """Body from a symmetric 3x3 inertia tensor in the caller's frame.
+
+        The principal axes (eigenvectors) are kept in :attr:`frame`.
+
+        Raises
+        ------
+        NonPhysicalBodyError
+            Not a finite symmetric 3x3 matrix, or its eigenvalues are not
+            the moments of a rigid body.
+        """
+        tensor = np.asarray(tensor, dtype=float)
+        if tensor.shape != (3, 3) or not np.all(np.isfinite(tensor)):
+            raise NonPhysicalBodyError(
+                "an inertia tensor must be a finite 3x3 matrix")
+        scale = np.max(np.abs(tensor))
+        if not np.allclose(tensor, tensor.T, rtol=0.0, atol=1e-12 * scale):
+            raise NonPhysicalBodyError("an inertia tensor must be symmetric")
+        values, vectors = np.linalg.eigh(0.5 * (tensor + tensor.T))
+        return cls(values, name=name, frame=vectors.T)
+
+    @classmethod
+    def from_semi_axes(cls, a, b, c, *, name=None):
+        """Uniform solid ellipsoid of unit mass with semi-axes a, b, c.
+
+        Moments about the a, b, c axes are ``(b^2+c^2)/5``, ``(a^2+c^2)/5``
+        and ``(a^2+b^2)/5`` (caller's axes along a, b, c).
+        """
+        for label, value in (("a", a), ("b", b), ("c", c)):
+            if not (math.isfinite(value) and value >= 0.0):
+                raise NonPhysicalBodyError(
+                    f"semi-axis {label} must be finite and >= 0, got {value}")
+        a2, b2, c2 = a * a, b * b, c * c
+        return cls(((b2 + c2) / 5.0, (a2 + c2) / 5.0, (a2 + b2) / 5.0),
+                   name=name)
+
+    @classmethod
+    def preset(cls, name):
+        """A named body: ``"t-handle"`` (8, 4, 1) or ``"fig6"``.
+
+        ``fig6`` is the paper's Fig. 6 body, I = (0.26, 0.55, 0.793662).
+        """
+        try:
+            factory = PRESETS[name]
+        except KeyError:
+            known = ", ".join(sorted(PRESETS))
+            raise NonPhysicalBodyError(
+                f"unknown preset {name!r}; known presets: {known}") from None
+        return factory()
+
+    # -- properties ----------------------------------------------------
+    @property
+    def moments(self):
+        """Principal moments ``(I1, I2, I3)``, ascending, as given."""
+        return self._moments
+
+    @property
+    def normalized_moments(self):
+        """Moments scaled to ``|I| = 1`` (the paper's convention)."""
+        return self._moments / np.linalg.norm(self._moments)
+
+    @property
+    def permutation(self):
+        """Caller's axis index of each sorted moment: ``I_k = given[permutation[k]]``."""
+        return self._permutation
+
+    @property
+    def frame(self):
+        """Proper rotation from the caller's axes to the principal axes."""
+        return self._frame
+
+    @property
+    def is_flat(self):
+        """True when ``I3 = I1 + I2`` to rounding (a lamina)."""
+        i1, i2, i3 = self._moments
+        return abs(i3 - i1 - i2) <= _FLAT_SLACK * i3
+
+    def equivalent_ellipsoid(self):
+        """Semi-axes (a, b, c) of the unit-mass solid ellipsoid with these moments.
+
+        ``a^2 = 5 (I2 + I3 - I1)/2`` (along the I1 axis), and cyclically;
+        ``a >= b >= c``.  A flat body gives ``c = 0``.  The moments are
+        used as given (not normalised), e.g. the unit-mass T-handle
+        (8, 4, 1) gives (4.23281, 3.07318, 0.645497) (Fig. 1 caption).
+        """
+        i1, i2, i3 = self._moments
+        squares = 2.5 * np.array([i2 + i3 - i1, i1 + i3 - i2, i1 + i2 - i3])
+        return tuple(float(v) for v in np.sqrt(np.clip(squares, 0.0, None)))
+
+    def critical_angle(self, phi=0.0):
+        """Polar angle of the separatrix spin, radians; see :func:`orbits.critical_angle`."""
+        from .phases import critical_angle
+        return critical_angle(self, phi)
+
+    def __repr__(self):
+        label = f", name={self.name!r}" if self.name else ""
+        values = ", ".join(f"{v:.17g}" for v in self._moments)
+        return f"Body(({values}){label})"
+
+    def __eq__(self, other):
+        if not isinstance(other, Body):
+            return NotImplemented
+        return (np.array_equal(self._moments, other._moments)
+                and np.array_equal(self._frame, other._frame))
+
+    def __hash__(self):
+        return hash(self._moments.tobytes())
+
+
+PRESETS = {
+    "t-handle": lambda: Body.t_handle(8.0, 4.0, 1.0, name="t-handle"),
+    "fig6": lambda: Body((0.26, 0.55, 0.793662), name="fig6"),
+}

@@ -1,0 +1,183 @@
+"""Bodies: constructors, ordering, frames and validation."""
+
+import math
+
+import numpy as np
+import pytest
+
+from orbits import Body, NonPhysicalBodyError, SymmetricTopError
+
+EPS = np.finfo(float).eps
+
+
+def box_inertia(mass, sides, centre):
+    """Inertia tensor about the origin of a uniform box (parallel-axis theorem)."""
+    a, b, c = sides
+    local = mass / 12.0 * np.diag([b * b + c * c, a * a + c * c, a * a + b * b])
+    r = np.asarray(centre, float)
+    return local + mass * (r @ r * np.eye(3) - np.outer(r, r))
+
+
+def t_handle_by_parts(l1, l2, w):
+    """Independent derivation: cross piece along x, shaft along y, unit mass."""
+    total = l1 + l2
+    bar = (l1 / total, (l1, w, w), (0.0, 0.0, 0.0))
+    shaft = (l2 / total, (w, l2, w), (0.0, 0.5 * w + 0.5 * l2, 0.0))
+    com = sum(m * np.array(c) for m, _, c in (bar, shaft))
+    tensor = sum(box_inertia(m, s, np.array(c) - com) for m, s, c in (bar, shaft))
+    return tensor
+
+
+class TestTHandle:
+    def test_paper_normalised_moments(self):
+        # Fig. 3 caption: I = (0.286827, 0.533256, 0.795844)
+        body = Body.t_handle(8, 4, 1)
+        np.testing.assert_allclose(body.normalized_moments,
+                                   [0.286827, 0.533256, 0.795844], atol=5e-7)
+
+    @pytest.mark.parametrize("dims", [(8, 4, 1), (3, 5, 0.5), (1, 1, 0.2),
+                                      (2, 9, 1.5)])
+    def test_eqn_isfort_matches_parallel_axis_theorem(self, dims):
+        tensor = t_handle_by_parts(*dims)
+        # the T is symmetric about the y axis: the tensor is diagonal
+        assert np.max(np.abs(tensor - np.diag(np.diag(tensor)))) < 1e-13 * np.max(tensor)
+        body = Body.t_handle(*dims)
+        np.testing.assert_allclose(body.moments, np.sort(np.diag(tensor)),
+                                   rtol=1e-14)
+
+    def test_short_cross_piece_is_relabelled(self):
+        # l1 short: the moment about x is no longer the smallest
+        body = Body.t_handle(1.0, 6.0, 0.5)
+        assert body.moments[0] < body.moments[1] < body.moments[2]
+        assert body.permutation != (0, 1, 2)
+        assert np.linalg.det(body.frame) == pytest.approx(1.0)
+
+    def test_equivalent_ellipsoid_fig1(self):
+        a, b, c = Body.t_handle(8, 4, 1).equivalent_ellipsoid()
+        # Fig. 1 caption, and eqn:ellipsoid evaluated at 8, 4, 1
+        assert (a, b, c) == pytest.approx((4.23281, 3.07318, 0.645497), abs=5e-6)
+        l1, l2, w = 8.0, 4.0, 1.0
+        k = math.sqrt(5.0 / 3.0)
+        assert a == pytest.approx(k * math.sqrt(l2 * w * w + l1**3) / (2 * math.sqrt(l1 + l2)), rel=1e-14)
+        assert b == pytest.approx(k * math.sqrt(2 * l1 * l2 * (3 * l2 * w + 2 * l2**2 + 2 * w**2) + l1**2 * w**2 + l2**4) / (2 * (l1 + l2)), rel=1e-14)
+        assert c == pytest.approx(0.5 * k * w, rel=1e-14)
+
+    @pytest.mark.parametrize("bad", [(0, 4, 1), (8, -1, 1), (8, 4, math.nan)])
+    def test_rejects_bad_lengths(self, bad):
+        with pytest.raises(NonPhysicalBodyError, match="positive length"):
+            Body.t_handle(*bad)
+
+
+class TestEllipsoids:
+    def test_semi_axes_round_trip(self):
+        body = Body.from_semi_axes(3.0, 2.0, 0.5)
+        np.testing.assert_allclose(body.equivalent_ellipsoid(), (3.0, 2.0, 0.5),
+                                   rtol=1e-14)
+
+    def test_semi_axes_in_caller_order(self):
+        body = Body.from_semi_axes(0.5, 3.0, 2.0)
+        # largest semi-axis (caller's y) carries the smallest moment
+        assert body.permutation[0] == 1
+
+    def test_paper_parametrisation_has_unit_norm(self):
+        for b, c in [(0.3, 0.1), (0.5, 0.45), (0.2, 0.0), (0.6, 0.05)]:
+            body = Body.ellipsoid(b, c)
+            assert np.linalg.norm(body.moments) == pytest.approx(1.0, abs=4 * EPS)
+            i1, i2, i3 = body.moments
+            assert i1 == pytest.approx(b * b + c * c, rel=4 * EPS)
+            assert i3 - i2 == pytest.approx(b * b - c * c, abs=8 * EPS)
+
+    def test_paper_parametrisation_third_semi_axis(self):
+        b, c = 0.4, 0.25
+        body = Body.ellipsoid(b, c)
+        root = math.sqrt(2 - 3 * b**4 - 2 * b**2 * c**2 - 3 * c**4)
+        a = math.sqrt(root - b * b - c * c) / math.sqrt(2)
+        # moments are those of a solid ellipsoid (mass 5) with semi-axes a, b, c
+        np.testing.assert_allclose(
+            body.moments, sorted([b * b + c * c, a * a + c * c, a * a + b * b]),
+            rtol=1e-14)
+
+    def test_flat_ellipsoid_is_a_valid_body(self):
+        body = Body.ellipsoid(0.4, 0.0)
+        assert body.is_flat
+        assert body.equivalent_ellipsoid()[2] < 1e-7
+
+    @pytest.mark.parametrize("b, c", [(0.9, 0.8), (1.0, 0.1)])
+    def test_rejects_too_large(self, b, c):
+        with pytest.raises(NonPhysicalBodyError):
+            Body.ellipsoid(b, c)
+
+
+class TestInertiaTensor:
+    def test_rotated_tensor(self):
+        rng = np.random.default_rng(3)
+        q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        moments = np.array([2.0, 3.0, 4.5])
+        tensor = q @ np.diag(moments) @ q.T
+        body = Body.from_inertia_tensor(tensor)
+        np.testing.assert_allclose(body.moments, moments, rtol=1e-13)
+        # frame rows are the principal axes: frame T frame^T is diagonal
+        np.testing.assert_allclose(body.frame @ tensor @ body.frame.T,
+                                   np.diag(moments), atol=1e-12)
+        assert np.linalg.det(body.frame) == pytest.approx(1.0)
+
+    def test_rejects_asymmetric(self):
+        with pytest.raises(NonPhysicalBodyError, match="symmetric"):
+            Body.from_inertia_tensor([[1, 0.5, 0], [0, 2, 0], [0, 0, 2.5]])
+
+    def test_rejects_non_finite(self):
+        with pytest.raises(NonPhysicalBodyError, match="finite"):
+            Body.from_inertia_tensor(np.full((3, 3), np.nan))
+
+
+class TestOrderingAndFrame:
+    @pytest.mark.parametrize("given", [(3.0, 1.0, 2.5), (1.0, 2.5, 3.0),
+                                       (2.5, 3.0, 1.0), (3.0, 2.5, 1.0)])
+    def test_sorted_with_permutation(self, given):
+        body = Body(given)
+        assert list(body.moments) == sorted(given)
+        assert [given[i] for i in body.permutation] == list(body.moments)
+        frame = body.frame
+        assert np.linalg.det(frame) == pytest.approx(1.0)
+        # the frame maps the caller's inertia tensor to the sorted one
+        np.testing.assert_array_equal(frame @ np.diag(given) @ frame.T,
+                                      np.diag(body.moments))
+
+    def test_moments_are_read_only(self):
+        body = Body((1.0, 2.0, 2.5))
+        with pytest.raises(ValueError):
+            body.moments[0] = 5.0
+
+    def test_presets(self):
+        assert Body.preset("fig6").moments.tolist() == [0.26, 0.55, 0.793662]
+        assert Body.preset("t-handle") == Body.t_handle(8, 4, 1)
+        with pytest.raises(NonPhysicalBodyError, match="unknown preset 'nope'"):
+            Body.preset("nope")
+
+
+class TestValidation:
+    @pytest.mark.parametrize("moments, message", [
+        ((1.0, 2.0, math.nan), "not all finite"),
+        ((1.0, math.inf, 2.0), "not all finite"),
+        ((0.0, 1.0, 1.0), "positive"),
+        ((-1.0, 2.0, 2.5), "positive"),
+        ((1.0, 1.5, 3.0), "triangle inequality"),
+    ])
+    def test_non_physical(self, moments, message):
+        with pytest.raises(NonPhysicalBodyError, match=message):
+            Body(moments)
+
+    @pytest.mark.parametrize("moments", [(1.0, 1.0, 1.5), (1.0, 1.5, 1.5),
+                                         (2.0, 2.0, 2.0)])
+    def test_symmetric_top_explains_why(self, moments):
+        with pytest.raises(SymmetricTopError, match="symmetric top.*I1 < I2 < I3"):
+            Body(moments)
+
+    def test_flat_equality_allowed(self):
+        i1, i2 = 0.3, 0.55
+        body = Body((i1, i2, i1 + i2))
+        assert body.is_flat
+
+    def test_wrong_shape(self):
+        with pytest.raises(NonPhysicalBodyError, match="exactly 3"):
+            Body((1.0, 2.0))
