@@ -1,0 +1,384 @@
+"""Closed-form total phase of the force-free asymmetric top (numba kernels).
+
+All kernels take raw principal moments ``I1 < I2 < I3`` (any positive
+scale: the phase is homogeneous of degree 0 in the moments, so they are
+never normalised here -- normalising would round away the small
+differences ``I3 - I2`` of nearly symmetric bodies) and a unit initial
+angular velocity
+
+    omega0 = (sin(theta) cos(phi), sin(theta) sin(phi), cos(theta))
+
+in the principal frame.  ``theta`` is measured from the I3 axis and ``phi``
+from the I1 axis.
+
+Formulas (Mecholsky 2019, "Analytic formula for the Geometric Phase of an
+Asymmetric Top"; labels are the paper's LaTeX labels):
+
+* ``M^2 - 2 E I1 = I2 (I2-I1) w2^2 + I3 (I3-I1) w3^2`` and
+  ``2 E I3 - M^2 = I1 (I3-I1) w1^2 + I2 (I3-I2) w2^2`` are sums of
+  non-negative terms (eqn:MM, eqn:EM), so they carry no cancellation.
+* ``M^2 - 2 E I2 = A cos^2(theta) - B_phi sin^2(theta)`` with
+  ``A = I3 (I3-I2)`` and ``B_phi = I1 (I2-I1) cos^2(phi)`` vanishes on the
+  separatrix; it is evaluated in the factored form
+  ``-(A + B_phi) sin(dtheta) sin(theta + theta_c)``, where
+  ``tan(theta_c) = sqrt(A / B_phi)`` and ``dtheta = theta - theta_c``
+  (see :func:`spin_gap`).
+* ``1 - k^2`` follows from the identity
+  ``(I3-I2)(M^2-2EI1) - (I2-I1)(2EI3-M^2) = (I3-I1)(M^2-2EI2)``.
+* eqn:GeometricPhase, with ``I1 K + (I3-I1) Pi(n|k^2)`` written as one
+  Bulirsch integral ``I3 cel(kc, 1-n, 1, b)``:
+
+  - SAM (``M^2 > 2EI2``): ``1-n = I2 (I3-I1) / (I1 (I3-I2))``,
+    ``b = (I3-I1)/(I3-I2)``, ``D = sqrt((I3-I2)(M^2-2EI1)/(I1 I2 I3))``,
+    ``Delta alpha = 4 M cel / (I1 D) - 2 pi``.
+  - LAM (``M^2 < 2EI2``): ``1-n = (I3-I1) M^2 / (I1 (2EI3-M^2))``,
+    ``b = 2E (I3-I1) / (2EI3-M^2)``,
+    ``D = sqrt((I2-I1)(2EI3-M^2)/(I1 I2 I3))``,
+    ``Delta alpha = 4 M cel / (I1 D)``.
+
+  Period ``T = 4 K / D`` (eqn:TK) with ``K = cel(kc, 1-n, 1, 1-n)`` from the
+  same AGM loop.
+"""
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from .elliptic import cel, cel_pair
+
+TWO_PI = 2.0 * math.pi
+HALF_PI = 0.5 * math.pi
+QUARTER_PI = 0.25 * math.pi
+# pi/2 - HALF_PI: the part of pi/2 that the double HALF_PI rounds away
+HALF_PI_LOW = 6.123233995736766e-17
+_END_SLACK = 4.0 * 2.220446049250313e-16
+# below this |sin(dtheta)| the gap is assembled factor by factor (underflow)
+_TINY_OFFSET = 1.0e-200
+
+BRANCH_SAM = 1     # short-axis mode, M^2 > 2 E I2: M circles the I3 axis
+BRANCH_LAM = -1    # long-axis mode,  M^2 < 2 E I2: M circles the I1 axis
+BRANCH_SEPARATRIX = 0
+
+STATUS_OK = 0
+STATUS_OUT_OF_RANGE = 1
+STATUS_SEPARATRIX = 2
+STATUS_NOT_FINITE = 3
+
+
+@njit(cache=True, nogil=True)
+def critical_angle(i1, i2, i3, phi):
+    """Polar angle of omega0 on the separatrix ``M^2 = 2 E I2``.
+
+    ``tan(theta_c) = sqrt(I3 (I3-I2) / (I1 (I2-I1) cos^2 phi))``: the
+    paper's critical-angle formula with the erratum in eqn:beta corrected
+    (its denominator is ``I3 (I3 - I2)``, not ``I3 (I3 - I1)``).
+    """
+    a = i3 * (i3 - i2)
+    b = i1 * (i2 - i1)
+    return math.atan2(math.sqrt(a), math.sqrt(b) * abs(math.cos(phi)))
+
+
+@njit(cache=True, nogil=True)
+def body_constants(i1, i2, i3, phi):
+    """Per-(body, phi) constants shared by every polar angle.
+
+    Returns ``cos phi, sin phi, theta_c, pi/2 - theta_c, sqrt(A),
+    sqrt(B_phi), sqrt(A + B_phi)`` with ``A = I3 (I3-I2)`` and
+    ``B_phi = I1 (I2-I1) cos^2 phi``.  Both angles come from ``atan2``
+    directly, so each is accurate where it is small.
+    """
+    cphi = math.cos(phi)
+    sphi = math.sin(phi)
+    a = i3 * (i3 - i2)
+    b = i1 * (i2 - i1) * cphi * cphi
+    root_a = math.sqrt(a)
+    root_b = math.sqrt(b)
+    return (cphi, sphi, math.atan2(root_a, root_b), math.atan2(root_b, root_a),
+            root_a, root_b, math.sqrt(a + b))
+
+
+@njit(cache=True, nogil=True)
+def angle_triplet(angle, from_offset, theta_c, co_theta_c):
+    """``theta, dtheta, co_theta`` and a status code from the given angle.
+
+    ``angle`` is ``theta`` or, with ``from_offset``, ``dtheta``.  Each of the
+    three is formed so that it keeps its relative precision where it is
+    small: ``pi/2 - theta`` in two parts, and the offset from the smaller
+    pair (``pi/2 - theta_c`` is far better known than ``theta_c`` for an
+    oblate body).  Rounding a hair past an end of [0, pi/2] lands on it.
+    """
+    if not math.isfinite(angle):
+        return angle, angle, angle, STATUS_NOT_FINITE
+    if from_offset:
+        dtheta = angle
+        theta = theta_c + dtheta
+        co_theta = co_theta_c - dtheta
+        if theta < 0.0:
+            if theta < -_END_SLACK:
+                return theta, dtheta, co_theta, STATUS_OUT_OF_RANGE
+            theta = 0.0
+        if co_theta < 0.0:
+            if co_theta < -_END_SLACK:
+                return theta, dtheta, co_theta, STATUS_OUT_OF_RANGE
+            co_theta = 0.0
+            theta = HALF_PI
+    else:
+        theta = angle
+        if theta < 0.0 or theta > HALF_PI:
+            return theta, theta - theta_c, HALF_PI - theta, STATUS_OUT_OF_RANGE
+        co_theta = (HALF_PI - theta) + HALF_PI_LOW
+        if theta_c <= QUARTER_PI:
+            dtheta = theta - theta_c
+        else:
+            dtheta = co_theta_c - co_theta
+    if dtheta == 0.0:
+        return theta, dtheta, co_theta, STATUS_SEPARATRIX
+    return theta, dtheta, co_theta, STATUS_OK
+
+
+@njit(cache=True, nogil=True)
+def spin_gap(cphi, sphi, root_a, root_b, root_ab, theta, dtheta, co_theta):
+    """Unit spin and ``M^2 - 2 E I2`` as a product of three factors.
+
+    Returns ``w1, w2, w3, scale, offset, closing`` with
+    ``M^2 - 2 E I2 = -scale * offset * closing``, ``scale > 0`` and
+    ``closing >= 0``; ``offset`` carries the sign and the separatrix
+    distance.  The factors are never multiplied here, because at
+    ``|dtheta| ~ 1e-300`` the product can underflow.
+
+    Notes
+    -----
+    ``M^2 - 2 E I2 = A cos^2 t - B_phi sin^2 t
+    = -(A + B_phi) sin(t - t_c) sin(t + t_c)``, and with
+    ``sin t_c = sqrt(A/(A+B_phi))``, ``cos t_c = sqrt(B_phi/(A+B_phi))``,
+    ``sin(t + t_c) = (sin t sqrt(B_phi) + cos t sqrt(A)) / sqrt(A + B_phi)``:
+    a sum of non-negative terms, accurate even when ``t + t_c -> pi``
+    (oblate bodies).  ``sin(t - t_c) = sin(dtheta)`` holds the small
+    distance at full relative precision.
+    """
+    w3 = math.sin(co_theta) if co_theta < theta else math.cos(theta)
+    st = math.sin(theta)
+    closing = st * root_b + w3 * root_a
+    return st * cphi, st * sphi, w3, root_ab, math.sin(dtheta), closing
+
+
+@njit(cache=True, nogil=True)
+def vector_gap(i1, i2, i3, w1, w2, w3):
+    """``M^2 - 2 E I2`` in the factor form of :func:`spin_gap` for a vector.
+
+    ``I3 (I3-I2) w3^2 - I1 (I2-I1) w1^2``: a vector knows its distance from
+    the separatrix only to rounding, so this one subtraction is the best
+    that can be done.
+    """
+    gap = i3 * (i3 - i2) * w3 * w3 - i1 * (i2 - i1) * w1 * w1
+    return 1.0, -gap, 1.0
+
+
+@njit(cache=True, nogil=True)
+def orbit_constants(i1, i2, i3, w1, w2, w3, scale, offset, closing):
+    """Elliptic constants of the orbit through ``omega = (w1, w2, w3)``.
+
+    Parameters
+    ----------
+    i1, i2, i3 : float
+        Principal moments, ascending, any scale.
+    w1, w2, w3 : float
+        Angular velocity in the principal frame, any magnitude.
+    scale, offset, closing : float
+        ``M^2 - 2 E I2 = -scale * offset * closing`` (see :func:`spin_gap`).
+
+    Returns
+    -------
+    branch, two_e, m_sq, kc, q, p, b : float
+        Branch code (+1 SAM, -1 LAM, 0 separatrix); ``2E`` and ``M^2``
+        (eqn:E, eqn:J); ``kc = sqrt(1 - k^2)`` for the ``k`` of eqn:TK;
+        ``q`` with ``D^2 = q / (I1 I2 I3)`` for the ``D`` of eqn:ABCD(d);
+        and ``p, b`` such that ``cel(kc, p, 1, b) = (I1 K + (I3-I1) Pi(n|k^2))
+        / I3`` with ``p = 1 - n`` of eqn:GeometricPhase.  On LAM every
+        quantity is the image under ``1 <-> 3`` that eqn:GeometricPhase
+        prescribes.
+
+    Notes
+    -----
+    ``M^2 - 2 E I1`` and ``2 E I3 - M^2`` are sums of non-negative terms.
+    ``1 - k^2`` follows from the identity
+    ``(I3-I2)(M^2-2EI1) - (I2-I1)(2EI3-M^2) = (I3-I1)(M^2-2EI2)``:
+    ``1 - k^2 = (I3-I1)(M^2-2EI2) / ((I3-I2)(M^2-2EI1))`` on SAM and
+    ``(I3-I1)(2EI2-M^2) / ((I2-I1)(2EI3-M^2))`` on LAM, so it is never
+    formed as ``1 - m``.
+    """
+    d21 = i2 - i1
+    d31 = i3 - i1
+    d32 = i3 - i2
+    s1 = w1 * w1
+    s2 = w2 * w2
+    s3 = w3 * w3
+    two_e = i1 * s1 + i2 * s2 + i3 * s3
+    m_sq = i1 * i1 * s1 + i2 * i2 * s2 + i3 * i3 * s3
+    if offset == 0.0 or closing == 0.0:
+        return 0, two_e, m_sq, 0.0, 0.0, 0.0, 0.0
+    if offset < 0.0:                                 # M^2 > 2 E I2
+        branch = BRANCH_SAM
+        q = d32 * (i2 * d21 * s2 + i3 * d31 * s3)    # (I3-I2)(M^2 - 2 E I1)
+        p = i2 * d31 / (i1 * d32)
+        b = d31 / d32
+    else:
+        branch = BRANCH_LAM
+        gap_3m = i1 * d31 * s1 + i2 * d32 * s2       # 2 E I3 - M^2
+        q = d21 * gap_3m
+        p = d31 * m_sq / (i1 * gap_3m)
+        b = two_e * d31 / gap_3m
+    magnitude = abs(offset)
+    if magnitude > _TINY_OFFSET:
+        kc = math.sqrt(d31 * scale * magnitude * closing / q)
+    else:
+        kc = (math.sqrt(d31 / q) * math.sqrt(scale) * math.sqrt(magnitude)
+              * math.sqrt(closing))
+    return branch, two_e, m_sq, kc, q, p, b
+
+
+@njit(cache=True, nogil=True)
+def total_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing):
+    """Total phase ``Delta alpha`` (eqn:GeometricPhase) with one ``cel`` loop.
+
+    ``Delta alpha = 4 M cel(kc, p, 1, b) / (I1 D) - 2 pi [SAM]``, where
+    ``4 M / (I1 D) = 4 sqrt(M^2 I2 I3 / (I1 q))``.  Inf on the separatrix.
+    """
+    branch, two_e, m_sq, kc, q, p, b = orbit_constants(
+        i1, i2, i3, w1, w2, w3, scale, offset, closing)
+    if branch == BRANCH_SEPARATRIX:
+        return np.inf
+    total = 4.0 * math.sqrt(m_sq * i2 * i3 / (i1 * q)) * cel(kc, p, 1.0, b)
+    return total - TWO_PI if branch == BRANCH_SAM else total
+
+
+@njit(cache=True, nogil=True)
+def parts_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing):
+    """``2E, M^2, m, branch, T, 2ET/M, Delta alpha`` for one orbit.
+
+    ``T = 4 K / D`` (eqn:TK) with ``K = cel(kc, p, 1, p)`` from the same AGM
+    loop as the total phase.  On the separatrix ``T``, ``2ET/M`` and
+    ``Delta alpha`` are inf and ``m = 1``.
+    """
+    branch, two_e, m_sq, kc, q, p, b = orbit_constants(
+        i1, i2, i3, w1, w2, w3, scale, offset, closing)
+    if branch == BRANCH_SEPARATRIX:
+        return two_e, m_sq, 1.0, 0, np.inf, np.inf, np.inf
+    d21 = i2 - i1
+    d31 = i3 - i1
+    d32 = i3 - i2
+    gap_m1 = i2 * d21 * w2 * w2 + i3 * d31 * w3 * w3
+    gap_3m = i1 * d31 * w1 * w1 + i2 * d32 * w2 * w2
+    if branch == BRANCH_SAM:
+        m_param = d21 * gap_3m / (d32 * gap_m1)
+    else:
+        m_param = d32 * gap_m1 / (d21 * gap_3m)
+    bracket, quarter = cel_pair(kc, p, 1.0, b, 1.0, p)
+    rate = math.sqrt(q / (i1 * i2 * i3))
+    momentum = math.sqrt(m_sq)
+    total = 4.0 * momentum * bracket / (i1 * rate)
+    if branch == BRANCH_SAM:
+        total -= TWO_PI
+    period = 4.0 * quarter / rate
+    return two_e, m_sq, m_param, branch, period, two_e * period / momentum, total
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def total_phase_one_body(i1, i2, i3, phi, angles, from_offset, out, status):
+    """Total phase of one body at many polar angles (scalar ``phi``).
+
+    Per-body constants are computed once.  ``status`` receives one of the
+    ``STATUS_*`` codes per point; ``out`` is inf where it is not OK.
+    """
+    cphi, sphi, theta_c, co_theta_c, root_a, root_b, root_ab = body_constants(
+        i1, i2, i3, phi)
+    for k in prange(angles.shape[0]):
+        theta, dtheta, co_theta, code = angle_triplet(angles[k], from_offset,
+                                                      theta_c, co_theta_c)
+        status[k] = code
+        if code != STATUS_OK:
+            out[k] = np.inf
+            continue
+        w1, w2, w3, scale, offset, closing = spin_gap(
+            cphi, sphi, root_a, root_b, root_ab, theta, dtheta, co_theta)
+        out[k] = total_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing)
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def total_phase_many(i1, i2, i3, phi, angles, from_offset, out, status):
+    """Total phase with every input an array of the same length."""
+    for k in prange(angles.shape[0]):
+        cphi, sphi, theta_c, co_theta_c, root_a, root_b, root_ab = body_constants(
+            i1[k], i2[k], i3[k], phi[k])
+        theta, dtheta, co_theta, code = angle_triplet(angles[k], from_offset,
+                                                      theta_c, co_theta_c)
+        status[k] = code
+        if code != STATUS_OK:
+            out[k] = np.inf
+            continue
+        w1, w2, w3, scale, offset, closing = spin_gap(
+            cphi, sphi, root_a, root_b, root_ab, theta, dtheta, co_theta)
+        out[k] = total_from_spin(i1[k], i2[k], i3[k], w1, w2, w3, scale, offset,
+                                 closing)
+
+
+PARTS_COLUMNS = ("theta", "dtheta", "theta_crit", "two_e", "m_sq", "m",
+                 "branch", "period", "dynamic_phase", "total_phase")
+
+
+@njit(cache=True, nogil=True)
+def _store_parts(out, k, parts):
+    two_e, m_sq, m_param, branch, period, dynamic, total = parts
+    out[k, 3] = two_e
+    out[k, 4] = m_sq
+    out[k, 5] = m_param
+    out[k, 6] = branch
+    out[k, 7] = period
+    out[k, 8] = dynamic
+    out[k, 9] = total
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def phase_parts_many(i1, i2, i3, phi, angles, from_offset, out, status):
+    """All closed-form quantities; ``out[k]`` follows :data:`PARTS_COLUMNS`."""
+    for k in prange(angles.shape[0]):
+        cphi, sphi, theta_c, co_theta_c, root_a, root_b, root_ab = body_constants(
+            i1[k], i2[k], i3[k], phi[k])
+        theta, dtheta, co_theta, code = angle_triplet(angles[k], from_offset,
+                                                      theta_c, co_theta_c)
+        status[k] = code
+        out[k, 0] = theta
+        out[k, 1] = dtheta
+        out[k, 2] = theta_c
+        if code != STATUS_OK:
+            for j in range(3, 10):
+                out[k, j] = np.nan
+            continue
+        w1, w2, w3, scale, offset, closing = spin_gap(
+            cphi, sphi, root_a, root_b, root_ab, theta, dtheta, co_theta)
+        _store_parts(out, k, parts_from_spin(i1[k], i2[k], i3[k], w1, w2, w3,
+                                             scale, offset, closing))
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def critical_angle_many(i1, i2, i3, phi, out):
+    """Vectorised :func:`critical_angle`."""
+    for k in prange(out.shape[0]):
+        out[k] = critical_angle(i1[k], i2[k], i3[k], phi[k])
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def parts_from_vector_array(i1, i2, i3, w1, w2, w3, out):
+    """:func:`parts_from_spin` for arbitrary spin vectors; ``out`` (n, 7)."""
+    for k in prange(out.shape[0]):
+        scale, offset, closing = vector_gap(i1[k], i2[k], i3[k], w1[k], w2[k], w3[k])
+        two_e, m_sq, m_param, branch, period, dynamic, total = parts_from_spin(
+            i1[k], i2[k], i3[k], w1[k], w2[k], w3[k], scale, offset, closing)
+        out[k, 0] = two_e
+        out[k, 1] = m_sq
+        out[k, 2] = m_param
+        out[k, 3] = branch
+        out[k, 4] = period
+        out[k, 5] = dynamic
+        out[k, 6] = total

@@ -1,0 +1,445 @@
+"""Closed-form phases: the paper's numbers, errata, accuracy and invariants."""
+
+import math
+from pathlib import Path
+
+import mpmath as mp
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
+
+import orbits
+from orbits import (AngleError, Body, NonPhysicalBodyError, SeparatrixError,
+                    SymmetricTopError)
+
+EPS = np.finfo(float).eps
+REFERENCE = Path(__file__).parent / "reference" / "phase_reference.csv"
+T_HANDLE = Body.t_handle(8, 4, 1)
+FIG6 = Body((0.26, 0.55, 0.793662))
+
+
+def relative_error(got, want):
+    """|got/want - 1|, and |got| where the exact value is 0 (m at the axes)."""
+    got, want = np.asarray(got, float), np.asarray(want, float)
+    scale = np.where(want == 0.0, 1.0, np.abs(want))
+    return np.abs(got - want) / scale
+
+
+def paper_digits(value, expected):
+    """Agreement to the digits the paper prints (half a unit in the last)."""
+    text = f"{expected!r}"
+    decimals = len(text.split(".")[1]) if "." in text else 0
+    return abs(value - expected) <= 0.5 * 10.0 ** -decimals
+
+
+# --------------------------------------------------------------------------
+# The paper's worked numbers
+# --------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def row():
+    """Fig. 3 / Sec. II.D: theta = pi/2 - 0.15, phi = pi/2 - 0.2."""
+    return orbits.phases(T_HANDLE, math.pi / 2 - 0.15, math.pi / 2 - 0.2).iloc[0]
+
+
+class TestPaperNumbers:
+
+    @pytest.mark.parametrize("column, expected", [
+        ("energy", 0.264805),          # Fig. 3 caption
+        ("momentum", 0.533252),
+        ("period", 23.8181),           # eqn:TK
+        ("dynamic_phase", 23.6555),    # 2ET/M
+        ("total_phase", 21.5303),      # eqn:GeometricPhase
+    ])
+    def test_t_handle_values(self, row, column, expected):
+        assert paper_digits(row[column], expected), row[column]
+
+    def test_t_handle_rotation_mod_two_pi(self, row):
+        assert paper_digits(row.total_phase % (2 * math.pi), 2.68074)
+        assert row.branch == "SAM"
+
+    def test_t_handle_solid_angle(self, row):
+        # the true Omega is 2.12519; the paper's 2.1253 is a coarse quadrature
+        assert paper_digits(row.geometric_phase, 2.12519)
+
+    def test_fig6_critical_angle(self):
+        assert paper_digits(orbits.critical_angle(FIG6), 1.01262)
+
+    def test_limits_t_handle(self):
+        lim = orbits.phase_limits(T_HANDLE)
+        # Fig. 5: "the total phase will be larger than about 2 pi"
+        assert 2 * math.pi < lim.theta_zero < lim.theta_half_pi
+
+
+# --------------------------------------------------------------------------
+# Errata: reduced formulas derived from eqn:GeometricPhase
+# --------------------------------------------------------------------------
+def beta_corrected(i1, i2, i3):
+    return i1 * (i2 - i1) / (i3 * (i3 - i2))
+
+
+def beta_as_printed(i1, i2, i3):
+    return i1 * (i2 - i1) / (i3 * (i3 - i1))
+
+
+def alphatheta(i1, i2, i3, theta, beta, lam_pi_has_beta):
+    """eqn:alphatheta evaluated in mpmath with the given beta.
+
+    ``lam_pi_has_beta``: the paper prints the LAM characteristic as
+    ``-I3^2 cot^2(theta) beta / I1^2``; derived from eqn:GeometricPhase it
+    is ``-I3^2 cot^2(theta) / I1^2``.
+    """
+    i1, i2, i3, theta = (mp.mpf(v) for v in (i1, i2, i3, theta))
+    b = beta(i1, i2, i3)
+    tan2 = mp.tan(theta) ** 2
+    cot2 = 1 / tan2
+    if tan2 * b < 1:   # SAM: k^2 = beta tan^2 < 1
+        pre = 4 * mp.sqrt(b * i2 * (i3**2 + i1**2 * tan2)
+                          / (i1**2 * i3 * (i3 - i1) * (i2 - i1)))
+        m = b * tan2
+        return pre * (i1 * mp.ellipk(m) + (i3 - i1) * mp.ellippi(-i3**2 * b / i1**2, m)) - 2 * mp.pi
+    pre = 4 * mp.sqrt(i2 * (i1**2 + i3**2 * cot2) / (i1**2 * i3 * (i3 - i1) * (i2 - i1)))
+    m = cot2 / b
+    n = -i3**2 * cot2 / i1**2 * (b if lam_pi_has_beta else 1)
+    return pre * (i1 * mp.ellipk(m) + (i3 - i1) * mp.ellippi(n, m))
+
+
+class TestErrata:
+    def test_critical_angle_solves_separatrix_condition(self):
+        for body in (T_HANDLE, FIG6, Body((1.0, 1.7, 2.2))):
+            i1, i2, i3 = body.moments
+            tc = orbits.critical_angle(body)
+            w = np.array([math.sin(tc), 0.0, math.cos(tc)])
+            two_e = np.dot(body.moments, w * w)
+            m_sq = np.dot(body.moments ** 2, w * w)
+            assert abs(m_sq - two_e * i2) <= 8 * EPS * m_sq
+            assert tc == pytest.approx(math.atan(1 / math.sqrt(beta_corrected(i1, i2, i3))), rel=4 * EPS)
+
+    def test_printed_beta_contradicts_fig6(self):
+        i1, i2, i3 = FIG6.moments
+        printed = math.atan(1 / math.sqrt(beta_as_printed(i1, i2, i3)))
+        assert not paper_digits(printed, 1.01262)
+        assert printed == pytest.approx(1.17153, abs=1e-5)
+
+    @pytest.mark.parametrize("theta", [0.3, 0.9, 1.0, 1.03, 1.2, 1.5])
+    def test_corrected_alphatheta_equals_general_formula(self, theta):
+        i1, i2, i3 = FIG6.moments
+        with mp.workdps(30):
+            reduced = alphatheta(i1, i2, i3, theta, beta_corrected, False)
+        assert float(reduced) == pytest.approx(orbits.total_phase(FIG6, theta), rel=1e-13)
+
+    @pytest.mark.parametrize("theta", [1.03, 1.2, 1.5])
+    def test_printed_lam_characteristic_is_wrong(self, theta):
+        i1, i2, i3 = FIG6.moments
+        with mp.workdps(30):
+            printed = alphatheta(i1, i2, i3, theta, beta_corrected, True)
+        assert abs(float(printed) / orbits.total_phase(FIG6, theta) - 1) > 1e-3
+
+    @pytest.mark.parametrize("theta", [0.2, 0.7, 1.2])
+    def test_eqn_abcd_a_sign(self, theta):
+        """dphi/dt = M/I3 + A/(B + C sn^2); at t = 0 (sn = 0, w2 = 0)
+        Landau's dphi/dt = M (I1 w1^2 + I2 w2^2)/(I1^2 w1^2 + I2^2 w2^2) = M/I1."""
+        i1, i2, i3 = FIG6.moments
+        w1, w3 = math.sin(theta), math.cos(theta)
+        momentum = math.sqrt(i1**2 * w1**2 + i3**2 * w3**2)
+        landau = momentum * (i1 * w1**2) / (i1**2 * w1**2)
+        b = i1 * i3 * (i3 - i2)
+        corrected = momentum * (i3 - i1) * (i3 - i2)
+        printed = -momentum * (i1 + i3) * (i3 - i2)
+        assert momentum / i3 + corrected / b == pytest.approx(landau, rel=1e-15)
+        assert abs(momentum / i3 + printed / b - landau) > 0.5 * landau
+
+    def test_minimum_phase_exceeds_two_pi_near_rod(self):
+        # the paper says the minimum total phase tends to 0 for a thin rod
+        # (I1 -> 0, I2 = I3); the limits stay >= 2 pi for every body
+        for i1 in (1e-2, 1e-4, 1e-6):
+            for frac in (0.001, 0.5, 0.999):
+                body = Body((i1, 1.0, 1.0 + frac * i1))
+                lim = orbits.phase_limits(body)
+                assert min(lim) >= 2 * math.pi * (1 - 4 * EPS)
+
+    def test_flat_body_limit_is_exactly_two_pi(self):
+        i1, i2 = 0.25, 0.6
+        lim = orbits.phase_limits(Body((i1, i2, i1 + i2)))
+        assert lim.theta_zero == pytest.approx(2 * math.pi, rel=8 * EPS)
+
+
+# --------------------------------------------------------------------------
+# Accuracy against the committed mpmath reference (make_phase_reference.py)
+# --------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def reference():
+    return pd.read_csv(REFERENCE, comment="#")
+
+
+def test_reference_covers_the_body_space(reference):
+    assert len(reference) >= 10_000
+    kinds = reference["kind"].value_counts()
+    for kind in ("interior", "prolate", "oblate", "flat", "exactly_flat",
+                 "sphere", "rod"):
+        assert kinds.get(kind, 0) >= 500
+    offsets = reference.loc[reference["mode"] == "dtheta", "dtheta"].abs()
+    assert offsets.min() < 1e-299
+    thetas = reference.loc[reference["mode"] == "theta", "theta"]
+    assert (thetas == 0).any() and (thetas == math.pi / 2).any()
+
+
+def test_dtheta_path_relative_error_1e13_down_to_1e300(reference):
+    rows = reference[reference["mode"] == "dtheta"]
+    got = orbits.phases(rows[["m1", "m2", "m3"]].to_numpy(),
+                        dtheta=rows["dtheta"].to_numpy(),
+                        phi=rows["phi"].to_numpy())
+    for column in ("total_phase", "period", "dynamic_phase", "energy",
+                   "momentum", "m"):
+        error = relative_error(got[column], rows[column])
+        assert error.max() <= 1e-13, (column, error.max())
+    assert (got["branch"].astype(str).to_numpy() == rows["branch"].to_numpy()).all()
+
+
+def test_theta_path_within_its_conditioning(reference):
+    """Relative error <= 1e-13 plus the conditioning of theta itself.
+
+    With theta given, theta_c carries a rounding error of a few ulps, so
+    the offset theta - theta_c, and with it the phase, is uncertain by
+    |d alpha/d theta| * 4 ulp(theta_c); far from the separatrix that term is
+    negligible and the bound is 1e-13.
+    """
+    rows = reference[reference["mode"] == "theta"]
+    moments = rows[["m1", "m2", "m3"]].to_numpy()
+    got = orbits.phases(moments, rows["theta"].to_numpy(),
+                        phi=rows["phi"].to_numpy())
+    expected = rows["total_phase"].to_numpy()
+    error = np.abs(got["total_phase"].to_numpy() / expected - 1)
+    theta_c = orbits.critical_angle(moments, rows["phi"].to_numpy())
+    ulp = np.spacing(np.minimum(theta_c, math.pi / 2 - theta_c))
+    bound = 1e-13 + np.abs(rows["dalpha_dtheta"].to_numpy()) * 4 * ulp / np.abs(expected)
+    assert np.all(error <= bound), np.max(error / bound)
+    far = rows["dtheta"].abs().to_numpy() > 1e-3
+    assert far.sum() > 9000
+    assert error[far].max() <= 1e-13
+    for column in ("period", "dynamic_phase", "energy", "momentum", "m"):
+        err = relative_error(got[column].to_numpy()[far], rows[column].to_numpy()[far])
+        assert err.max() <= 1e-13, (column, err.max())
+    assert (got["branch"].astype(str).to_numpy() == rows["branch"].to_numpy()).all()
+
+
+def mp_total_phase_from_dtheta(moments, dtheta, dps):
+    """Independent live reference: eqn:GeometricPhase at dps digits."""
+    with mp.workdps(dps):
+        i1, i2, i3 = (mp.mpf(float(v)) for v in sorted(moments))
+        theta = mp.atan2(mp.sqrt(i3 * (i3 - i2)), mp.sqrt(i1 * (i2 - i1))) + mp.mpf(dtheta)
+        w1, w3 = mp.sin(theta), mp.cos(theta)
+        two_e = i1 * w1**2 + i3 * w3**2
+        m_sq = i1**2 * w1**2 + i3**2 * w3**2
+        mom = mp.sqrt(m_sq)
+        if m_sq > two_e * i2:
+            k2 = (i2 - i1) * (two_e * i3 - m_sq) / ((i3 - i2) * (m_sq - two_e * i1))
+            rate = mp.sqrt((i3 - i2) * (m_sq - two_e * i1) / (i1 * i2 * i3))
+            n, shift = -i3 * (i2 - i1) / (i1 * (i3 - i2)), 2 * mp.pi
+        else:
+            k2 = (i3 - i2) * (m_sq - two_e * i1) / ((i2 - i1) * (two_e * i3 - m_sq))
+            rate = mp.sqrt((i2 - i1) * (two_e * i3 - m_sq) / (i1 * i2 * i3))
+            n, shift = -i3 * (m_sq - two_e * i1) / (i1 * (two_e * i3 - m_sq)), 0
+        period = 4 * mp.ellipk(k2) / rate
+        return float(mom * period / i3 + 4 * mom * (i3 - i1) * mp.ellippi(n, k2)
+                     / (i1 * i3 * rate) - shift)
+
+
+@pytest.mark.parametrize("body", [T_HANDLE, FIG6], ids=["t-handle", "fig6"])
+@pytest.mark.parametrize("dtheta", [-1e-300, 1e-300, -1e-150, 3e-40])
+def test_live_mpmath_at_1e300(body, dtheta):
+    expected = mp_total_phase_from_dtheta(body.moments, dtheta, 340)
+    got = orbits.total_phase(body, dtheta=dtheta)
+    assert got == pytest.approx(expected, rel=1e-13)
+
+
+def test_theta_path_error_grows_like_eps_over_offset():
+    """The documented ill-conditioning in theta, and its cure with dtheta."""
+    theta_c = orbits.critical_angle(FIG6)
+    theta = theta_c + 1e-12
+    exact_offset = float(mp.mpf(theta) - mp_theta_c(FIG6))
+    by_theta = orbits.total_phase(FIG6, theta)
+    by_offset = orbits.total_phase(FIG6, dtheta=exact_offset)
+    expected = mp_total_phase_from_dtheta(FIG6.moments, exact_offset, 60)
+    assert by_offset == pytest.approx(expected, rel=1e-14)
+    assert abs(by_theta / expected - 1) < 4 * EPS / 1e-12
+
+
+def mp_theta_c(body):
+    with mp.workdps(50):
+        i1, i2, i3 = (mp.mpf(float(v)) for v in body.moments)
+        return mp.atan2(mp.sqrt(i3 * (i3 - i2)), mp.sqrt(i1 * (i2 - i1)))
+
+
+# --------------------------------------------------------------------------
+# Invariants (hypothesis)
+# --------------------------------------------------------------------------
+@st.composite
+def bodies(draw, margin=1e-3):
+    """Moments with every relative gap and the flat excess at least ``margin``."""
+    i1 = draw(st.floats(0.02, 0.57))
+    i2 = draw(st.floats(0.40, 0.71))
+    rest = 1 - i1 * i1 - i2 * i2
+    assume(rest > 0)
+    i3 = math.sqrt(rest)
+    assume(i2 - i1 > margin and i3 - i2 > margin and i1 + i2 - i3 > -1e-15)
+    return np.array([i1, i2, i3])
+
+
+@st.composite
+def spins(draw, body, margin=0.02):
+    theta_c = orbits.critical_angle(body)
+    theta = draw(st.floats(0.0, math.pi / 2))
+    assume(abs(theta - theta_c) > margin)
+    return theta
+
+
+SETTINGS = settings(max_examples=150, deadline=None,
+                    suppress_health_check=[HealthCheck.filter_too_much])
+
+
+@SETTINGS
+@given(data=st.data(), scale=st.floats(1e-3, 1e3))
+def test_invariant_under_scaling_the_moments(data, scale):
+    body = data.draw(bodies())
+    theta = data.draw(spins(body))
+    base = orbits.total_phase(body, theta)
+    assert orbits.total_phase(body * scale, theta) == pytest.approx(base, rel=1e-13)
+
+
+@SETTINGS
+@given(data=st.data(), scale=st.floats(1e-3, 1e3))
+def test_invariant_under_scaling_omega(data, scale):
+    body = data.draw(bodies())
+    theta = data.draw(spins(body))
+    omega = np.array([math.sin(theta), 0.0, math.cos(theta)])
+    unit = orbits.spin_phases(body, omega).iloc[0]
+    scaled = orbits.spin_phases(body, scale * omega).iloc[0]
+    assert scaled.total_phase == pytest.approx(unit.total_phase, rel=1e-13)
+    assert scaled.total_phase == pytest.approx(orbits.total_phase(body, theta), rel=1e-13)
+    # time and energy scale as they must
+    assert scaled.period * scale == pytest.approx(unit.period, rel=1e-13)
+    assert scaled.energy == pytest.approx(unit.energy * scale**2, rel=1e-13)
+
+
+def point_on_same_polhode(moments, theta, fraction):
+    """Another omega with the same E and M: choose w2, solve for w1^2, w3^2."""
+    i1, i2, i3 = moments
+    w = np.array([math.sin(theta), 0.0, math.cos(theta)])
+    two_e, m_sq = moments @ (w * w), (moments**2) @ (w * w)
+    # largest |w2| on the polhode: where w1 = 0 (SAM) or w3 = 0 (LAM)
+    w2_max_sq = min((two_e * i3 - m_sq) / (i2 * (i3 - i2)),
+                    (m_sq - two_e * i1) / (i2 * (i2 - i1)))
+    w2_sq = fraction * w2_max_sq
+    # i1 x + i3 z = 2E - i2 w2^2 ; i1^2 x + i3^2 z = M^2 - i2^2 w2^2
+    rhs_e, rhs_m = two_e - i2 * w2_sq, m_sq - i2 * i2 * w2_sq
+    x = (i3 * rhs_e - rhs_m) / (i1 * (i3 - i1))
+    z = (rhs_m - i1 * rhs_e) / (i3 * (i3 - i1))
+    return np.array([math.sqrt(max(x, 0.0)), math.sqrt(w2_sq), math.sqrt(max(z, 0.0))])
+
+
+@SETTINGS
+@given(data=st.data(), fraction=st.floats(0.05, 0.95))
+def test_invariant_along_the_polhode(data, fraction):
+    body = data.draw(bodies())
+    theta = data.draw(spins(body))
+    base = orbits.total_phase(body, theta)
+    omega = point_on_same_polhode(body, theta, fraction)
+    assert orbits.spin_phases(body, omega).total_phase[0] == pytest.approx(base, rel=1e-12)
+    # the same spin through the (theta, phi) interface with phi != 0
+    unit = omega / np.linalg.norm(omega)
+    theta2 = math.acos(unit[2])
+    phi2 = math.atan2(unit[1], unit[0])
+    assert orbits.total_phase(body, theta2, phi=phi2) == pytest.approx(base, rel=1e-12)
+
+
+@SETTINGS
+@given(data=st.data())
+def test_limits_match_formula_near_the_ends(data):
+    body = data.draw(bodies())
+    lim = orbits.phase_limits(body)
+    theta_c = orbits.critical_angle(body)
+    assert orbits.total_phase(body, 0.0) == pytest.approx(lim.theta_zero, rel=1e-14)
+    assert orbits.total_phase(body, math.pi / 2) == pytest.approx(lim.theta_half_pi, rel=1e-14)
+    # the approach is quadratic in the distance from the axis
+    near0 = [abs(orbits.total_phase(body, f * theta_c) / lim.theta_zero - 1) for f in (1e-3, 1e-4)]
+    top = math.pi / 2 - theta_c
+    near1 = [abs(orbits.total_phase(body, math.pi / 2 - f * top) / lim.theta_half_pi - 1)
+             for f in (1e-3, 1e-4)]
+    for coarse, fine in (near0, near1):
+        assert coarse < 1e-4
+        assert fine <= coarse / 50 + 1e-14
+
+
+@SETTINGS
+@given(data=st.data())
+def test_branches_split_at_the_critical_angle(data):
+    body = data.draw(bodies())
+    table = orbits.phases(body, dtheta=[-1e-9, 1e-9])
+    assert table.branch.tolist() == ["SAM", "LAM"]
+    assert (table.total_phase > 2 * math.pi).all()
+
+
+# --------------------------------------------------------------------------
+# Shapes and bad input
+# --------------------------------------------------------------------------
+def test_broadcasting_bodies_against_angles():
+    moments = np.array([[1.0, 2.0, 2.5], [0.26, 0.55, 0.793662]])[:, None, :]
+    theta = np.linspace(0.1, 1.5, 5)
+    out = orbits.total_phase(moments, theta)
+    assert out.shape == (2, 5)
+    assert out[1, 3] == orbits.total_phase(FIG6, theta[3])
+    table = orbits.phases(moments, theta)
+    assert len(table) == 10
+
+
+def test_critical_angle_with_phi():
+    i1, i2, i3 = FIG6.moments
+    phi = 0.7
+    tc = orbits.critical_angle(FIG6, phi)
+    w = np.array([math.sin(tc) * math.cos(phi), math.sin(tc) * math.sin(phi), math.cos(tc)])
+    two_e, m_sq = FIG6.moments @ (w * w), (FIG6.moments ** 2) @ (w * w)
+    assert abs(m_sq - two_e * i2) <= 8 * EPS * m_sq
+    assert orbits.critical_angle(FIG6, math.pi / 2) == pytest.approx(math.pi / 2)
+
+
+@pytest.mark.parametrize("kwargs, error, message", [
+    (dict(theta=math.nan), AngleError, "finite"),
+    (dict(theta=math.inf), AngleError, "finite"),
+    (dict(theta=-0.1), AngleError, r"outside \[0, pi/2\]"),
+    (dict(theta=1.6), AngleError, r"outside \[0, pi/2\]"),
+    (dict(dtheta=1.0), AngleError, r"outside \[0, pi/2\]"),
+    (dict(theta=0.3, dtheta=0.1), AngleError, "exactly one"),
+    (dict(), AngleError, "exactly one"),
+    (dict(dtheta=0.0), SeparatrixError, "separatrix"),
+    (dict(theta=0.5, phi=math.nan), AngleError, "phi must be finite"),
+])
+def test_bad_angles(kwargs, error, message):
+    with pytest.raises(error, match=message):
+        orbits.total_phase(FIG6, **kwargs)
+
+
+def test_theta_exactly_on_the_separatrix():
+    with pytest.raises(SeparatrixError, match="dtheta"):
+        orbits.phases(FIG6, orbits.critical_angle(FIG6))
+
+
+def test_bad_bodies_through_arrays():
+    with pytest.raises(SymmetricTopError, match=r"body #1"):
+        orbits.total_phase([[1, 2, 2.5], [1, 1, 1.5]], 0.3)
+    with pytest.raises(NonPhysicalBodyError, match="triangle"):
+        orbits.total_phase([1, 1.5, 3.0], 0.3)
+    with pytest.raises(NonPhysicalBodyError, match="finite"):
+        orbits.critical_angle([1, 2, math.nan])
+    with pytest.raises(NonPhysicalBodyError, match="shape"):
+        orbits.total_phase([1, 2], 0.3)
+
+
+def test_bad_spin_vectors():
+    with pytest.raises(AngleError, match="nonzero"):
+        orbits.spin_phases(FIG6, [0.0, 0.0, 0.0])
+    with pytest.raises(SeparatrixError):
+        orbits.spin_phases(FIG6, [0.0, 1.0, 0.0])   # steady spin about I2
+    with pytest.raises(AngleError, match="finite"):
+        orbits.spin_phases(FIG6, [math.nan, 0.0, 1.0])
