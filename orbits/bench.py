@@ -1,0 +1,132 @@
+"""``orbits bench``: our kernels against the obvious alternatives, same process.
+
+Each row times one task two ways, best of several repeats after a warm-up
+(so numba compilation is excluded), and reports the ratio.  No test ever
+asserts on these timings; the README quotes a run.
+"""
+
+import json
+import math
+import os
+import platform
+import time
+
+import numba
+import numpy as np
+import scipy
+from scipy import special
+
+from .bodies import Body
+from .phases import total_phase
+
+
+def best_time(function, repeats):
+    """Smallest wall time of ``repeats`` calls (after one warm-up call)."""
+    function()
+    best = math.inf
+    for _ in range(repeats):
+        start = time.perf_counter()
+        function()
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
+def scipy_total_phase(moments, theta):
+    """eqn:GeometricPhase the obvious way: NumPy + SciPy, phi = 0.
+
+    ``K = ellipk(m)``, ``Pi(n|m) = R_F(0, 1-m, 1) + n/3 R_J(0, 1-m, 1, 1-n)``
+    (DLMF 19.25.2), with ``1 - m`` formed by subtraction as anyone would.
+    """
+    i1, i2, i3 = (np.sort(np.asarray(moments, float))[..., k] for k in range(3))
+    s2, c2 = np.sin(theta) ** 2, np.cos(theta) ** 2
+    two_e = i1 * s2 + i3 * c2
+    m_sq = i1 * i1 * s2 + i3 * i3 * c2
+    momentum = np.sqrt(m_sq)
+    sam = m_sq > two_e * i2
+    # eqn:TK and eqn:GeometricPhase, indices 1 <-> 3 in k and D on LAM
+    k2 = np.where(sam, (i2 - i1) * (two_e * i3 - m_sq) / ((i3 - i2) * (m_sq - two_e * i1)),
+                  (i3 - i2) * (m_sq - two_e * i1) / ((i2 - i1) * (two_e * i3 - m_sq)))
+    rate = np.where(sam, np.sqrt((i3 - i2) * (m_sq - two_e * i1) / (i1 * i2 * i3)),
+                    np.sqrt((i2 - i1) * (two_e * i3 - m_sq) / (i1 * i2 * i3)))
+    n = np.where(sam, -i3 * (i2 - i1) / (i1 * (i3 - i2)),
+                 -i3 * (m_sq - two_e * i1) / (i1 * (two_e * i3 - m_sq)))
+    one_minus_m = 1.0 - k2
+    big_k = special.ellipk(k2)
+    big_pi = (special.elliprf(0.0, one_minus_m, 1.0)
+              + n / 3.0 * special.elliprj(0.0, one_minus_m, 1.0, 1.0 - n))
+    period = 4.0 * big_k / rate
+    return (momentum * period / i3
+            + 4.0 * momentum * (i3 - i1) * big_pi / (i1 * i3 * rate)
+            - np.where(sam, 2.0 * np.pi, 0.0))
+
+
+def bench_total_phase(points=1_000_000, repeats=3, seed=0):
+    """Total phase of the Fig. 6 body at ``points`` random angles."""
+    body = Body.preset("fig6")
+    theta = np.random.default_rng(seed).uniform(0.0, 0.5 * np.pi, points)
+    ours = best_time(lambda: total_phase(body, theta), repeats)
+    theirs = best_time(lambda: scipy_total_phase(body.moments, theta), repeats)
+    agree = np.max(np.abs(total_phase(body, theta) / scipy_total_phase(body.moments, theta) - 1))
+    return {
+        "task": f"total phase, {points:.0e} random theta (fig6 body)",
+        "ours_s": ours,
+        "baseline": "NumPy + scipy.special ellipk/elliprf/elliprj",
+        "baseline_s": theirs,
+        "speedup": theirs / ours,
+        "note": f"max relative difference {agree:.1e} (near theta_c the "
+                "baseline loses digits to 1 - m)",
+    }
+
+
+BENCHMARKS = {
+    "phase": bench_total_phase,
+}
+
+
+def run(names=None, quick=False):
+    """Run the named benchmarks (all by default); return a JSON-able dict."""
+    names = list(BENCHMARKS) if not names else names
+    rows = []
+    for name in names:
+        kwargs = {"points": 100_000} if (quick and name == "phase") else {}
+        rows.append(dict(name=name, **BENCHMARKS[name](**kwargs)))
+    return {
+        "machine": {
+            "cpu_count": os.cpu_count(),
+            "numba_threads": numba.get_num_threads(),
+            "python": platform.python_version(),
+            "numpy": np.__version__,
+            "scipy": scipy.__version__,
+            "numba": numba.__version__,
+        },
+        "results": rows,
+    }
+
+
+def format_table(report):
+    """Plain-text table of a :func:`run` report."""
+    machine = report["machine"]
+    lines = [f"orbits bench: {machine['cpu_count']} cores, "
+             f"{machine['numba_threads']} numba threads, Python "
+             f"{machine['python']}, NumPy {machine['numpy']}, SciPy "
+             f"{machine['scipy']}, numba {machine['numba']}",
+             "",
+             f"{'task':<52} {'ours':>10} {'baseline':>10} {'ratio':>8}"]
+    for row in report["results"]:
+        lines.append(f"{row['task']:<52} {_seconds(row['ours_s']):>10} "
+                     f"{_seconds(row['baseline_s']):>10} "
+                     f"{row['speedup']:>7.1f}x")
+        lines.append(f"    baseline: {row['baseline']}; {row['note']}")
+    return "\n".join(lines)
+
+
+def _seconds(value):
+    if value >= 1.0:
+        return f"{value:.2f} s"
+    if value >= 1e-3:
+        return f"{value * 1e3:.2f} ms"
+    return f"{value * 1e6:.1f} us"
+
+
+def to_json(report):
+    return json.dumps(report, indent=2)

@@ -1,0 +1,197 @@
+"""The ``orbits`` command line.
+
+Every failure the user can cause (a bad argument, non-physical moments, an
+unwritable path) ends with exit code 2 and one line on stderr, never a
+traceback.  Ctrl-C ends with exit code 130 and leaves no partial output.
+"""
+
+import argparse
+import math
+import re
+import sys
+
+import pandas as pd
+
+from . import __version__
+from .bodies import PRESETS, Body
+from .errors import InputError, OrbitsError
+
+EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with a one-line error message (no usage dump).
+
+    It also reads ``-1e-300`` as a number: argparse's own pattern for
+    negative numbers has no exponent, so ``--dtheta -1e-300`` would fail.
+    """
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(
+            r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
+
+    def error(self, message):
+        raise InputError(f"{self.prog}: {message}")
+
+
+def _finite(text):
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"not a finite number: {text!r}")
+    return value
+
+
+def _positive_int(text):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
+    return value
+
+
+def add_body_options(parser, many=False):
+    """The body selectors shared by the subcommands (exactly one is required)."""
+    group = parser.add_argument_group(
+        "body (exactly one)",
+        "Moments may be in any order and any scale; they are sorted so that "
+        "I1 < I2 < I3 (the paper's labels).")
+    exclusive = group.add_mutually_exclusive_group(required=True)
+    exclusive.add_argument("--moments", nargs=3, type=_finite,
+                           metavar=("I1", "I2", "I3"),
+                           help="principal moments of inertia")
+    exclusive.add_argument("--t-handle", nargs=3, type=_finite,
+                           metavar=("L1", "L2", "W"),
+                           help="the paper's T-handle of unit mass: cross piece "
+                                "L1, shaft L2, square section W (eqn:IsforT)")
+    exclusive.add_argument("--ellipsoid", nargs=2, type=_finite,
+                           metavar=("B", "C"),
+                           help="the paper's unit-norm body from ellipsoid "
+                                "semi-axes b, c (eqn:isforellipsoid)")
+    exclusive.add_argument("--preset", choices=sorted(PRESETS),
+                           help="t-handle: the paper's (8, 4, 1) handle; fig6: "
+                                "I = (0.26, 0.55, 0.793662)")
+    if many:
+        exclusive.add_argument("--bodies", metavar="FILE.csv",
+                               help="many bodies: a CSV with columns I1, I2, I3 "
+                                    "and optionally name")
+    return group
+
+
+def body_from_args(args):
+    """The :class:`Body` selected by :func:`add_body_options` options."""
+    if args.moments is not None:
+        return Body(args.moments, name="moments({:g}, {:g}, {:g})".format(*args.moments))
+    if args.t_handle is not None:
+        return Body.t_handle(*args.t_handle,
+                             name="t-handle({:g}, {:g}, {:g})".format(*args.t_handle))
+    if args.ellipsoid is not None:
+        return Body.ellipsoid(*args.ellipsoid,
+                              name="ellipsoid({:g}, {:g})".format(*args.ellipsoid))
+    return Body.preset(args.preset)
+
+
+# ---------------------------------------------------------------- phase
+def _cmd_phase(args):
+    from .phases import phases
+    body = body_from_args(args)
+    table = phases(body, args.theta, args.phi, dtheta=args.dtheta)
+    if args.csv:
+        table.to_csv(sys.stdout, index=False, float_format="%.17g")
+    else:
+        with pd.option_context("display.precision", 15):
+            print(table.T.to_string(header=False))
+    return 0
+
+
+def _add_phase(subparsers):
+    parser = subparsers.add_parser(
+        "phase", help="closed-form phases of one body at given spins",
+        description="Energy, momentum, period and the dynamic, geometric and "
+                    "total phase (eqn:GeometricPhase) for |I| = 1 and a unit "
+                    "initial spin omega0 = (sin t cos p, sin t sin p, cos t) in "
+                    "the principal frame.  Angles in radians.")
+    add_body_options(parser)
+    angle = parser.add_mutually_exclusive_group(required=True)
+    angle.add_argument("--theta", nargs="+", type=_finite,
+                       help="polar angle(s) of omega0 from the I3 axis, in [0, pi/2]")
+    angle.add_argument("--dtheta", nargs="+", type=_finite,
+                       help="offset(s) theta - theta_crit from the separatrix "
+                            "(well conditioned down to 1e-300)")
+    parser.add_argument("--phi", type=_finite, default=0.0,
+                        help="azimuth of omega0 from the I1 axis (default 0)")
+    parser.add_argument("--csv", action="store_true",
+                        help="print CSV rows instead of a table")
+    parser.set_defaults(run=_cmd_phase)
+
+
+# ---------------------------------------------------------------- bench
+def _cmd_bench(args):
+    from . import bench
+    unknown = set(args.only or ()) - set(bench.BENCHMARKS)
+    if unknown:
+        raise InputError(f"unknown benchmark(s): {', '.join(sorted(unknown))}; "
+                         f"known: {', '.join(bench.BENCHMARKS)}")
+    report = bench.run(args.only, quick=args.quick)
+    print(bench.to_json(report) if args.json else bench.format_table(report))
+    return 0
+
+
+def _add_bench(subparsers):
+    from . import bench
+    parser = subparsers.add_parser(
+        "bench", help="time our kernels against SciPy in the same process",
+        description="Times each task with our compiled kernels and with the "
+                    "obvious SciPy alternative, best of several runs after a "
+                    "warm-up, and prints the ratio.")
+    parser.add_argument("--json", action="store_true", help="print JSON")
+    parser.add_argument("--only", nargs="+", metavar="NAME",
+                        help=f"run only these ({', '.join(bench.BENCHMARKS)})")
+    parser.add_argument("--quick", action="store_true",
+                        help="smaller problem sizes (a smoke test, not for the README)")
+    parser.set_defaults(run=_cmd_bench)
+
+
+def build_parser():
+    parser = _Parser(
+        prog="orbits",
+        description="Geometric phase, exact motion and closed orbits of the "
+                    "force-free asymmetric top (Mecholsky 2019).")
+    parser.add_argument("--version", action="version",
+                        version=f"orbits {__version__}")
+    subparsers = parser.add_subparsers(dest="command", required=True,
+                                       parser_class=_Parser)
+    _add_phase(subparsers)
+    _add_bench(subparsers)
+    return parser
+
+
+def main(argv=None):
+    """Entry point of the ``orbits`` console script; returns the exit code."""
+    try:
+        args = build_parser().parse_args(argv)
+        return args.run(args)
+    except KeyboardInterrupt:
+        print("orbits: interrupted; no partial output was written", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except OrbitsError as error:
+        print(f"orbits: error: {error}", file=sys.stderr)
+        return EXIT_USAGE
+    except BrokenPipeError:
+        # the reader (e.g. `head`) closed the pipe: not an error of ours
+        sys.stdout = None
+        return 0
+    except OSError as error:
+        print(f"orbits: error: {error.strerror or error}: "
+              f"{error.filename or ''}".rstrip(": "), file=sys.stderr)
+        return EXIT_USAGE
+
+
+if __name__ == "__main__":
+    sys.exit(main())

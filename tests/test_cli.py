@@ -1,0 +1,92 @@
+"""The command line: results, and one-line errors with exit code 2."""
+
+import io
+import json
+import shutil
+import subprocess
+import sys
+
+import pandas as pd
+import pytest
+
+from orbits.cli import main
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def assert_usage_error(code, err, *fragments):
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("orbits: error:")
+    assert "Traceback" not in err
+    for fragment in fragments:
+        assert fragment in lines[0]
+
+
+class TestPhase:
+    def test_t_handle_csv(self, capsys):
+        code, out, _ = run(capsys, "phase", "--preset", "t-handle",
+                           "--theta", "1.4207963267948966",
+                           "--phi", "1.3707963267948966", "--csv")
+        assert code == 0
+        row = pd.read_csv(io.StringIO(out)).iloc[0]
+        assert row.total_phase == pytest.approx(21.5303, abs=5e-5)
+        assert row.branch == "SAM"
+
+    def test_negative_exponent_offsets(self, capsys):
+        code, out, _ = run(capsys, "phase", "--preset", "fig6",
+                           "--dtheta", "-1e-300", "1e-300", "--csv")
+        assert code == 0
+        table = pd.read_csv(io.StringIO(out))
+        assert table.branch.tolist() == ["SAM", "LAM"]
+        assert table.dtheta.tolist() == [-1e-300, 1e-300]
+
+    def test_table_output(self, capsys):
+        code, out, _ = run(capsys, "phase", "--moments", "3", "1", "2",
+                           "--theta", "0.4")
+        assert code == 0 and "total_phase" in out
+
+    @pytest.mark.parametrize("argv, fragments", [
+        (["phase", "--moments", "1", "1", "2", "--theta", "0.3"], ["symmetric top"]),
+        (["phase", "--moments", "1", "2", "4", "--theta", "0.3"], ["triangle"]),
+        (["phase", "--moments", "1", "2", "nan", "--theta", "0.3"], ["not a finite number"]),
+        (["phase", "--preset", "fig6", "--theta", "2"], ["outside [0, pi/2]"]),
+        (["phase", "--preset", "nope", "--theta", "1"], ["invalid choice"]),
+        (["phase", "--preset", "fig6"], ["--theta", "required"]),
+        (["phase", "--preset", "fig6", "--moments", "1", "2", "2.5", "--theta", "1"],
+         ["not allowed with"]),
+        (["phase", "--preset", "fig6", "--dtheta", "0"], ["separatrix"]),
+        (["phase", "--t-handle", "8", "-4", "1", "--theta", "1"], ["positive length"]),
+        (["bench", "--only", "nope"], ["unknown benchmark"]),
+        (["nonsense"], ["invalid choice"]),
+    ])
+    def test_bad_input(self, capsys, argv, fragments):
+        code, _, err = run(capsys, *argv)
+        assert_usage_error(code, err, *fragments)
+
+
+def test_bench_json_quick(capsys):
+    code, out, _ = run(capsys, "bench", "--quick", "--json", "--only", "phase")
+    assert code == 0
+    report = json.loads(out)
+    row = report["results"][0]
+    assert row["name"] == "phase"
+    assert row["ours_s"] > 0 and row["baseline_s"] > 0
+    assert row["speedup"] == pytest.approx(row["baseline_s"] / row["ours_s"])
+
+
+def test_console_script_has_no_traceback():
+    exe = shutil.which("orbits")
+    argv = [exe] if exe else [sys.executable, "-m", "orbits.cli"]
+    proc = subprocess.run(argv + ["phase", "--moments", "1", "1", "2", "--theta", "1"],
+                          capture_output=True, text=True)
+    assert proc.returncode == 2
+    assert proc.stderr.count("\n") == 1
+    assert "Traceback" not in proc.stderr
+    version = subprocess.run(argv + ["--version"], capture_output=True, text=True)
+    assert version.returncode == 0 and version.stdout.startswith("orbits ")
