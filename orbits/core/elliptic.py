@@ -304,53 +304,88 @@ def ellipf_kc(phi, kc):
     return value
 
 
-@njit(cache=True, nogil=True)
-def jacobi_amplitude(u, kc):
-    """Jacobi amplitude and ``sn, cn, dn`` of real ``u`` with modulus ``kc``.
+AGM_LEVELS = _MAX_AGM + 1
 
-    Parameters
-    ----------
-    u : float
-        Argument.
-    kc : float
-        Complementary modulus, ``kc**2 = 1 - m``, ``0 < kc <= 1``.
+
+@njit(cache=True, nogil=True)
+def agm_table(kc, means, geometric):
+    """AGM sequence of ``(1, kc)`` for the Jacobi functions; returns its length.
+
+    Fills ``means[n] = a_n`` and ``geometric[n] = b_n`` (A&S 16.4.1,
+    ``a_0 = 1``, ``b_0 = kc``) and returns ``N``, the first index at which
+    ``c_N = (a_{N-1} - b_{N-1})/2`` is negligible; ``K(m) = pi / (2 a_N)``.
+    ``c_n`` is carried by the stable recurrence ``c_{n+1} = c_n^2 / (4
+    a_{n+1})`` for the stopping test.  Arrays need :data:`AGM_LEVELS` entries.
+    """
+    a = 1.0
+    b = kc
+    gap = math.sqrt((1.0 - kc) * (1.0 + kc))
+    means[0] = a
+    geometric[0] = b
+    n = 0
+    while n < _MAX_AGM and abs(gap) > _AGM_GAP * a:
+        a, b = 0.5 * (a + b), math.sqrt(a * b)
+        gap = gap * gap / (4.0 * a)
+        n += 1
+        means[n] = a
+        geometric[n] = b
+    return n
+
+
+@njit(cache=True, nogil=True)
+def jacobi_from_table(u, kc, levels, means, geometric):
+    """``sn, cn, dn`` of ``u`` and its half-period reduction, from :func:`agm_table`.
 
     Returns
     -------
-    am, sn, cn, dn, j, r : float
-        ``am(u|m)``; the three functions; the half-period index ``j`` and
-        the reduced argument ``r = u - 2 j K`` in ``[-K, K]`` (so that
-        ``am(u) = j pi + am(r)``).
+    sn, cn, dn, j, r : float
+        The three functions at ``u``; the half-period index ``j`` and the
+        reduced argument ``r = u - 2 j K`` in ``[-K, K]``
+        (``am(u) = j pi + am(r)``, and ``sn(r) = (-1)^j sn(u)``).
 
     Notes
     -----
     ``u`` is first reduced by the half period ``2K`` so that long time
-    grids keep full accuracy; ``am(r)`` then follows from the descending
-    Landen (AGM) recurrence, A&S 16.4.  ``dn`` is formed as
-    ``sqrt(cn^2 + kc^2 sn^2)``, which keeps its relative accuracy when
-    ``m -> 1`` and ``dn`` is small.
+    grids keep full accuracy.  At the bottom of the AGM the functions are
+    trigonometric in ``v = a_N r``; the descending Gauss transformation is
+    then undone level by level on the ratio ``cn/sn`` and on ``dn``, with
+    rational operations only (R. Bulirsch, Numer. Math. 7, 78 (1965)):
+    per level ``t <- t c, c <- c dn, dn <- (b_l + t) / (a_l + t), t <- c / a_l``.
     """
-    ka = np.empty(_MAX_AGM + 1)
-    kcn = np.empty(_MAX_AGM + 1)   # c_n of the AGM, = (a_{n-1} - b_{n-1}) / 2
-    a = 1.0
-    b = kc
-    ka[0] = a
-    kcn[0] = math.sqrt((1.0 - kc) * (1.0 + kc))
-    n = 0
-    while n < _MAX_AGM and abs(kcn[n]) > _AGM_GAP * a:
-        c_prev = kcn[n]
-        a, b = 0.5 * (a + b), math.sqrt(a * b)
-        n += 1
-        ka[n] = a
-        kcn[n] = c_prev * c_prev / (4.0 * a)   # = (a_{n-1} - b_{n-1}) / 2, stably
-    quarter = HALF_PI / a                     # K(m)
+    a_last = means[levels]
+    quarter = HALF_PI / a_last                     # K(m)
     j = math.floor(u / (2.0 * quarter) + 0.5)
     r = u - 2.0 * j * quarter
-    phi = (2.0 ** n) * a * r
-    for level in range(n, 0, -1):
-        phi = 0.5 * (phi + math.asin(kcn[level] / ka[level] * math.sin(phi)))
-    s = math.sin(phi)
-    c = math.cos(phi)
-    dn = math.sqrt(c * c + kc * kc * s * s)
+    v = a_last * r
+    s = math.sin(v)
+    c = math.cos(v)
+    dn = 1.0
+    if s != 0.0:
+        ratio = c / s
+        cot = a_last * ratio
+        for level in range(levels - 1, -1, -1):
+            mean = means[level]
+            ratio *= cot
+            cot *= dn
+            dn = (geometric[level] + ratio) / (mean + ratio)
+            ratio = cot / mean
+        s = math.copysign(1.0 / math.sqrt(cot * cot + 1.0), s)
+        c = cot * s
     sign = 1.0 - 2.0 * (j % 2.0 != 0.0)
-    return j * math.pi + phi, sign * s, sign * c, dn, j, r
+    return sign * s, sign * c, dn, j, r
+
+
+@njit(cache=True, nogil=True)
+def jacobi_amplitude(u, kc):
+    """Jacobi amplitude and ``sn, cn, dn`` of real ``u`` with modulus ``kc``.
+
+    Returns ``am, sn, cn, dn, j, r`` with ``am`` continuous in ``u``
+    (``am = j pi + atan2(sn(r), cn(r))``); convenience form of
+    :func:`agm_table` + :func:`jacobi_from_table` for one argument.
+    """
+    means = np.empty(AGM_LEVELS)
+    geometric = np.empty(AGM_LEVELS)
+    levels = agm_table(kc, means, geometric)
+    sn, cn, dn, j, r = jacobi_from_table(u, kc, levels, means, geometric)
+    parity = 1.0 - 2.0 * (j % 2.0 != 0.0)
+    return j * math.pi + math.atan2(parity * sn, parity * cn), sn, cn, dn, j, r
