@@ -46,6 +46,7 @@ import numpy as np
 from numba import njit, prange
 
 from .elliptic import cel, cel_pair
+from .exact import separatrix_gap_exact
 
 TWO_PI = 2.0 * math.pi
 HALF_PI = 0.5 * math.pi
@@ -167,12 +168,11 @@ def spin_gap(cphi, sphi, root_a, root_b, root_ab, theta, dtheta, co_theta):
 def vector_gap(i1, i2, i3, w1, w2, w3):
     """``M^2 - 2 E I2`` in the factor form of :func:`spin_gap` for a vector.
 
-    ``I3 (I3-I2) w3^2 - I1 (I2-I1) w1^2``: a vector knows its distance from
-    the separatrix only to rounding, so this one subtraction is the best
-    that can be done.
+    The orbit through a spin given in doubles is exact, and so is its
+    separatrix gap ``I3 (I3-I2) w3^2 - I1 (I2-I1) w1^2``: it is evaluated in
+    double-double arithmetic and rounded once (:mod:`orbits.core.exact`).
     """
-    gap = i3 * (i3 - i2) * w3 * w3 - i1 * (i2 - i1) * w1 * w1
-    return 1.0, -gap, 1.0
+    return 1.0, -separatrix_gap_exact(i1, i2, i3, w1, w3), 1.0
 
 
 @njit(cache=True, nogil=True)
