@@ -1,0 +1,283 @@
+"""Exact torque-free motion of the asymmetric top (numba kernels).
+
+An orbit is described by a flat float64 array (``ORBIT_SIZE`` entries,
+slots named ``SLOT_*``) filled once by :func:`orbit_setup`; the per-time
+kernels then only evaluate elliptic functions.
+
+Formulas (Mecholsky 2019, appendix; Landau & Lifshitz, Mechanics, Sec. 37):
+
+* eqn:Omegas, SAM (``M^2 > 2 E I2``), ``tau = D (t + t0)``::
+
+      w1 = a1 cn(tau),  w2 = a2 sn(tau),  w3 = a3 dn(tau)
+      a1^2 = (2EI3 - M^2) / (I1 (I3-I1)),  a2^2 = (2EI3 - M^2) / (I2 (I3-I2)),
+      a3^2 = (M^2 - 2EI1) / (I3 (I3-I1))
+
+  LAM: indices 1 <-> 3 swapped (``w1 ~ dn``, ``w3 ~ cn``).  Euler's
+  equations fix the signs: the product of the three amplitude signs is +1.
+* eqn:eulerangles: ``cos(theta) = I3 w3 / M``, ``tan(psi) = I1 w1 / (I2 w2)``.
+* eqn:fullphi: ``dphi/dt = M/I3 + M (I3-I1)/(I1 I3) / (1 - n sn^2(tau))``
+  with ``n = -I3 (I2-I1) / (I1 (I3-I2))`` on SAM and
+  ``n = -I3 (M^2-2EI1) / (I1 (2EI3-M^2))`` on LAM (the reciprocal-modulus
+  form of the paper's second case), so
+
+      phi(t) = M t / I3 + M (I3-I1) / (I1 I3 D) [Pi(n; am tau) - Pi(n; am tau_0)]
+
+  with ``Pi(n; phi + j pi) = 2 j Pi(n) + Pi(n; phi)``.  The incomplete and
+  complete Pi come from Carlson's R_J (DLMF 19.25.14), independent of the
+  Bulirsch ``cel`` used for the closed-form phase.
+* Orientation ``R = Rz(phi) Rx(theta) Rz(psi)`` (z-x'-z'', Goldstein/Landau)
+  maps body components to space components; the space z axis is along M
+  and ``phi(0) = 0``.
+"""
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from .elliptic import (AGM_LEVELS, agm_table, carlson_rj, ellipf_kc,
+                       ellippi_complete_carlson, jacobi_from_table)
+from .phase import BRANCH_SAM, BRANCH_SEPARATRIX, orbit_constants
+
+HALF_PI = 0.5 * math.pi
+TWO_PI = 2.0 * math.pi
+
+(SLOT_BRANCH, SLOT_I1, SLOT_I2, SLOT_I3, SLOT_A1, SLOT_A2, SLOT_A3, SLOT_KC,
+ SLOT_RATE, SLOT_TAU0, SLOT_QUARTER, SLOT_N, SLOT_PI_COMPLETE, SLOT_PI_START,
+ SLOT_COEF, SLOT_MOMENTUM, SLOT_PRECESSION, SLOT_TWO_E, SLOT_PERIOD,
+ SLOT_M, SLOT_STILL, SLOT_LEVELS) = range(22)
+SLOT_MEANS = 22
+SLOT_GEOMETRIC = SLOT_MEANS + AGM_LEVELS
+ORBIT_SIZE = SLOT_GEOMETRIC + AGM_LEVELS
+
+
+@njit(cache=True, nogil=True)
+def _pi_of_u(orbit, u):
+    """``Pi(n; am(u) | m)`` continued through every half period, with sn, cn, dn.
+
+    Also returns ``am(u)``'s pieces: the half-period index ``j`` and
+    ``sin, cos`` of ``am(r)`` (``|am(r)| <= pi/2``).
+    """
+    levels = int(orbit[SLOT_LEVELS])
+    means = orbit[SLOT_MEANS:SLOT_MEANS + AGM_LEVELS]
+    geometric = orbit[SLOT_GEOMETRIC:SLOT_GEOMETRIC + AGM_LEVELS]
+    sn, cn, dn, j, r = jacobi_from_table(u, orbit[SLOT_KC], levels, means,
+                                         geometric)
+    parity = 1.0 - 2.0 * (j % 2.0 != 0.0)
+    s = parity * sn            # sin and cos of am(r), |am(r)| <= pi/2
+    c = parity * cn
+    n = orbit[SLOT_N]
+    # DLMF 19.25.14 with F(am(r)) = r
+    value = (2.0 * j * orbit[SLOT_PI_COMPLETE] + r
+             + n / 3.0 * s * s * s * carlson_rj(c * c, dn * dn, 1.0, 1.0 - n * s * s))
+    return value, sn, cn, dn, j, s, c
+
+
+@njit(cache=True, nogil=True)
+def orbit_setup(i1, i2, i3, w1, w2, w3, scale, offset, closing, orbit):
+    """Fill ``orbit`` with the constants of the motion through omega0.
+
+    Parameters
+    ----------
+    i1, i2, i3 : float
+        Principal moments, ascending.
+    w1, w2, w3 : float
+        omega0 in the principal frame (any magnitude).
+    scale, offset, closing : float
+        ``M^2 - 2 E I2 = -scale * offset * closing``, from
+        :func:`orbits.core.phase.spin_gap` or ``vector_gap``.
+    orbit : ndarray, shape (ORBIT_SIZE,)
+
+    Returns
+    -------
+    int
+        The branch code (0 on the separatrix, where nothing is filled).
+    """
+    branch, two_e, m_sq, kc, q, p, b = orbit_constants(
+        i1, i2, i3, w1, w2, w3, scale, offset, closing)
+    orbit[SLOT_BRANCH] = branch
+    if branch == BRANCH_SEPARATRIX:
+        return branch
+    d21 = i2 - i1
+    d31 = i3 - i1
+    d32 = i3 - i2
+    gap_m1 = i2 * d21 * w2 * w2 + i3 * d31 * w3 * w3      # M^2 - 2 E I1
+    gap_3m = i1 * d31 * w1 * w1 + i2 * d32 * w2 * w2      # 2 E I3 - M^2
+    a1 = math.sqrt(gap_3m / (i1 * d31))
+    a3 = math.sqrt(gap_m1 / (i3 * d31))
+    if branch == BRANCH_SAM:
+        a2 = math.sqrt(gap_3m / (i2 * d32))
+        sign = 1.0 if w3 >= 0.0 else -1.0       # w3 ~ dn never vanishes
+        amp1, amp2, amp3 = a1, sign * a2, sign * a3
+        cos0 = w1 / amp1 if amp1 > 0.0 else 1.0
+        sin0 = w2 / amp2 if a2 > 0.0 else 0.0
+        n = -i3 * d21 / (i1 * d32)
+        m_param = d21 * gap_3m / (d32 * gap_m1)
+    else:
+        a2 = math.sqrt(gap_m1 / (i2 * d21))
+        sign = 1.0 if w1 >= 0.0 else -1.0       # w1 ~ dn never vanishes
+        amp1, amp2, amp3 = sign * a1, sign * a2, a3
+        cos0 = w3 / amp3 if amp3 > 0.0 else 1.0
+        sin0 = w2 / amp2 if a2 > 0.0 else 0.0
+        n = -i3 * gap_m1 / (i1 * gap_3m)
+        m_param = d32 * gap_m1 / (d21 * gap_3m)
+    levels = agm_table(kc, orbit[SLOT_MEANS:SLOT_MEANS + AGM_LEVELS],
+                       orbit[SLOT_GEOMETRIC:SLOT_GEOMETRIC + AGM_LEVELS])
+    quarter = HALF_PI / orbit[SLOT_MEANS + levels]
+    rate = math.sqrt(q / (i1 * i2 * i3))
+    momentum = math.sqrt(m_sq)
+    orbit[SLOT_I1] = i1
+    orbit[SLOT_I2] = i2
+    orbit[SLOT_I3] = i3
+    orbit[SLOT_A1] = amp1
+    orbit[SLOT_A2] = amp2
+    orbit[SLOT_A3] = amp3
+    orbit[SLOT_KC] = kc
+    orbit[SLOT_RATE] = rate
+    orbit[SLOT_QUARTER] = quarter
+    orbit[SLOT_N] = n
+    orbit[SLOT_PI_COMPLETE] = ellippi_complete_carlson(n, kc)
+    orbit[SLOT_COEF] = momentum * d31 / (i1 * i3 * rate)
+    orbit[SLOT_MOMENTUM] = momentum
+    orbit[SLOT_PRECESSION] = momentum / i3
+    orbit[SLOT_TWO_E] = two_e
+    orbit[SLOT_PERIOD] = 4.0 * quarter / rate
+    orbit[SLOT_M] = m_param
+    # a steady spin about I3: the Euler angles phi and psi share one axis
+    orbit[SLOT_STILL] = 1.0 if (branch == BRANCH_SAM and gap_3m == 0.0) else 0.0
+    orbit[SLOT_LEVELS] = levels
+    tau0 = ellipf_kc(math.atan2(sin0, cos0), kc)
+    orbit[SLOT_TAU0] = tau0
+    orbit[SLOT_PI_START] = _pi_of_u(orbit, tau0)[0]
+    return branch
+
+
+@njit(cache=True, nogil=True)
+def state_at(orbit, t):
+    """``w1, w2, w3, phi, theta, psi`` at time ``t`` (body-frame omega, Euler angles).
+
+    ``phi`` is continuous (unwrapped) with ``phi(0) = 0``; ``psi`` is
+    continuous too: on SAM it winds by -2 pi sign(w3) per period, on LAM it
+    stays in one half-plane.
+    """
+    i1 = orbit[SLOT_I1]
+    i2 = orbit[SLOT_I2]
+    i3 = orbit[SLOT_I3]
+    u = orbit[SLOT_TAU0] + orbit[SLOT_RATE] * t
+    pi_u, sn, cn, dn, j, s_red, c_red = _pi_of_u(orbit, u)
+    elapsed = orbit[SLOT_COEF] * (pi_u - orbit[SLOT_PI_START])
+    phi = orbit[SLOT_PRECESSION] * t + elapsed
+    amp2 = orbit[SLOT_A2]
+    w2 = amp2 * sn
+    if orbit[SLOT_BRANCH] == BRANCH_SAM:
+        w1 = orbit[SLOT_A1] * cn
+        w3 = orbit[SLOT_A3] * dn
+        if orbit[SLOT_STILL] != 0.0:
+            psi = -elapsed            # phi + psi = M t / I3, a plain spin
+        else:
+            # chi = atan2(I2 w2, I1 w1) follows +-am; unwrap it against am
+            winding = 1.0 if amp2 >= 0.0 else -1.0
+            am = j * math.pi + math.atan2(s_red, c_red)
+            chi = math.atan2(i2 * w2, i1 * w1)
+            delta = chi - winding * am
+            delta -= TWO_PI * math.floor(delta / TWO_PI + 0.5)
+            psi = HALF_PI - (winding * am + delta)
+    else:
+        w1 = orbit[SLOT_A1] * dn
+        w3 = orbit[SLOT_A3] * cn
+        psi = math.atan2(i1 * w1, i2 * w2)
+    theta = math.atan2(math.hypot(i1 * w1, i2 * w2), i3 * w3)
+    return w1, w2, w3, phi, theta, psi
+
+
+@njit(cache=True, nogil=True)
+def rotation_from_euler(phi, theta, psi, out):
+    """``R = Rz(phi) Rx(theta) Rz(psi)`` into ``out`` (3x3)."""
+    cf, sf = math.cos(phi), math.sin(phi)
+    ct, st = math.cos(theta), math.sin(theta)
+    cp, sp = math.cos(psi), math.sin(psi)
+    out[0, 0] = cf * cp - sf * ct * sp
+    out[0, 1] = -cf * sp - sf * ct * cp
+    out[0, 2] = sf * st
+    out[1, 0] = sf * cp + cf * ct * sp
+    out[1, 1] = -sf * sp + cf * ct * cp
+    out[1, 2] = -cf * st
+    out[2, 0] = st * sp
+    out[2, 1] = st * cp
+    out[2, 2] = ct
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def motion_on_grid(orbit, times, omega, euler, rotation, omega_space):
+    """Evaluate the motion at every time, in parallel.
+
+    Fills ``omega`` (n, 3) body frame, ``euler`` (n, 3) as (phi, theta, psi),
+    ``rotation`` (n, 3, 3) body -> space, and ``omega_space`` (n, 3).
+    """
+    for k in prange(times.shape[0]):
+        w1, w2, w3, phi, theta, psi = state_at(orbit, times[k])
+        omega[k, 0] = w1
+        omega[k, 1] = w2
+        omega[k, 2] = w3
+        euler[k, 0] = phi
+        euler[k, 1] = theta
+        euler[k, 2] = psi
+        r = rotation[k]
+        rotation_from_euler(phi, theta, psi, r)
+        for row in range(3):
+            omega_space[k, row] = r[row, 0] * w1 + r[row, 1] * w2 + r[row, 2] * w3
+
+
+@njit(cache=True, nogil=True)
+def omega_space_at(orbit, t):
+    """Space-frame angular velocity at ``t`` (the herpolhode point).
+
+    With ``R = Rz(phi) Rx(theta) Rz(psi)`` and ``sin(psi), cos(psi)`` from the
+    body-frame momentum, ``R omega`` lies in the invariable plane at height
+    ``2E/M``, at distance ``rho = sqrt(|omega|^2 - (2E/M)^2)`` from the axis
+    and azimuth ``phi + atan2(w3 (2EI3 - M^2) / M, (I2 - I1) w1 w2)``.
+    """
+    i1 = orbit[SLOT_I1]
+    i2 = orbit[SLOT_I2]
+    i3 = orbit[SLOT_I3]
+    u = orbit[SLOT_TAU0] + orbit[SLOT_RATE] * t
+    pi_u, sn, cn, dn, j, s_red, c_red = _pi_of_u(orbit, u)
+    phi = (orbit[SLOT_PRECESSION] * t
+           + orbit[SLOT_COEF] * (pi_u - orbit[SLOT_PI_START]))
+    w2 = orbit[SLOT_A2] * sn
+    if orbit[SLOT_BRANCH] == BRANCH_SAM:
+        w1 = orbit[SLOT_A1] * cn
+        w3 = orbit[SLOT_A3] * dn
+    else:
+        w1 = orbit[SLOT_A1] * dn
+        w3 = orbit[SLOT_A3] * cn
+    momentum = orbit[SLOT_MOMENTUM]
+    height = orbit[SLOT_TWO_E] / momentum
+    gap_3m = i1 * (i3 - i1) * w1 * w1 + i2 * (i3 - i2) * w2 * w2
+    # |omega|^2 - (2E/M)^2 = |omega x M^|^2, as a sum of squares
+    c1 = (i3 - i2) * w2 * w3
+    c2 = (i1 - i3) * w3 * w1
+    c3 = (i2 - i1) * w1 * w2
+    rho = math.sqrt(c1 * c1 + c2 * c2 + c3 * c3) / momentum
+    azimuth = phi + math.atan2(w3 * gap_3m / momentum, c3)
+    return rho * math.cos(azimuth), rho * math.sin(azimuth), height
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def omega_space_on_grid(orbit, times, omega_space):
+    """Only the space-frame angular velocity (the herpolhode), in parallel."""
+    for k in prange(times.shape[0]):
+        x, y, z = omega_space_at(orbit, times[k])
+        omega_space[k, 0] = x
+        omega_space[k, 1] = y
+        omega_space[k, 2] = z
+
+
+@njit(cache=True, nogil=True)
+def phase_after_period(orbit):
+    """``Delta alpha`` from the motion: ``phi(T) - 2 pi`` (SAM) or ``phi(T)``.
+
+    ``T = 4 K / D`` with K from the AGM table; phi from Carlson's Pi.
+    """
+    phi = state_at(orbit, orbit[SLOT_PERIOD])[3]
+    return phi - TWO_PI if orbit[SLOT_BRANCH] == BRANCH_SAM else phi

@@ -1,0 +1,287 @@
+"""Exact motion: angular velocity, Euler angles and orientation in time.
+
+:class:`Motion` evaluates the closed-form solution of Euler's equations
+(eqn:Omegas, eqn:eulerangles, eqn:fullphi; see :mod:`orbits.core.motion`)
+on any time grid.  Conventions:
+
+* body frame = principal axes sorted ``I1 < I2 < I3``;
+* space frame: z along the (conserved) angular momentum M, and the Euler
+  angle ``phi(0) = 0``;
+* orientation ``R(t)`` maps body components to space components,
+  ``R = Rz(phi) Rx(theta) Rz(psi)`` (z-x'-z'', Goldstein Fig. 4.7 / Landau
+  Sec. 35);
+* after one period ``R(T) = Rot(+z, Delta alpha) R(0)``: the herpolhode
+  closes exactly when ``Delta alpha`` is a whole number of turns.
+
+Units: the body's moments as given and omega as given (rad per unit time);
+:func:`polhode` and :func:`herpolhode` use the paper's ``|I| = 1`` and
+``|omega0| = 1``.
+"""
+
+from collections import namedtuple
+
+import numpy as np
+
+from .bodies import Body, as_moments
+from .core import motion as _kernels
+from .core import phase as _phase
+from .errors import AngleError, InputError, SeparatrixError
+
+MotionState = namedtuple("MotionState",
+                         ["t", "omega", "euler", "rotation", "omega_space"])
+MotionState.__doc__ = """The motion on a time grid.
+
+t : (n,) times; omega : (n, 3) body-frame angular velocity;
+euler : (n, 3) Euler angles (phi, theta, psi), radians, phi and psi
+unwrapped; rotation : (n, 3, 3) body -> space; omega_space : (n, 3) the
+angular velocity in the space frame (z along M).
+"""
+
+
+def _as_body(body_or_moments):
+    if isinstance(body_or_moments, Body):
+        return body_or_moments
+    moments = as_moments(body_or_moments)
+    if moments.shape != (3,):
+        raise InputError("the motion is computed for one body at a time")
+    return Body(moments)
+
+
+class Motion:
+    """The torque-free motion of one body from one initial spin.
+
+    Build with :meth:`from_spin` (polar angles, as elsewhere in ``orbits``)
+    or :meth:`from_omega` (any vector).
+
+    Attributes
+    ----------
+    body : Body
+    omega0 : ndarray, shape (3,)
+        Initial angular velocity in the principal frame.
+    branch : str
+        ``"SAM"`` or ``"LAM"``.
+    energy, momentum : float
+        E and M for the body's moments as given.
+    period : float
+        T of eqn:TK, in the time unit of omega0.
+    m : float
+        Elliptic parameter k^2 (indices 1 <-> 3 on LAM).
+    one_minus_m : float
+        ``1 - k^2``, from the factored separatrix gap (accurate where ``m``
+        rounds to 1).
+    """
+
+    def __init__(self, body, omega0, _gap=None):
+        body = _as_body(body)
+        omega0 = np.asarray(omega0, dtype=float)
+        if omega0.shape != (3,) or not np.all(np.isfinite(omega0)):
+            raise AngleError("omega0 must be a finite 3-vector")
+        if not np.any(omega0):
+            raise AngleError("omega0 must be nonzero")
+        i1, i2, i3 = body.moments
+        if _gap is None:
+            _gap = _phase.vector_gap(i1, i2, i3, *omega0)
+        orbit = np.zeros(_kernels.ORBIT_SIZE)
+        branch = _kernels.orbit_setup(i1, i2, i3, *omega0, *_gap, orbit)
+        if branch == _phase.BRANCH_SEPARATRIX:
+            raise SeparatrixError(
+                "omega0 lies on the separatrix M^2 = 2 E I2 (infinite period)")
+        self.body = body
+        self.omega0 = omega0
+        self._orbit = orbit
+        self.branch = "SAM" if branch == _phase.BRANCH_SAM else "LAM"
+        self.energy = 0.5 * orbit[_kernels.SLOT_TWO_E]
+        self.momentum = orbit[_kernels.SLOT_MOMENTUM]
+        self.period = orbit[_kernels.SLOT_PERIOD]
+        self.m = orbit[_kernels.SLOT_M]
+        self.one_minus_m = orbit[_kernels.SLOT_KC] ** 2
+
+    @classmethod
+    def from_omega(cls, body, omega):
+        """Motion from an initial angular velocity in the principal frame.
+
+        Raises
+        ------
+        AngleError
+            omega not a finite nonzero 3-vector.
+        SeparatrixError
+            omega on the separatrix (including a spin exactly along I2).
+        """
+        return cls(body, omega)
+
+    @classmethod
+    def from_spin(cls, body, theta=None, *, dtheta=None, phi=0.0, speed=1.0):
+        """Motion from ``omega0 = speed (sin t cos p, sin t sin p, cos t)``.
+
+        ``theta`` (or the offset ``dtheta = theta - theta_crit``) and ``phi``
+        as in :func:`orbits.total_phase`; with ``dtheta`` the separatrix
+        distance keeps full precision (tested down to ``1 - m = 1e-12``).
+
+        Raises
+        ------
+        AngleError, SeparatrixError
+            As :func:`orbits.total_phase`; ``speed`` must be positive.
+        """
+        body = _as_body(body)
+        if not (np.isfinite(speed) and speed > 0.0):
+            raise AngleError(f"speed must be positive, got {speed}")
+        if (theta is None) == (dtheta is None):
+            raise AngleError("give exactly one of theta and dtheta")
+        i1, i2, i3 = body.moments
+        cphi, sphi, theta_c, co_theta_c, root_a, root_b, root_ab = \
+            _phase.body_constants(i1, i2, i3, float(phi))
+        if not np.isfinite(phi):
+            raise AngleError(f"phi must be finite, got {phi}")
+        from_offset = dtheta is not None
+        angle = float(dtheta if from_offset else theta)
+        theta_, dtheta_, co_theta, status = _phase.angle_triplet(
+            angle, from_offset, theta_c, co_theta_c)
+        if status == _phase.STATUS_NOT_FINITE:
+            raise AngleError(f"{'dtheta' if from_offset else 'theta'} must be finite")
+        if status == _phase.STATUS_OUT_OF_RANGE:
+            raise AngleError(f"theta = {theta_!r} is outside [0, pi/2]")
+        if status == _phase.STATUS_SEPARATRIX:
+            raise SeparatrixError("the spin lies on the separatrix; pass a "
+                                  "nonzero dtheta")
+        w1, w2, w3, scale, offset, closing = _phase.spin_gap(
+            cphi, sphi, root_a, root_b, root_ab, theta_, dtheta_, co_theta)
+        omega = speed * np.array([w1, w2, w3])
+        # the gap scales with speed^2 like omega's squares
+        return cls(body, omega, (scale * speed * speed, offset, closing))
+
+    # ------------------------------------------------------------------
+    def _times(self, t):
+        times = np.ascontiguousarray(t, dtype=float)
+        if not np.all(np.isfinite(times)):
+            raise InputError("times must be finite")
+        return times
+
+    def state(self, t):
+        """Everything at the times ``t``: a :class:`MotionState`."""
+        times = self._times(t)
+        flat = times.reshape(-1)
+        n = flat.shape[0]
+        omega = np.empty((n, 3))
+        euler = np.empty((n, 3))
+        rotation = np.empty((n, 3, 3))
+        omega_space = np.empty((n, 3))
+        _kernels.motion_on_grid(self._orbit, flat, omega, euler, rotation,
+                                omega_space)
+        shape = times.shape
+        return MotionState(times, omega.reshape(shape + (3,)),
+                           euler.reshape(shape + (3,)),
+                           rotation.reshape(shape + (3, 3)),
+                           omega_space.reshape(shape + (3,)))
+
+    def omega(self, t):
+        """Body-frame angular velocity, shape ``t.shape + (3,)``."""
+        return self.state(t).omega
+
+    def angular_momentum(self, t):
+        """Body-frame angular momentum ``I omega`` (the polhode)."""
+        return self.state(t).omega * self.body.moments
+
+    def euler_angles(self, t):
+        """Euler angles ``(phi, theta, psi)``, z-x'-z'', radians."""
+        return self.state(t).euler
+
+    def rotation(self, t):
+        """Orientation matrices (body -> space), shape ``t.shape + (3, 3)``."""
+        return self.state(t).rotation
+
+    def quaternion(self, t):
+        """Orientation as unit quaternions ``(w, x, y, z)``, continuous in t."""
+        euler = self.state(t).euler
+        phi, theta, psi = euler[..., 0], euler[..., 1], euler[..., 2]
+        half = 0.5 * theta
+        plus = 0.5 * (phi + psi)
+        minus = 0.5 * (phi - psi)
+        return np.stack([np.cos(half) * np.cos(plus), np.sin(half) * np.cos(minus),
+                         np.sin(half) * np.sin(minus), np.cos(half) * np.sin(plus)],
+                        axis=-1)
+
+    def omega_space(self, t):
+        """Space-frame angular velocity (z along M): the herpolhode."""
+        times = self._times(t)
+        out = np.empty((times.size, 3))
+        _kernels.omega_space_on_grid(self._orbit, times.reshape(-1), out)
+        return out.reshape(times.shape + (3,))
+
+    def total_phase(self):
+        """``Delta alpha`` from the Euler angle phi after one period.
+
+        ``phi(T) - 2 pi`` on SAM, ``phi(T)`` on LAM (eqn:alphaproto), with
+        Carlson's Pi: an evaluation independent of the ``cel`` of
+        :func:`orbits.total_phase`.
+        """
+        return float(_kernels.phase_after_period(self._orbit))
+
+    def __repr__(self):
+        return (f"Motion({self.body!r}, omega0={self.omega0.tolist()}, "
+                f"branch={self.branch!r}, period={self.period:.6g})")
+
+
+def _grid(motion, periods, points):
+    if not (np.isfinite(periods) and periods > 0):
+        raise InputError(f"periods must be positive, got {periods}")
+    if int(points) != points or points < 2:
+        raise InputError(f"points must be an integer >= 2, got {points}")
+    return np.linspace(0.0, periods * motion.period, int(points))
+
+
+def _paper_motion(body_or_moments, theta, dtheta, phi):
+    body = _as_body(body_or_moments)
+    unit = Body(body.normalized_moments, name=body.name)
+    return Motion.from_spin(unit, theta, dtheta=dtheta, phi=phi)
+
+
+def herpolhode(body_or_moments, theta=None, *, dtheta=None, phi=0.0,
+               periods=1, points=2001):
+    """The herpolhode: the angular velocity in the space frame over time.
+
+    Parameters
+    ----------
+    body_or_moments : Body or array_like, shape (3,)
+    theta, dtheta, phi : float
+        The initial spin, as in :func:`orbits.total_phase` (``|omega0| = 1``).
+    periods : float
+        Length of the curve in periods T.
+    points : int
+        Samples, evenly spaced over ``[0, periods T]``, both ends included.
+
+    Returns
+    -------
+    t : ndarray, shape (points,)
+    omega : ndarray, shape (points, 3)
+        Space-frame angular velocity, z along M.  ``omega[:, 2]`` is the
+        constant ``2E/M``: the curve lies in the invariable plane and its
+        x-y part is the figure.  After one period it is turned by
+        ``+Delta alpha`` about z.
+
+    Raises
+    ------
+    As :func:`orbits.total_phase`; InputError for bad ``periods``/``points``.
+    """
+    # omega(t) does not depend on the scale of I: no need to normalise
+    motion = Motion.from_spin(_as_body(body_or_moments), theta, dtheta=dtheta,
+                              phi=phi)
+    t = _grid(motion, periods, points)
+    return t, motion.omega_space(t)
+
+
+def polhode(body_or_moments, theta=None, *, dtheta=None, phi=0.0, periods=1,
+            points=2001):
+    """The polhode: the angular momentum in the body frame over time.
+
+    Parameters as :func:`herpolhode`; ``|I| = 1`` and ``|omega0| = 1``.
+
+    Returns
+    -------
+    t : ndarray, shape (points,)
+    momentum : ndarray, shape (points, 3)
+        ``I omega(t)`` in the principal frame; it lies on the sphere
+        ``|M| = M`` and the Binet ellipsoid ``M.I^-1.M = 2E``.
+    """
+    motion = _paper_motion(body_or_moments, theta, dtheta, phi)
+    t = _grid(motion, periods, points)
+    return t, motion.angular_momentum(t)
