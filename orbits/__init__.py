@@ -7,9 +7,11 @@ errata corrected (see README, "Errata").
 
 from importlib.metadata import PackageNotFoundError, version as _version
 
-from .bodies import Body, PRESETS
+from .bodies import PRESETS, Body, region_grid, region_sample
+from .checks import montgomery, motion_phase, rotation_by_integration, verify
 from .errors import (AngleError, InputError, NonPhysicalBodyError,
                      OrbitsError, SeparatrixError, SymmetricTopError)
+from .motion import Motion, MotionState, herpolhode, polhode
 from .phases import (PhaseLimits, critical_angle, phase_limits, phases,
                      spin_phases, total_phase)
 
@@ -22,6 +24,8 @@ __all__ = [
     "AngleError",
     "Body",
     "InputError",
+    "Motion",
+    "MotionState",
     "NonPhysicalBodyError",
     "OrbitsError",
     "PRESETS",
@@ -30,8 +34,16 @@ __all__ = [
     "SymmetricTopError",
     "__version__",
     "critical_angle",
+    "herpolhode",
+    "montgomery",
+    "motion_phase",
     "phase_limits",
     "phases",
+    "polhode",
+    "region_grid",
+    "region_sample",
+    "rotation_by_integration",
     "spin_phases",
     "total_phase",
+    "verify",
 ]

@@ -303,6 +303,65 @@ class Body:
         return hash(self._moments.tobytes())
 
 
+# The region of physical asymmetric bodies in the paper's I1-I2 plane
+# (|I| = 1, I1 < I2 < I3 <= I1 + I2), Fig. 2: bounded by the prolate curve
+# I2 = sqrt((1 - I1^2)/2), the oblate line I2 = I1 and the flat curve
+# I2 = (sqrt(2 - 3 I1^2) - I1)/2; corners rod (0, 1/sqrt2), disk
+# (1/sqrt6, 1/sqrt6) and sphere (1/sqrt3, 1/sqrt3).
+REGION_BOX = ((0.0, 1.0 / math.sqrt(3.0)), (1.0 / math.sqrt(6.0), 1.0 / math.sqrt(2.0)))
+
+
+def region_moments(i1, i2):
+    """Unit-norm moments ``(I1, I2, I3)`` and a mask of the physical ones.
+
+    Inside means ``0 < I1 < I2 < I3`` and ``I3 <= I1 + I2`` (flat bodies
+    included, symmetric tops excluded).
+    """
+    i1 = np.asarray(i1, dtype=float)
+    i2 = np.asarray(i2, dtype=float)
+    rest = 1.0 - i1 * i1 - i2 * i2
+    i3 = np.sqrt(np.clip(rest, 0.0, None))
+    inside = ((rest > 0.0) & (i1 > 0.0) & (i1 < i2) & (i2 < i3)
+              & (i3 <= (i1 + i2) * (1.0 + _FLAT_SLACK)))
+    return np.stack([i1, i2, i3], axis=-1), inside
+
+
+def region_grid(resolution):
+    """Bodies on an N x N grid (cell centres) over the region's bounding box.
+
+    Returns an (n, 3) array of unit-norm moments, the grid points inside
+    the region, in row-major order of (I1, I2).
+    """
+    resolution = int(resolution)
+    (lo1, hi1), (lo2, hi2) = REGION_BOX
+    axis1 = lo1 + (np.arange(resolution) + 0.5) * (hi1 - lo1) / resolution
+    axis2 = lo2 + (np.arange(resolution) + 0.5) * (hi2 - lo2) / resolution
+    g1, g2 = np.meshgrid(axis1, axis2, indexing="ij")
+    moments, inside = region_moments(g1.ravel(), g2.ravel())
+    return moments[inside]
+
+
+def region_sample(count):
+    """``count`` bodies spread evenly over the region (deterministic).
+
+    A Halton sequence (bases 2 and 3) over the bounding box, keeping the
+    points inside the region until there are ``count`` of them.
+    """
+    from scipy.stats import qmc
+    (lo1, hi1), (lo2, hi2) = REGION_BOX
+    sampler = qmc.Halton(d=2, scramble=False)
+    sampler.fast_forward(1)                  # skip the corner (0, 0)
+    kept = []
+    total = 0
+    while total < count:
+        points = sampler.random(max(64, 4 * (count - total)))
+        moments, inside = region_moments(lo1 + points[:, 0] * (hi1 - lo1),
+                                         lo2 + points[:, 1] * (hi2 - lo2))
+        kept.append(moments[inside])
+        total += int(inside.sum())
+    return np.concatenate(kept)[:count]
+
+
 PRESETS = {
     "t-handle": lambda: Body.t_handle(8.0, 4.0, 1.0, name="t-handle"),
     "fig6": lambda: Body((0.26, 0.55, 0.793662), name="fig6"),

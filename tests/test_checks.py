@@ -1,0 +1,135 @@
+"""Independent checks: the paper's numbers, their agreement, and that they can fail."""
+
+import json
+import math
+
+import mpmath as mp
+import numpy as np
+import pytest
+
+import orbits
+from orbits import Body, checks
+from orbits.cli import main
+
+T_HANDLE = Body.t_handle(8, 4, 1)
+FIG6 = Body.preset("fig6")
+SPIN = dict(theta=math.pi / 2 - 0.15, phi=math.pi / 2 - 0.2)   # Fig. 3
+
+
+class TestTHandle:
+    """Sec. II.D: all three checks give 2.68074 (mod 2 pi), i.e. 21.5303."""
+
+    @pytest.mark.parametrize("engine", ["scipy", "compiled"])
+    def test_ode_rotation(self, engine):
+        result = checks.rotation_by_integration(T_HANDLE, **SPIN, engine=engine)
+        assert round(result.angle, 5) == 2.68074
+        assert result.error <= 1e-10
+        assert result.off_axis <= 1e-10
+        assert result.period == pytest.approx(23.8181, abs=5e-5)
+
+    def test_montgomery(self):
+        result = checks.montgomery(T_HANDLE, **SPIN)
+        assert round(result.solid_angle, 5) == 2.12519     # not the paper's 2.1253
+        assert round(result.dynamic_phase, 4) == 23.6555
+        assert round(result.total_phase, 4) == 21.5303
+        assert result.total_phase == pytest.approx(orbits.total_phase(T_HANDLE, **SPIN), abs=1e-12)
+
+    def test_exact_motion(self):
+        value = checks.motion_phase(T_HANDLE, **SPIN)
+        assert round(value % (2 * math.pi), 5) == 2.68074
+        assert value == pytest.approx(orbits.total_phase(T_HANDLE, **SPIN), abs=1e-12)
+
+
+def test_montgomery_solid_angle_by_brute_force():
+    """Omega as the area of the cap the polhode bounds, from the polhode
+    points alone (spherical polygon, many vertices)."""
+    t, momentum = orbits.polhode(T_HANDLE, **SPIN, points=20001)
+    unit = momentum / np.linalg.norm(momentum, axis=1)[:, None]
+    # signed area of the spherical polygon about the I3 pole (SAM)
+    phi = np.unwrap(np.arctan2(unit[:, 1], unit[:, 0]))
+    cap = np.trapezoid(1.0 - unit[:, 2], phi)
+    assert cap == pytest.approx(2.12519, abs=5e-6)
+
+
+@pytest.mark.parametrize("theta", [0.3, 0.9, 1.0, 1.05, 1.3, 1.55])
+def test_montgomery_sign_and_geometric_phase(theta):
+    row = orbits.phases(FIG6, theta).iloc[0]
+    result = checks.montgomery(FIG6, theta)
+    assert np.sign(result.solid_angle) == (1 if row.branch == "SAM" else -1)
+    assert result.solid_angle == pytest.approx(row.geometric_phase, abs=1e-11)
+    assert result.period == pytest.approx(row.period, rel=1e-13)
+
+
+@pytest.mark.parametrize("theta, phi", [(0.4, 0.0), (1.2, 0.0), (0.7, 1.1), (1.45, -0.6)])
+def test_compiled_dop853_agrees_with_solve_ivp(theta, phi):
+    a = checks.rotation_by_integration(FIG6, theta, phi=phi, engine="scipy")
+    b = checks.rotation_by_integration(FIG6, theta, phi=phi, engine="compiled")
+    assert b.period == pytest.approx(a.period, rel=1e-11)
+    assert checks.circular_distance(a.angle, b.angle) <= 1e-10
+    assert a.error <= 1e-9 and b.error <= 1e-9
+
+
+def test_several_periods():
+    result = checks.rotation_by_integration(FIG6, 1.2, periods=3, engine="compiled")
+    assert result.error <= 1e-9
+    assert result.expected == pytest.approx(
+        (3 * orbits.total_phase(FIG6, 1.2)) % (2 * math.pi), abs=1e-12)
+
+
+def test_checks_detect_the_printed_lam_formula():
+    """The checks can fail: eqn:alphatheta as printed (beta in the LAM
+    characteristic) disagrees with Montgomery by far more than the tolerance."""
+    theta = 1.2
+    i1, i2, i3 = (mp.mpf(float(v)) for v in FIG6.moments)
+    beta = i1 * (i2 - i1) / (i3 * (i3 - i2))
+    cot2 = 1 / mp.tan(theta) ** 2
+    pre = 4 * mp.sqrt(i2 * (i1**2 + i3**2 * cot2) / (i1**2 * i3 * (i3 - i1) * (i2 - i1)))
+    m = cot2 / beta
+    printed = float(pre * (i1 * mp.ellipk(m)
+                           + (i3 - i1) * mp.ellippi(-i3**2 * cot2 * beta / i1**2, m)))
+    assert abs(printed - checks.montgomery(FIG6, theta).total_phase) > 1e-3
+
+
+def test_verify_small_run_and_report():
+    report = checks.verify(20, 5)
+    assert report.passed
+    assert report.summary["initial_conditions"] == 100
+    assert len(report.table) == 100
+    assert set(report.table["branch"]) == {"SAM", "LAM"}
+    for name in ("montgomery", "ode_rotation", "exact_motion"):
+        assert 0.0 <= report.summary["checks"][name]["max_abs_error"] <= 1e-9
+
+
+def test_verify_fails_on_impossible_tolerance():
+    report = checks.verify(5, 3, tolerance=1e-18)
+    assert not report.passed
+
+
+@pytest.mark.parametrize("bodies, expected", [(None, 6446), ("2930", 64460)])
+def test_cli_verify_paper_count_and_ten_times(capsys, bodies, expected):
+    argv = ["verify", "--json", "--no-progress"] + (["--bodies", bodies] if bodies else [])
+    code = main(argv)
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0
+    assert out["initial_conditions"] == expected
+    assert set(out["checks"]) == {"montgomery", "ode_rotation", "exact_motion"}
+    for check in out["checks"].values():
+        assert check["max_abs_error"] <= 1e-9
+
+
+def test_cli_verify_exit_code_and_table(capsys, tmp_path):
+    path = tmp_path / "ics.csv"
+    assert main(["verify", "--bodies", "3", "--angles", "2", "--tolerance", "1e-18",
+                 "--no-progress", "--table", str(path)]) == 1
+    out = capsys.readouterr().out
+    assert "FAIL" in out
+    import pandas as pd
+    table = pd.read_csv(path)
+    assert len(table) == 6 and "montgomery_error" in table
+
+
+def test_cli_verify_bad_arguments(capsys):
+    assert main(["verify", "--bodies", "0"]) == 2
+    assert "must be >= 1" in capsys.readouterr().err
+    assert main(["verify", "--bodies", "2", "--table", "/nonexistent/dir/x.csv"]) == 2
+    assert "does not exist" in capsys.readouterr().err
