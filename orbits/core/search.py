@@ -1,0 +1,383 @@
+"""Closed-orbit search: every offset where the total phase hits a level.
+
+For one body (phi = 0, |omega0| = 1) each branch is parameterised by the
+distance ``d = |dtheta|`` from the critical angle: ``dtheta = -d`` on SAM
+(``0 < d <= theta_c``) and ``+d`` on LAM (``0 < d <= pi/2 - theta_c``).
+``Delta alpha`` grows like ``log(1/d)`` as ``d -> 0``, so the roots of
+``Delta alpha = L`` accumulate geometrically at the separatrix; in ``log d``
+they are evenly spaced.
+
+Method, per branch:
+
+1. Scan ``Delta alpha`` on a merged grid: log-spaced in ``d`` from the
+   smallest normal double (2.2e-308) up to the branch width, uniform in
+   ``theta`` over the branch, and geometrically approaching the far end
+   (``theta -> 0`` or ``pi/2``), where a dip below the end value would sit.
+2. Split the branch at every interior extremum of the scanned values
+   (each refined by golden section), so that ``Delta alpha`` is monotone on
+   each piece; on a monotone piece every level between its end values has
+   exactly one root.
+3. Bracket each level between neighbouring scan points and solve with
+   Brent's method, first in ``log d`` and then in ``d`` itself, so that the
+   offset is found to a few ulps.
+
+Levels above ``Delta alpha(2.2e-308)`` would need ``|dtheta|`` below the
+smallest normal double; they are counted, not solved.
+"""
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .phase import (STATUS_OK, angle_triplet, body_constants, spin_gap,
+                    total_from_spin)
+
+SMALLEST_OFFSET = 2.2250738585072014e-308
+LOG_POINTS = 64
+UNIFORM_POINTS = 256
+END_POINTS = 12
+GRID_SIZE = LOG_POINTS + UNIFORM_POINTS + END_POINTS
+_GOLDEN = 0.3819660112501051
+# relative size of rounding noise in the scanned phase
+_NOISE = 16.0 * 2.220446049250313e-16
+
+INFO_SIZE = 10
+(INFO_MIN_SAM, INFO_MIN_AT_SAM, INFO_MIN_LAM, INFO_MIN_AT_LAM,
+ INFO_TOP_SAM, INFO_TOP_LAM, INFO_UNREACHED_SAM, INFO_UNREACHED_LAM,
+ INFO_WIDTH_SAM, INFO_WIDTH_LAM) = range(INFO_SIZE)
+
+BRANCH_INFO_SIZE = 4     # minimum, where, value at the smallest offset, unreached
+
+
+@njit(cache=True, nogil=True)
+def phase_of_offset(d, params):
+    """Total phase at ``dtheta = params[3] * d`` (phi = 0).
+
+    ``params = (I1, I2, I3, sign, *body_constants(I1, I2, I3, 0))``.
+    """
+    theta, dtheta, co_theta, code = angle_triplet(params[3] * d, True,
+                                                  params[6], params[7])
+    if code != STATUS_OK:
+        return np.nan
+    w1, w2, w3, scale, offset, closing = spin_gap(
+        params[4], params[5], params[8], params[9], params[10], theta, dtheta,
+        co_theta)
+    return total_from_spin(params[0], params[1], params[2], w1, w2, w3, scale,
+                           offset, closing)
+
+
+KIND_PHASE = 0
+KIND_SYNTHETIC = 1
+
+
+@njit(cache=True, nogil=True)
+def synthetic_profile(d, params):
+    """A non-monotone stand-in for the phase, to test the search.
+
+    ``A log(w/d) + B + C sin(k pi d / w) - D exp(-((w - d)/s)^2)`` with
+    ``params = (A, B, C, k, D, s, w)``: it diverges at the separatrix like
+    the phase, oscillates across the branch and dips next to the far end.
+    """
+    a, b, c, k, depth, spread, width = (params[0], params[1], params[2],
+                                        params[3], params[4], params[5],
+                                        params[6])
+    return (a * math.log(width / d) + b + c * math.sin(k * math.pi * d / width)
+            - depth * math.exp(-((width - d) / spread) ** 2))
+
+
+@njit(cache=True, nogil=True)
+def _evaluate(kind, d, params):
+    if kind == KIND_PHASE:
+        return phase_of_offset(d, params)
+    return synthetic_profile(d, params)
+
+
+@njit(cache=True, nogil=True)
+def branch_grid(width, out):
+    """Scan points ``d`` in (0, width], ascending; returns how many."""
+    count = 0
+    ratio = math.log(width / SMALLEST_OFFSET)
+    for k in range(LOG_POINTS):
+        out[count] = SMALLEST_OFFSET * math.exp(ratio * k / LOG_POINTS)
+        count += 1
+    for k in range(1, UNIFORM_POINTS + 1):
+        out[count] = width * k / UNIFORM_POINTS
+        count += 1
+    for k in range(1, END_POINTS + 1):
+        out[count] = width * (1.0 - 10.0 ** (-0.5 - 0.75 * k))
+        count += 1
+    grid = np.sort(out[:count])
+    unique = 0
+    for k in range(count):
+        if k == 0 or grid[k] > grid[k - 1]:
+            out[unique] = grid[k]
+            unique += 1
+    return unique
+
+
+@njit(cache=True, nogil=True)
+def _brent(kind, params, level, lo, hi, f_lo, f_hi, in_log):
+    """Root of ``f(d) = level`` bracketed by ``[lo, hi]``.
+
+    Brent-Dekker (inverse quadratic interpolation, secant, bisection) in
+    ``x = log d`` (``in_log``) or ``x = d``.  Returns ``(best, other)``, in
+    ``d``: Brent's best iterate and the other end of the final bracket
+    (they coincide when the residual vanished exactly).
+    """
+    a, b = (math.log(lo), math.log(hi)) if in_log else (lo, hi)
+    fa = f_lo - level
+    fb = f_hi - level
+    if fa == 0.0:
+        return lo, lo
+    if fb == 0.0:
+        return hi, hi
+    c = a
+    fc = fa
+    e = b - a
+    step = e
+    for _ in range(200):
+        if (fb > 0.0) == (fc > 0.0):
+            c = a
+            fc = fa
+            e = b - a
+            step = e
+        if abs(fc) < abs(fb):
+            a, b, c = b, c, b
+            fa, fb, fc = fb, fc, fb
+        tol = 2.0 * 2.220446049250313e-16 * abs(b)
+        half = 0.5 * (c - b)
+        if abs(half) <= tol or fb == 0.0:
+            break
+        if abs(e) >= tol and abs(fa) > abs(fb):
+            s = fb / fa
+            if a == c:
+                p = 2.0 * half * s
+                q = 1.0 - s
+            else:
+                q = fa / fc
+                r = fb / fc
+                p = s * (2.0 * half * q * (q - r) - (b - a) * (r - 1.0))
+                q = (q - 1.0) * (r - 1.0) * (s - 1.0)
+            if p > 0.0:
+                q = -q
+            p = abs(p)
+            if 2.0 * p < min(3.0 * half * q - abs(tol * q), abs(e * q)):
+                e = step
+                step = p / q
+            else:
+                step = half
+                e = step
+        else:
+            step = half
+            e = step
+        a = b
+        fa = fb
+        b += step if abs(step) > tol else math.copysign(tol, half)
+        fb = _evaluate(kind, math.exp(b) if in_log else b, params) - level
+    if fb == 0.0:
+        c = b
+    if in_log:
+        return math.exp(b), math.exp(c)
+    return b, c
+
+
+@njit(cache=True, nogil=True)
+def solve_level(kind, params, level, lo, hi, f_lo, f_hi):
+    """The ``d`` in ``[lo, hi]`` where ``f(d) = level`` (``f`` monotone there).
+
+    Brent in ``log d`` to a narrow bracket, then Brent in ``d`` to a few
+    ulps of ``d`` (the log stage alone leaves ~|log d| ulps).
+    """
+    if hi > 4.0 * lo:
+        best, other = _brent(kind, params, level, lo, hi, f_lo, f_hi, True)
+        if best == other:
+            return best
+        lo2, hi2 = min(best, other), max(best, other)
+        f_lo2 = _evaluate(kind, lo2, params)
+        f_hi2 = _evaluate(kind, hi2, params)
+        if (f_lo2 - level > 0.0) != (f_hi2 - level > 0.0):
+            lo, hi, f_lo, f_hi = lo2, hi2, f_lo2, f_hi2
+    best, other = _brent(kind, params, level, lo, hi, f_lo, f_hi, False)
+    return best
+
+
+@njit(cache=True, nogil=True)
+def _extremum(kind, params, lo, hi, want_min):
+    """Golden-section search for the extremum of ``f`` on ``[lo, hi]``."""
+    s = 1.0 if want_min else -1.0
+    a = lo
+    b = hi
+    x1 = a + _GOLDEN * (b - a)
+    x2 = b - _GOLDEN * (b - a)
+    f1 = s * _evaluate(kind, x1, params)
+    f2 = s * _evaluate(kind, x2, params)
+    for _ in range(200):
+        if b - a <= 1e-12 * b:
+            break
+        if f1 < f2:
+            b = x2
+            x2 = x1
+            f2 = f1
+            x1 = a + _GOLDEN * (b - a)
+            f1 = s * _evaluate(kind, x1, params)
+        else:
+            a = x1
+            x1 = x2
+            f1 = f2
+            x2 = b - _GOLDEN * (b - a)
+            f2 = s * _evaluate(kind, x2, params)
+    if f1 < f2:
+        return x1, s * f1
+    return x2, s * f2
+
+
+@njit(cache=True, nogil=True)
+def _bracket(values, start, stop, level):
+    """Index k with ``level`` between ``values[k]`` and ``values[k+1]``.
+
+    ``values[start:stop+1]`` is monotone and brackets ``level``.
+    """
+    increasing = values[stop] > values[start]
+    lo = start
+    hi = stop
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if (values[mid] < level) == increasing:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
+@njit(cache=True, nogil=True)
+def search_branch(kind, params, width, levels, root_level, root_offset, found,
+                  branch_info):
+    """Every ``d`` in (0, width) with ``f(d)`` equal to a level.
+
+    ``f`` is :func:`phase_of_offset` (``kind = KIND_PHASE``), the phase at
+    distance ``d`` from the separatrix, or :func:`synthetic_profile`; it
+    may rise and fall any number of times (resolved by the scan).  Roots
+    are appended to ``root_level`` / ``root_offset`` from index ``found``
+    (``d``, not signed).  ``branch_info`` receives the minimum of ``f`` and
+    where it lies, ``f`` at the smallest offset and how many levels exceed
+    that.  Returns the new count, or -1 if the arrays are too short.
+    """
+    grid = np.empty(GRID_SIZE)
+    values = np.empty(GRID_SIZE)
+    piece_lo = np.empty(GRID_SIZE + 2, dtype=np.int64)
+    capacity = root_offset.shape[0]
+    count = branch_grid(width, grid)
+    for k in range(count):
+        values[k] = _evaluate(kind, grid[k], params)
+    # the phase at the smallest representable offset bounds the levels
+    # whose roots a double can hold
+    top = values[0]
+    unreached = 0
+    for j in range(levels.shape[0]):
+        if levels[j] > top:
+            unreached += 1
+    # monotone pieces: split at interior extrema of the scan
+    best_value = values[count - 1]
+    best_at = grid[count - 1]
+    pieces = 0
+    piece_lo[pieces] = 0
+    pieces += 1
+    for k in range(1, count - 1):
+        left = values[k] - values[k - 1]
+        right = values[k + 1] - values[k]
+        # near the far end the phase is flat to rounding; differences
+        # within a few ulps are noise, not extrema
+        noise = _NOISE * abs(values[k])
+        if abs(left) <= noise or abs(right) <= noise:
+            continue
+        if left * right < 0.0:
+            d_ext, f_ext = _extremum(kind, params, grid[k - 1], grid[k + 1],
+                                     right > 0.0)
+            # the refined extremum replaces the scan point, keeping the
+            # scan ordered and each piece monotone
+            if grid[k - 1] < d_ext < grid[k + 1] and (
+                    (right > 0.0 and f_ext <= values[k])
+                    or (right < 0.0 and f_ext >= values[k])):
+                grid[k] = d_ext
+                values[k] = f_ext
+            piece_lo[pieces] = k
+            pieces += 1
+    piece_lo[pieces] = count - 1
+    for k in range(count):
+        if values[k] < best_value - _NOISE * abs(best_value):
+            best_value = values[k]
+            best_at = grid[k]
+    branch_info[0] = best_value
+    branch_info[1] = best_at
+    branch_info[2] = top
+    branch_info[3] = unreached
+    for p in range(pieces):
+        start = piece_lo[p]
+        stop = piece_lo[p + 1]
+        low = min(values[start], values[stop])
+        high = max(values[start], values[stop])
+        j = np.searchsorted(levels, low, side="right")
+        while j < levels.shape[0] and levels[j] < high:
+            if found >= capacity:
+                return -1
+            k = _bracket(values, start, stop, levels[j])
+            root_level[found] = j
+            root_offset[found] = solve_level(kind, params, levels[j], grid[k],
+                                             grid[k + 1], values[k], values[k + 1])
+            found += 1
+            j += 1
+    return found
+
+
+@njit(cache=True, nogil=True)
+def search_body(i1, i2, i3, levels, root_branch, root_level, root_offset, info):
+    """All roots of ``Delta alpha = levels[j]`` on both branches of one body.
+
+    Parameters
+    ----------
+    i1, i2, i3 : float
+        Principal moments, ascending.
+    levels : ndarray
+        Target phases, ascending (``2 pi p / q``).
+    root_branch, root_level, root_offset : ndarray
+        Receive, per root, the branch (+1 SAM, -1 LAM), the index into
+        ``levels`` and ``dtheta``.
+    info : ndarray (INFO_SIZE,)
+        Per branch: the minimum of the phase and its ``dtheta``, the phase
+        at ``|dtheta| = 2.2e-308``, the number of levels above it (roots
+        that would lie closer to the separatrix than a double can say),
+        and the branch width.
+
+    Returns
+    -------
+    int
+        Number of roots found, or ``-1`` if the output arrays are too short.
+    """
+    constants = body_constants(i1, i2, i3, 0.0)
+    params = np.empty(11)
+    params[0] = i1
+    params[1] = i2
+    params[2] = i3
+    for k in range(7):
+        params[4 + k] = constants[k]
+    branch_info = np.empty(BRANCH_INFO_SIZE)
+    found = 0
+    for branch_index in range(2):
+        sign = -1.0 if branch_index == 0 else 1.0
+        params[3] = sign
+        width = constants[2] if branch_index == 0 else constants[3]
+        start = found
+        found = search_branch(KIND_PHASE, params, width, levels, root_level,
+                              root_offset, found, branch_info)
+        if found < 0:
+            return -1
+        for k in range(start, found):
+            root_branch[k] = 1 if branch_index == 0 else -1
+            root_offset[k] *= sign
+        info[INFO_MIN_SAM + 2 * branch_index] = branch_info[0]
+        info[INFO_MIN_AT_SAM + 2 * branch_index] = sign * branch_info[1]
+        info[INFO_TOP_SAM + branch_index] = branch_info[2]
+        info[INFO_UNREACHED_SAM + branch_index] = branch_info[3]
+        info[INFO_WIDTH_SAM + branch_index] = width
+    return found

@@ -1,0 +1,187 @@
+"""Closed orbits: the initial spins whose total phase is a whole number of turns.
+
+On an orbit with ``Delta alpha = 2 pi p / q`` the body is back at its
+starting orientation after q periods, and the herpolhode closes.  With the
+paper's conventions (phi = 0, ``|omega0| = 1``) every such spin is a polar
+angle ``theta`` in (0, pi/2) on one of the two branches; near the critical
+angle they accumulate geometrically, so each root is stored as its offset
+``dtheta = theta - theta_crit`` to full relative precision.
+"""
+
+import math
+import warnings
+from fractions import Fraction
+
+import numpy as np
+import pandas as pd
+
+from .bodies import Body, as_moments
+from .core import search as _kernels
+from .errors import InputError
+from .phases import phases
+
+CATALOG_COLUMNS = ("body", "I1", "I2", "I3", "theta_crit", "branch", "n", "q",
+                   "theta", "dtheta", "total_phase", "dynamic_phase",
+                   "geometric_phase", "period", "energy", "momentum", "m",
+                   "residual")
+# every root must satisfy |Delta alpha - 2 pi p/q| <= RESIDUAL_TOLERANCE * 2 pi p/q
+RESIDUAL_TOLERANCE = 1e-10
+
+
+class UnresolvedOrbitsWarning(UserWarning):
+    """Closed orbits exist but lie closer to the separatrix than a double can hold."""
+
+
+def phase_levels(n_max, q_max=1):
+    """The target phases ``2 pi p / q``, ascending.
+
+    All fractions ``p/q`` in lowest terms with ``1 <= q <= q_max`` and
+    ``0 < p/q <= n_max``.
+
+    Returns
+    -------
+    p, q : ndarray of int
+    values : ndarray of float
+        ``2 pi p / q``.
+    """
+    n_max = _count("n_max", n_max)
+    q_max = _count("q_max", q_max)
+    fractions = sorted({Fraction(p, q) for q in range(1, q_max + 1)
+                        for p in range(1, n_max * q + 1)})
+    p = np.array([f.numerator for f in fractions], dtype=np.int64)
+    q = np.array([f.denominator for f in fractions], dtype=np.int64)
+    return p, q, 2.0 * np.pi * p / q
+
+
+def _count(name, value):
+    if isinstance(value, bool) or not float(value).is_integer() or value < 1:
+        raise InputError(f"{name} must be an integer >= 1, got {value!r}")
+    return int(value)
+
+
+def _label(body, moments):
+    if isinstance(body, Body) and body.name:
+        return str(body.name).replace("#", "")
+    return "I=({:.9g}, {:.9g}, {:.9g})".format(*moments)
+
+
+def find_roots(moments, levels):
+    """Kernel call for one body; returns (branch, level index, dtheta, info)."""
+    capacity = 4 * levels.size + 16
+    info = np.empty(_kernels.INFO_SIZE)
+    while True:
+        branch = np.empty(capacity, dtype=np.int8)
+        level = np.empty(capacity, dtype=np.int64)
+        offset = np.empty(capacity)
+        count = _kernels.search_body(moments[0], moments[1], moments[2],
+                                     levels, branch, level, offset, info)
+        if count >= 0:
+            return branch[:count], level[:count], offset[:count], info
+        capacity *= 4
+
+
+def closed_orbits(body, n_max=10, q_max=1):
+    """Every closed orbit of a body up to ``n_max`` turns.
+
+    Parameters
+    ----------
+    body : Body or array_like, shape (3,)
+    n_max : int
+        Largest multiple: orbits with ``Delta alpha = 2 pi p / q <= 2 pi n_max``.
+    q_max : int
+        Largest number of periods after which the orbit closes; 1 (default)
+        gives the paper's integer multiples ``Delta alpha = 2 pi n``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per closed orbit, sorted by ``theta`` (i.e. by ``dtheta``),
+        with the columns of :data:`CATALOG_COLUMNS` (see the README's
+        catalog schema).  ``n`` is ``p``; ``q`` is 1 for integer orbits.
+
+    Raises
+    ------
+    NonPhysicalBodyError, SymmetricTopError
+        Invalid moments.
+    InputError
+        ``n_max`` or ``q_max`` not an integer >= 1.
+
+    Warns
+    -----
+    UnresolvedOrbitsWarning
+        When some levels are reached only closer to the separatrix than
+        ``|dtheta| = 2.2e-308`` (the smallest normal double): those orbits
+        exist but cannot be stored, and are left out.
+
+    Notes
+    -----
+    The search (see :mod:`orbits.core.search`) scans each branch, splits
+    it into pieces on which ``Delta alpha`` is monotone, and solves for
+    every level on every piece, so bodies whose phase is not monotone in
+    theta get all their roots.  Every root is checked:
+    ``|Delta alpha - 2 pi p/q| <= 1e-10 * 2 pi p/q``.
+    """
+    p, q, values = phase_levels(n_max, q_max)
+    moments = as_moments(body)
+    if moments.shape != (3,):
+        raise InputError("closed_orbits takes one body; use orbits.catalog.catalog "
+                         "for many")
+    branch, level, offset, info = find_roots(moments, values)
+    unreached = int(info[_kernels.INFO_UNREACHED_SAM] + info[_kernels.INFO_UNREACHED_LAM])
+    if unreached:
+        warnings.warn(
+            f"{unreached} closed orbit(s) with 2 pi p/q <= 2 pi {n_max} lie "
+            "closer than |dtheta| = 2.2e-308 to the separatrix and cannot be "
+            "stored in double precision; they are left out",
+            UnresolvedOrbitsWarning, stacklevel=2)
+    order = np.argsort(offset, kind="stable")
+    branch, level, offset = branch[order], level[order], offset[order]
+    table = phases(moments, dtheta=offset) if offset.size else phases(
+        moments, dtheta=np.empty(0))
+    target = values[level]
+    residual = table["total_phase"].to_numpy() - target
+    bad = np.abs(residual) > RESIDUAL_TOLERANCE * target
+    if bad.any():      # the search guarantees this; a failure is a bug
+        k = int(np.flatnonzero(bad)[0])
+        raise RuntimeError(f"root {offset[k]!r} misses its level {target[k]!r} "
+                           f"by {residual[k]!r}")
+    frame = pd.DataFrame({
+        "body": _label(body, moments),
+        "I1": table["I1"], "I2": table["I2"], "I3": table["I3"],
+        "theta_crit": table["theta_crit"],
+        "branch": table["branch"].astype(str),
+        "n": p[level], "q": q[level],
+        "theta": table["theta"], "dtheta": offset,
+        "total_phase": table["total_phase"],
+        "dynamic_phase": table["dynamic_phase"],
+        "geometric_phase": table["geometric_phase"],
+        "period": table["period"],
+        "energy": table["energy"], "momentum": table["momentum"],
+        "m": table["m"],
+        "residual": residual,
+    }, columns=list(CATALOG_COLUMNS))
+    frame.attrs["unresolved"] = unreached
+    frame.attrs["minimum_phase"] = {
+        "SAM": (float(info[_kernels.INFO_MIN_SAM]), float(info[_kernels.INFO_MIN_AT_SAM])),
+        "LAM": (float(info[_kernels.INFO_MIN_LAM]), float(info[_kernels.INFO_MIN_AT_LAM])),
+    }
+    return frame
+
+
+def minimum_phase(body):
+    """The smallest total phase over all spins of a body (phi = 0).
+
+    Returns
+    -------
+    value, dtheta : float
+        The minimum of ``Delta alpha`` over both branches and the offset
+        where it lies (``-theta_crit`` is theta = 0, ``pi/2 - theta_crit`` is
+        theta = pi/2: the paper's conjecture is that it is always one of
+        these ends).
+    """
+    moments = as_moments(body)
+    _, _, _, info = find_roots(moments, np.empty(0))
+    sam = (info[_kernels.INFO_MIN_SAM], info[_kernels.INFO_MIN_AT_SAM])
+    lam = (info[_kernels.INFO_MIN_LAM], info[_kernels.INFO_MIN_AT_LAM])
+    best = min(sam, lam)
+    return float(best[0]), float(best[1])

@@ -1,0 +1,159 @@
+"""Closed-orbit search: the paper's Fig. 6 roots, completeness, range, rationals."""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+import orbits
+from orbits import Body, InputError, closed_orbits
+from orbits.core import search as kernels
+from orbits.search import UnresolvedOrbitsWarning, minimum_phase, phase_levels
+
+FIG6 = Body.preset("fig6")
+T_HANDLE = Body.preset("t-handle")
+
+
+def test_fig6_roots_of_the_paper():
+    """Sec. III.C: theta = 0.9562 ... 1.2742 with n = 2, 3, 4, 5, 5, 4, 3, 2."""
+    table = closed_orbits(FIG6, n_max=5)
+    assert table["n"].tolist() == [2, 3, 4, 5, 5, 4, 3, 2]
+    assert table["branch"].tolist() == ["SAM"] * 4 + ["LAM"] * 4
+    paper = [0.9562, 1.004, 1.011, 1.012, 1.014, 1.021, 1.061, 1.2742]
+    for got, printed in zip(table["theta"], paper):
+        decimals = len(repr(printed).split(".")[1])
+        assert abs(got - printed) <= 0.5 * 10.0 ** -decimals
+    # the critical angle sits between the two n = 5 orbits
+    assert table["theta"][3] < orbits.critical_angle(FIG6) < table["theta"][4]
+    # "each n is about 6x closer than the last"
+    offsets = table.loc[table.branch == "SAM", "dtheta"].abs().to_numpy()
+    ratios = offsets[:-1] / offsets[1:]
+    assert np.all((5.5 < ratios[1:]) & (ratios[1:] < 7.0))
+
+
+def test_every_root_meets_its_level_and_n_max_300_works():
+    table = closed_orbits(FIG6, n_max=300)
+    target = 2 * np.pi * table["n"] / table["q"]
+    # checked from dtheta, independently of the search
+    again = orbits.total_phase(FIG6, dtheta=table["dtheta"].to_numpy())
+    assert np.all(np.abs(again - target) <= 1e-10 * target)
+    assert np.all(np.abs(table["residual"]) <= 1e-10 * target)
+    # every n from the branch minimum up to 300, once on each branch
+    for branch, limit in (("SAM", orbits.phase_limits(FIG6).theta_zero),
+                          ("LAM", orbits.phase_limits(FIG6).theta_half_pi)):
+        found = sorted(table.loc[table.branch == branch, "n"])
+        assert found == list(range(math.floor(limit / (2 * np.pi)) + 1, 301))
+    assert table["dtheta"].abs().min() < 1e-200
+    assert (np.diff(table["dtheta"]) > 0).all()    # sorted by theta
+    # full relative precision near the separatrix: the roots are distinct
+    assert table["dtheta"].nunique() == len(table)
+
+
+def test_roots_independently_by_bisection():
+    """The n = 3 roots by plain bisection on the public API."""
+    for branch, sign in (("SAM", -1.0), ("LAM", 1.0)):
+        lo, hi = 1e-6, 0.3
+        for _ in range(200):
+            mid = math.sqrt(lo * hi)
+            value = orbits.total_phase(FIG6, dtheta=sign * mid) - 6 * np.pi
+            lo, hi = (mid, hi) if value > 0 else (lo, mid)
+        table = closed_orbits(FIG6, n_max=3)
+        row = table[(table.branch == branch) & (table.n == 3)].iloc[0]
+        assert row.dtheta == pytest.approx(sign * lo, rel=1e-14)
+
+
+def test_rational_levels():
+    p, q, values = phase_levels(3, 4)
+    fractions = list(zip(p, q))
+    assert (1, 1) in fractions and (3, 4) in fractions and (5, 2) in fractions
+    assert (2, 4) not in fractions and (2, 2) not in fractions   # lowest terms
+    assert np.all(np.diff(values) > 0)
+    assert np.all(p <= 3 * q)
+    assert all(math.gcd(int(a), int(b)) == 1 for a, b in fractions)
+
+
+def test_rational_orbits_close_after_q_periods():
+    table = closed_orbits(FIG6, n_max=4, q_max=3)
+    assert set(table["q"]) == {1, 2, 3}
+    assert (table.loc[table.q == 1, "n"] >= 2).all()
+    for _, row in table[table.q > 1].head(6).iterrows():
+        t, omega = orbits.herpolhode(FIG6, dtheta=row.dtheta, periods=row.q, points=3001)
+        assert np.abs(omega[-1] - omega[0]).max() <= 1e-9
+        # but not after fewer periods
+        for fewer in range(1, row.q):
+            t, omega = orbits.herpolhode(FIG6, dtheta=row.dtheta, periods=fewer, points=3)
+            assert np.abs(omega[-1] - omega[0]).max() > 1e-3
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_search_is_complete_on_non_monotone_profiles(seed):
+    """The scan-and-split search against brute force on wiggly profiles.
+
+    No physical body in a 300 x 300 grid has a non-monotone phase at
+    phi = 0, so the splitting at extrema is exercised on a synthetic
+    profile with the same divergence at the separatrix.
+    """
+    rng = np.random.default_rng(seed)
+    width = rng.uniform(0.3, 1.4)
+    params = np.array([rng.uniform(0.5, 2.0), rng.uniform(3, 8), rng.uniform(0.5, 3.0),
+                       rng.uniform(2.0, 12.0), rng.uniform(0.0, 3.0),
+                       rng.uniform(0.005, 0.05), width])
+    levels = np.sort(rng.uniform(2.0, 25.0, 40))
+    root_level = np.empty(4000, dtype=np.int64)
+    root_offset = np.empty(4000)
+    info = np.empty(kernels.BRANCH_INFO_SIZE)
+    count = kernels.search_branch(kernels.KIND_SYNTHETIC, params, width, levels,
+                                  root_level, root_offset, 0, info)
+    d = np.concatenate([np.geomspace(1e-300, 1e-3 * width, 100_000),
+                        np.linspace(1e-3 * width, width, 2_000_001)[1:-1]])
+    a, b, c, k, depth, spread, w = params
+    f = (a * np.log(w / d) + b + c * np.sin(k * np.pi * d / w)
+         - depth * np.exp(-((w - d) / spread) ** 2))
+    expected = sum(int(np.count_nonzero((f[:-1] - level) * (f[1:] - level) < 0))
+                   for level in levels)
+    assert count == expected
+    for j, offset in zip(root_level[:count], root_offset[:count]):
+        assert kernels.synthetic_profile(offset, params) == pytest.approx(levels[j], abs=1e-9)
+    # the refined minimum is attained where reported, and no sample beats it
+    assert kernels.synthetic_profile(info[1], params) == pytest.approx(info[0], rel=1e-15)
+    assert info[0] <= f.min() + 1e-12
+
+
+def test_unrepresentable_roots_are_reported():
+    body = Body((0.05, 1.0, 1.049))      # ~23x closer per n: n = 300 is past 1e-308
+    with pytest.warns(UnresolvedOrbitsWarning, match="2.2e-308"):
+        table = closed_orbits(body, n_max=300)
+    assert table.attrs["unresolved"] > 0
+    assert table["dtheta"].abs().min() >= kernels.SMALLEST_OFFSET
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        closed_orbits(FIG6, n_max=300)     # the paper's body: all representable
+
+
+def test_minimum_phase_at_the_ends():
+    value, where = minimum_phase(FIG6)
+    limits = orbits.phase_limits(FIG6)
+    assert value == pytest.approx(min(limits), rel=1e-12)
+    assert where == pytest.approx(-orbits.critical_angle(FIG6))    # theta = 0
+
+
+def test_body_with_no_two_pi_orbit():
+    # every physical body: minimum phase > 2 pi, so n = 1 never occurs
+    table = closed_orbits(Body((0.3, 0.5, 0.7)), n_max=1)
+    assert len(table) == 0
+    assert list(table.columns) == list(orbits.CATALOG_COLUMNS)
+
+
+@pytest.mark.parametrize("kwargs", [dict(n_max=0), dict(n_max=2.5), dict(n_max=3, q_max=0),
+                                    dict(n_max=True)])
+def test_bad_counts(kwargs):
+    with pytest.raises(InputError, match="integer >= 1"):
+        closed_orbits(FIG6, **kwargs)
+
+
+def test_bad_body():
+    with pytest.raises(orbits.SymmetricTopError):
+        closed_orbits([1.0, 1.0, 1.5], n_max=3)
+    with pytest.raises(InputError, match="one body"):
+        closed_orbits([[1.0, 2.0, 2.5], [1.0, 2.0, 2.6]], n_max=3)
