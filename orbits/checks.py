@@ -174,6 +174,41 @@ def motion_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0):
     return _unit_motion(body_or_moments, theta, dtheta, phi).total_phase()
 
 
+def closure_errors(moments, dtheta, periods, rtol=1e-13):
+    """Independent integration check of closed orbits (``catalog --verify``).
+
+    Parameters
+    ----------
+    moments : array_like, shape (n, 3) or (3,)
+        Principal moments (any order, any scale).
+    dtheta : array_like, shape (n,)
+        Offsets from the critical angle (phi = 0).
+    periods : array_like of int, shape (n,)
+        After how many periods each orbit should close (the catalog's q).
+
+    Returns
+    -------
+    ndarray
+        The angle (radians) by which the orientation after ``q`` periods
+        differs from the start.  For ``|dtheta| >= 1e-3``: Euler's equations
+        with quaternion kinematics integrated (compiled DOP853) over the q
+        periods from omega0, the angle of ``R(qT) R(0)^-1``.  Closer to the
+        separatrix a double omega0 cannot hold the orbit, and the phase of a
+        period comes from a quarter period integrated from the orbit's
+        closest approach to the I2 axis (exact reversibility of Euler's
+        equations makes the four quarters equal); the angle is then
+        ``|q Delta alpha|`` reduced to [0, pi].
+    """
+    dtheta = np.atleast_1d(np.asarray(dtheta, dtype=float))
+    moments = np.broadcast_to(np.sort(np.asarray(moments, dtype=float), axis=-1),
+                              dtheta.shape + (3,))
+    periods = np.broadcast_to(np.asarray(periods, dtype=np.int64), dtheta.shape)
+    out = np.empty(dtheta.shape)
+    _checks.closure_batch(np.ascontiguousarray(moments), np.ascontiguousarray(dtheta),
+                          np.ascontiguousarray(periods), rtol, out)
+    return out
+
+
 VerifyReport = namedtuple("VerifyReport", ["table", "summary", "passed"])
 VerifyReport.__doc__ = """Result of :func:`verify`.
 

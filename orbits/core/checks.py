@@ -49,8 +49,8 @@ def rotation_after_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol, max_step
     if f0[component] == 0.0:
         return np.nan, np.nan, np.nan
     y_end = np.empty(STATE_SIZE)
-    t_end = integrate_to_event(inertia, y0, component, y0[component], direction,
-                               periods, rtol, atol, 1e12, y_end, max_steps)
+    t_end, _ = integrate_to_event(inertia, y0, component, y0[component], direction,
+                                  periods, rtol, atol, 1e12, y_end, max_steps)
     if t_end < 0.0:
         return np.nan, np.nan, np.nan
     norm_q = math.sqrt(y_end[3] ** 2 + y_end[4] ** 2 + y_end[5] ** 2 + y_end[6] ** 2)
@@ -69,6 +69,115 @@ def rotation_after_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol, max_step
     angle = 2.0 * math.atan2(along, q0)
     angle -= TWO_PI * math.floor(angle / TWO_PI)
     return t_end / periods, angle, 2.0 * math.sqrt(p1 * p1 + p2 * p2 + p3 * p3)
+
+
+@njit(cache=True, nogil=True)
+def phase_by_quarter(i1, i2, i3, gap_m1, gap_3m, scale, offset, closing, rtol):
+    """``Delta alpha`` from one quarter period integrated from the saddle side.
+
+    Parameters
+    ----------
+    i1, i2, i3 : float
+        Principal moments, ascending.
+    gap_m1, gap_3m : float
+        ``M^2 - 2 E I1`` and ``2 E I3 - M^2`` of the orbit.
+    scale, offset, closing : float
+        ``M^2 - 2 E I2 = -scale * offset * closing`` (factored, so that it is
+        known to full relative precision however small).
+
+    Returns
+    -------
+    delta_alpha, quarter_time : float
+
+    Notes
+    -----
+    The orbit's point of closest approach to the unstable spin about I2 is
+    where ``w1 = 0`` (SAM) or ``w3 = 0`` (LAM); from the two invariants,
+    there ``w2^2 = (2EI3 - M^2)/(I2 (I3-I2))`` and the small component is
+    ``w3^2 = (M^2 - 2EI2)/(I3 (I3-I2))`` (SAM), or ``w2^2 = (M^2 -
+    2EI1)/(I2 (I2-I1))`` and ``w1^2 = (2EI2 - M^2)/(I1 (I2-I1))`` (LAM).
+    Started there, with an error control that is relative in every
+    component, the integration keeps the separatrix distance to full
+    precision however small it is -- unlike a start anywhere else, where
+    a double omega0 cannot resolve it.  The integration runs until
+    ``w2 = 0`` (a quarter period) while following the Euler angle phi.
+
+    Euler's equations are reversible under ``(w_k, t) -> (-w_k, -t)`` for
+    each k, so the four quarters of a period are mirror images, and
+    ``dphi/dt = M (I1 w1^2 + I2 w2^2) / (I1^2 w1^2 + I2^2 w2^2)`` takes the
+    same values on each: ``phi(T) = 4 phi(T/4)``, and
+    ``Delta alpha = phi(T) - 2 pi`` (SAM) or ``phi(T)`` (LAM)
+    (eqn:alphaproto).
+    """
+    d21 = i2 - i1
+    d31 = i3 - i1
+    d32 = i3 - i2
+    magnitude = abs(offset)
+    sam = offset < 0.0
+    if sam:
+        w1 = 0.0
+        w2 = math.sqrt(gap_3m / (i2 * d32))
+        w3 = (math.sqrt(scale / (i3 * d32)) * math.sqrt(magnitude)
+              * math.sqrt(closing))
+    else:
+        w1 = (math.sqrt(scale / (i1 * d21)) * math.sqrt(magnitude)
+              * math.sqrt(closing))
+        w2 = math.sqrt(gap_m1 / (i2 * d21))
+        w3 = 0.0
+    m1 = i1 * w1
+    m2 = i2 * w2
+    m3 = i3 * w3
+    momentum = math.sqrt(m1 * m1 + m2 * m2 + m3 * m3)
+    # orientation with space z along M and phi = 0: R = Rx(theta) Rz(psi)
+    half_theta = 0.5 * math.atan2(math.sqrt(m1 * m1 + m2 * m2), m3)
+    half_psi = 0.5 * math.atan2(m1, m2)
+    y0 = np.array([w1, w2, w3,
+                   math.cos(half_theta) * math.cos(half_psi),
+                   math.sin(half_theta) * math.cos(half_psi),
+                   -math.sin(half_theta) * math.sin(half_psi),
+                   math.cos(half_theta) * math.sin(half_psi)])
+    inertia = np.array([i1, i2, i3])
+    y_end = np.empty(STATE_SIZE)
+    # error control relative in every component: the absolute floor sits
+    # well below the small components' own scale
+    small = max(abs(w1), abs(w3))
+    atol = rtol * 1e-3 * small if small > 0.0 else rtol * 1e-3
+    # phi turns at most at M/I1; a quarter turn per step at most
+    max_step = 0.25 * math.pi * i1 / momentum
+    t_quarter, phi_quarter = integrate_to_event(
+        inertia, y0, 1, 0.0, -1.0, 1, rtol, atol, 1e15, y_end, 100_000_000,
+        max_step, True)
+    if t_quarter < 0.0:
+        return np.nan, np.nan
+    total = 4.0 * phi_quarter
+    if sam:
+        total -= TWO_PI
+    return total, t_quarter
+
+
+@njit(cache=True, nogil=True)
+def rotation_angle_after_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol,
+                                 max_steps):
+    """Angle of the rotation ``R(q T) R(0)^-1`` (full integration), in [0, pi]."""
+    inertia = np.array([i1, i2, i3])
+    y0 = np.array([w1, w2, w3, 1.0, 0.0, 0.0, 0.0])
+    f0 = np.empty(STATE_SIZE)
+    euler_rhs(inertia, y0, f0)
+    two_e = i1 * w1 * w1 + i2 * w2 * w2 + i3 * w3 * w3
+    m_sq = i1 * i1 * w1 * w1 + i2 * i2 * w2 * w2 + i3 * i3 * w3 * w3
+    cn_index = 0 if m_sq > two_e * i2 else 2
+    component = 1 if abs(f0[1]) >= abs(f0[cn_index]) else cn_index
+    if f0[component] == 0.0:
+        return np.nan
+    direction = 1.0 if f0[component] > 0.0 else -1.0
+    y_end = np.empty(STATE_SIZE)
+    t_end, _ = integrate_to_event(inertia, y0, component, y0[component],
+                                  direction, periods, rtol, atol, 1e15, y_end,
+                                  max_steps)
+    if t_end < 0.0:
+        return np.nan
+    vector = math.sqrt(y_end[4] ** 2 + y_end[5] ** 2 + y_end[6] ** 2)
+    return 2.0 * math.atan2(vector, abs(y_end[3]))
 
 
 CHECK_COLUMNS = ("closed_form", "motion", "montgomery", "solid_angle",
@@ -126,3 +235,46 @@ def check_batch(moments, theta, phi, ode_rtol, ode_atol, quad_rtol, out):
         out[k, 7] = off_axis
         out[k, 8] = orbit[_motion.SLOT_PERIOD]
         out[k, 9] = branch
+
+
+# Full integration from a double omega0 keeps ~1e-10 only while the orbit
+# stays this far from the separatrix; closer, start from the saddle side.
+FULL_INTEGRATION_FROM = 1e-3
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def closure_batch(moments, dtheta, periods, rtol, out):
+    """Angle by which each orbit fails to close after ``periods[k]`` periods.
+
+    ``moments`` (n, 3) sorted; ``dtheta`` (n,) offsets from the critical
+    angle (phi = 0).  Orbits with ``|dtheta| >= FULL_INTEGRATION_FROM`` are
+    integrated over all their periods from omega0 and ``out`` is the angle
+    of ``R(qT) R(0)^-1``; closer to the separatrix the period's phase comes
+    from :func:`phase_by_quarter` and ``out`` is ``|q Delta alpha|`` reduced
+    to [0, pi].
+    """
+    for k in prange(moments.shape[0]):
+        i1 = moments[k, 0]
+        i2 = moments[k, 1]
+        i3 = moments[k, 2]
+        cphi, sphi, theta_c, co_theta_c, root_a, root_b, root_ab = \
+            _phase.body_constants(i1, i2, i3, 0.0)
+        th, dth, co_th, code = _phase.angle_triplet(dtheta[k], True, theta_c,
+                                                    co_theta_c)
+        if code != _phase.STATUS_OK:
+            out[k] = np.nan
+            continue
+        w1, w2, w3, scale, offset, closing = _phase.spin_gap(
+            cphi, sphi, root_a, root_b, root_ab, th, dth, co_th)
+        if abs(dtheta[k]) >= FULL_INTEGRATION_FROM:
+            out[k] = rotation_angle_after_periods(i1, i2, i3, w1, w2, w3,
+                                                  periods[k], rtol, 1e-14,
+                                                  100_000_000)
+        else:
+            gap_m1 = i2 * (i2 - i1) * w2 * w2 + i3 * (i3 - i1) * w3 * w3
+            gap_3m = i1 * (i3 - i1) * w1 * w1 + i2 * (i3 - i2) * w2 * w2
+            total, _ = phase_by_quarter(i1, i2, i3, gap_m1, gap_3m, scale,
+                                        offset, closing, rtol)
+            turned = periods[k] * total
+            turned -= TWO_PI * math.floor(turned / TWO_PI + 0.5)
+            out[k] = abs(turned)

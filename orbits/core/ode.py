@@ -121,6 +121,8 @@ def _initial_step(inertia, y, f0, rtol, atol, work, f1):
     d0 = math.sqrt(d0 / n)
     d1 = math.sqrt(d1 / n)
     h0 = 1e-6 if (d0 < 1e-5 or d1 < 1e-5) else 0.01 * d0 / d1
+    if not (h0 > 0.0 and math.isfinite(h0)):
+        h0 = 1e-6
     for i in range(n):
         work[i] = y[i] + h0 * f0[i]
     euler_rhs(inertia, work, f1)
@@ -133,12 +135,29 @@ def _initial_step(inertia, y, f0, rtol, atol, work, f1):
         h1 = max(1e-6, h0 * 1e-3)
     else:
         h1 = (0.01 / max(d1, d2)) ** (1.0 / 8.0)
-    return min(100.0 * h0, h1)
+    h = min(100.0 * h0, h1)
+    return h if (h > 0.0 and math.isfinite(h)) else 1e-6
+
+
+@njit(cache=True, nogil=True)
+def euler_phi(y):
+    """Euler angle phi of the orientation quaternion in ``y[3:7]``.
+
+    ``R = Rz(phi) Rx(theta) Rz(psi)`` has ``R02 = sin phi sin theta`` and
+    ``R12 = -cos phi sin theta``; in quaternion components
+    ``phi = atan2(xz + wy, wx - yz)`` (space z along M).
+    """
+    w = y[3]
+    x = y[4]
+    yy = y[5]
+    z = y[6]
+    return math.atan2(x * z + w * yy, w * x - yy * z)
 
 
 @njit(cache=True, nogil=True)
 def integrate_to_event(inertia, y0, component, target, direction, count,
-                       rtol, atol, t_max, y_out, max_steps):
+                       rtol, atol, t_max, y_out, max_steps, max_step=np.inf,
+                       track_phi=False):
     """Integrate until ``y[component] - target`` crosses zero ``count`` times
     in ``direction`` (+1 or -1); the start itself does not count.
 
@@ -157,11 +176,18 @@ def integrate_to_event(inertia, y0, component, target, direction, count,
     y_out : ndarray (7,)
         Receives the state at the event.
     max_steps : int
+    max_step : float
+        Largest step allowed.
+    track_phi : bool
+        Also follow the Euler angle phi continuously (unwrapped) and return
+        its change; needs steps short enough that phi turns less than pi
+        per step (see ``max_step``).
 
     Returns
     -------
-    float
-        Time of the ``count``-th event, or -1.0 if not reached.
+    t_event, phi_change : float
+        Time of the ``count``-th event (-1.0 if not reached) and, with
+        ``track_phi``, the change of phi up to it (else 0).
     """
     n = y0.shape[0]
     y = y0.copy()
@@ -173,13 +199,15 @@ def integrate_to_event(inertia, y0, component, target, direction, count,
     work = np.empty(n)
     y_try = np.empty(n)
     f_try = np.empty(n)
-    h = _initial_step(inertia, y, f, rtol, atol, work, f_new)
+    h = min(_initial_step(inertia, y, f, rtol, atol, work, f_new), max_step)
     t = 0.0
     g_old = 0.0
     seen = 0
+    phi_total = 0.0
+    phi_last = euler_phi(y) if track_phi else 0.0
     for _ in range(max_steps):
         if t > t_max:
-            return -1.0
+            return -1.0, 0.0
         while True:
             dop853_step(inertia, y, f, h, stages, y_new, f_new, work)
             err = error_norm(stages, h, y, y_new, rtol, atol)
@@ -192,15 +220,28 @@ def integrate_to_event(inertia, y0, component, target, direction, count,
         if direction * g_old < 0.0 and direction * g_new >= 0.0:
             seen += 1
             if seen == count:
-                return t + _locate(inertia, y, f, h, g_old, g_new, component,
-                                   target, stages, y_try, f_try, work, y_out)
+                h_event = _locate(inertia, y, f, h, g_old, g_new, component,
+                                  target, stages, y_try, f_try, work, y_out)
+                if track_phi:
+                    phi_total += _wrapped(euler_phi(y_out) - phi_last)
+                return t + h_event, phi_total
         t += h
         for i in range(n):
             y[i] = y_new[i]
             f[i] = f_new[i]
+        if track_phi:
+            phi_now = euler_phi(y)
+            phi_total += _wrapped(phi_now - phi_last)
+            phi_last = phi_now
         g_old = g_new
-        h *= factor
-    return -1.0
+        h = min(h * factor, max_step)
+    return -1.0, 0.0
+
+
+@njit(cache=True, nogil=True)
+def _wrapped(angle):
+    """``angle`` reduced to (-pi, pi]."""
+    return angle - 2.0 * math.pi * math.floor(angle / (2.0 * math.pi) + 0.5)
 
 
 @njit(cache=True, nogil=True)
