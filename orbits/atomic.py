@@ -30,6 +30,15 @@ def ensure_writable(path):
         raise InputError(f"cannot write {path}: it is a directory")
 
 
+def _target_mode(path):
+    try:
+        return os.stat(path).st_mode & 0o7777
+    except FileNotFoundError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
+
+
 @contextmanager
 def atomic_path(path):
     """Yield a temporary path; on success move it onto ``path``.
@@ -41,10 +50,17 @@ def atomic_path(path):
     """
     path = Path(path)
     ensure_writable(path)
-    handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part",
-                                         dir=path.parent if str(path.parent) else ".")
+    try:
+        handle, temporary = tempfile.mkstemp(
+            prefix=f".{path.name}.", suffix=".part",
+            dir=path.parent if str(path.parent) else ".")
+    except OSError as error:
+        raise InputError(f"cannot write {path}: {error.strerror}") from None
     os.close(handle)
     try:
+        # mkstemp makes the file private (0600); give it the mode a plain
+        # open() would, or keep the mode of the file it replaces
+        os.chmod(temporary, _target_mode(path))
         yield Path(temporary)
         with open(temporary, "rb") as done:
             os.fsync(done.fileno())

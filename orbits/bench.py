@@ -17,7 +17,7 @@ import scipy
 from scipy import special
 
 from .bodies import Body
-from .phases import total_phase
+from .phases import critical_angle, total_phase
 
 
 def best_time(function, repeats):
@@ -164,11 +164,53 @@ def bench_motion_rate(points=1_000_000, repeats=3):
     }
 
 
+def _roots_by_scipy(body, n_max, points=2000):
+    """The obvious route: scan theta, brentq on the SciPy-route phase."""
+    from scipy.optimize import brentq
+    moments = body.moments
+    theta_c = float(critical_angle(body))
+    found = 0
+    for lo_end, hi_end in ((0.0, theta_c), (theta_c, 0.5 * np.pi)):
+        theta = np.linspace(lo_end, hi_end, points)[1:-1]
+        values = scipy_total_phase(moments, theta)
+        for n in range(1, n_max + 1):
+            level = 2.0 * np.pi * n
+            signs = np.flatnonzero(np.diff(np.sign(values - level)) != 0)
+            for k in signs:
+                brentq(lambda t: float(scipy_total_phase(moments, np.array([t]))[0]) - level,
+                       theta[k], theta[k + 1], xtol=1e-15)
+                found += 1
+    return found
+
+
+def bench_search(n_max=50, repeats=20):
+    """Every closed orbit with n <= 50 on both branches of the fig6 body."""
+    from .search import closed_orbits, find_roots, phase_levels
+    body = Body.preset("fig6")
+    ours = best_time(lambda: closed_orbits(body, n_max=n_max), repeats)
+    levels = phase_levels(n_max)[2]
+    kernel = best_time(lambda: find_roots(body.moments, levels), repeats)
+    roots = len(closed_orbits(body, n_max=n_max))
+    theirs = best_time(lambda: _roots_by_scipy(body, n_max), 3)
+    found = _roots_by_scipy(body, n_max)
+    return {
+        "task": f"closed orbits n <= {n_max}, both branches (fig6)",
+        "ours_s": ours,
+        "baseline": "theta grid (2000 points) + scipy.optimize.brentq on the SciPy-route phase",
+        "baseline_s": theirs,
+        "speedup": theirs / ours,
+        "note": f"ours finds {roots} roots ({kernel * 1e3:.2f} ms in the kernel, the rest "
+                f"is the DataFrame); the baseline finds {found}: roots closer to "
+                "theta_c than its grid step are missed",
+    }
+
+
 BENCHMARKS = {
     "phase": bench_total_phase,
     "motion": bench_motion,
     "motion_near_separatrix": lambda **kw: bench_motion(dtheta=-2e-4, **kw),
     "motion_rate": bench_motion_rate,
+    "search": bench_search,
 }
 
 

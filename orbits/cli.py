@@ -12,10 +12,11 @@ import sys
 
 import pandas as pd
 
-from . import __version__
+from ._version import __version__
 from .bodies import PRESETS, Body
 from .errors import InputError, OrbitsError
 
+EXIT_CHECK_FAILED = 1
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
 
@@ -131,16 +132,90 @@ def _add_phase(subparsers):
     parser.set_defaults(run=_cmd_phase)
 
 
+# ---------------------------------------------------------------- catalog
+def command_line(argv):
+    """The command as typed, for the provenance header of output files."""
+    import shlex
+    words = sys.argv[1:] if argv is None else list(argv)
+    return "orbits " + " ".join(shlex.quote(word) for word in words)
+
+
+def bodies_from_args(args):
+    """The list of bodies selected by the body options (``--bodies`` or one)."""
+    if getattr(args, "bodies", None):
+        from .catalog import bodies_from_csv
+        return bodies_from_csv(args.bodies)
+    return [body_from_args(args)]
+
+
+def _cmd_catalog(args):
+    import time
+    import warnings
+
+    from .atomic import ensure_writable
+    from .catalog import CLOSURE_TOLERANCE, catalog, write_catalog
+    from .search import UnresolvedOrbitsWarning
+    ensure_writable(args.out)
+    bodies = bodies_from_args(args)
+    start = time.perf_counter()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", UnresolvedOrbitsWarning)
+        with progress_bar(len(bodies), "catalog", None if len(bodies) > 1 else False,
+                          unit="body") as bar:
+            frame = catalog(bodies, n_max=args.n_max, q_max=args.q_max,
+                            verify=args.verify, progress=bar.update)
+    write_catalog(frame, args.out, command=command_line(args.argv))
+    for warning in caught:
+        print(f"orbits: warning: {warning.message}", file=sys.stderr)
+    elapsed = time.perf_counter() - start
+    note = ""
+    if args.verify:
+        worst = float(frame["closure_error"].max()) if len(frame) else 0.0
+        note = f"; largest closure error {worst:.2e} rad"
+    print(f"orbits catalog: {len(frame)} closed orbits of {len(bodies)} "
+          f"body(ies) written to {args.out} in {elapsed:.2f} s{note}", file=sys.stderr)
+    if args.verify and len(frame) and frame["closure_error"].max() > CLOSURE_TOLERANCE:
+        print(f"orbits: error: closure errors above {CLOSURE_TOLERANCE:g} rad",
+              file=sys.stderr)
+        return EXIT_CHECK_FAILED
+    return 0
+
+
+def _add_catalog(subparsers):
+    parser = subparsers.add_parser(
+        "catalog", help="find every closed orbit of a body and write a CSV",
+        description="Finds every initial spin (phi = 0, |omega0| = 1, theta in "
+                    "(0, pi/2), both branches) whose total phase is 2 pi p/q "
+                    "with p/q <= N and q <= Q: the body returns to its starting "
+                    "orientation after q periods and the herpolhode closes.  "
+                    "Writes one row per orbit (schema in the README); the file "
+                    "starts with '#' lines recording the version and this "
+                    "command, so read it with pandas.read_csv(path, "
+                    "comment='#').  The output is written atomically.")
+    add_body_options(parser, many=True)
+    parser.add_argument("--n-max", type=_positive_int, required=True,
+                        help="largest multiple n (or p/q) of 2 pi")
+    parser.add_argument("--q-max", type=_positive_int, default=1,
+                        help="also orbits closing after up to Q periods, "
+                             "Delta alpha = 2 pi p/q (default 1: integers only)")
+    parser.add_argument("--verify", action="store_true",
+                        help="add closure_error: an independent integration of "
+                             "each orbit over q periods (exit 1 if any exceeds "
+                             "1e-8 rad)")
+    parser.add_argument("--out", required=True, metavar="FILE.csv",
+                        help="output CSV")
+    parser.set_defaults(run=_cmd_catalog)
+
+
 # ---------------------------------------------------------------- verify
-EXIT_CHECK_FAILED = 1
 
 
-def progress_bar(total, description, enabled=None):
+def progress_bar(total, description, enabled=None, unit="orbit"):
     """A tqdm bar on a terminal (stderr), a no-op otherwise."""
     from tqdm import tqdm
     if enabled is None:
         enabled = sys.stderr.isatty()
-    return tqdm(total=total, desc=description, unit="orbit", disable=not enabled,
+    return tqdm(total=total, desc=description, unit=unit, disable=not enabled,
                 file=sys.stderr, dynamic_ncols=True)
 
 
@@ -244,6 +319,7 @@ def build_parser():
     subparsers = parser.add_subparsers(dest="command", required=True,
                                        parser_class=_Parser)
     _add_phase(subparsers)
+    _add_catalog(subparsers)
     _add_verify(subparsers)
     _add_bench(subparsers)
     return parser
@@ -253,6 +329,7 @@ def main(argv=None):
     """Entry point of the ``orbits`` console script; returns the exit code."""
     try:
         args = build_parser().parse_args(argv)
+        args.argv = argv
         return args.run(args)
     except KeyboardInterrupt:
         print("orbits: interrupted; no partial output was written", file=sys.stderr)

@@ -1,0 +1,224 @@
+"""Catalogs: schema, exact CSV round trip, provenance, atomic output, the CLI."""
+
+import os
+import shlex
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import orbits
+from orbits import Body, InputError, catalog, read_catalog, write_catalog
+from orbits.atomic import write_csv_atomic
+from orbits.catalog import bodies_from_csv
+from orbits.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+CATALOGS = ROOT / "catalogs"
+FIG6 = Body.preset("fig6")
+
+
+def assert_one_line_error(code, err, fragment):
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("orbits: error:"), err
+    assert fragment in lines[0]
+
+
+def test_schema_and_order():
+    frame = orbits.closed_orbits(FIG6, n_max=4)
+    assert list(frame.columns) == list(orbits.CATALOG_COLUMNS)
+    assert frame["body"].unique().tolist() == ["fig6"]
+    assert frame["n"].dtype.kind == "i" and frame["q"].dtype.kind == "i"
+    np.testing.assert_allclose(frame[["I1", "I2", "I3"]].pow(2).sum(axis=1), 1.0, rtol=1e-15)
+    np.testing.assert_allclose(frame["theta"], frame["theta_crit"] + frame["dtheta"], rtol=1e-15)
+    np.testing.assert_allclose(frame["geometric_phase"],
+                               frame["dynamic_phase"] - frame["total_phase"], atol=1e-12)
+
+
+def test_csv_round_trip_is_bit_exact(tmp_path):
+    frame = catalog(FIG6, n_max=30, q_max=3, verify=True)
+    path = tmp_path / "fig6.csv"
+    write_catalog(frame, path, command="orbits catalog --preset fig6")
+    again = read_catalog(path)
+    pd.testing.assert_frame_equal(again, frame, check_exact=True)
+    # the one documented option is enough for plain pandas too
+    plain = pd.read_csv(path, comment="#")
+    for column in frame.select_dtypes("float").columns:
+        assert np.array_equal(plain[column].to_numpy().view(np.int64),
+                              frame[column].to_numpy().view(np.int64)), column
+    header = again.attrs["header"]
+    assert header[0] == f"orbits {orbits.__version__} closed-orbit catalog"
+    assert header[1] == "command: orbits catalog --preset fig6"
+
+
+@pytest.mark.parametrize("mutate, message", [
+    (lambda f: f.drop(columns="theta"), "schema"),
+    (lambda f: f[list(f.columns[::-1])], "schema"),
+    (lambda f: f.assign(extra=1.0), "unexpected"),
+    (lambda f: f.assign(branch="XAM"), "SAM or LAM"),
+    (lambda f: f.assign(n=0), "integers >= 1"),
+    (lambda f: f.assign(period=np.inf), "non-finite"),
+])
+def test_read_catalog_checks_schema(tmp_path, mutate, message):
+    path = tmp_path / "bad.csv"
+    write_csv_atomic(mutate(orbits.closed_orbits(FIG6, n_max=3)), path)
+    with pytest.raises(InputError, match=message):
+        read_catalog(path)
+
+
+def test_read_catalog_missing_file(tmp_path):
+    with pytest.raises(InputError, match="no catalog"):
+        read_catalog(tmp_path / "none.csv")
+
+
+def test_many_bodies_and_bodies_file(tmp_path):
+    path = tmp_path / "bodies.csv"
+    path.write_text("name,I1,I2,I3\nfig6,0.26,0.55,0.793662\nhandle,5.4722,1.9722,3.6667\n")
+    bodies = bodies_from_csv(path)
+    assert [b.name for b in bodies] == ["fig6", "handle"]
+    frame = catalog(bodies, n_max=5)
+    assert frame["body"].unique().tolist() == ["fig6", "handle"]
+    single = orbits.closed_orbits(FIG6, n_max=5)
+    pd.testing.assert_frame_equal(frame[frame.body == "fig6"].reset_index(drop=True), single)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("I1,I2\n1,2\n", "missing column"),
+    ("I1,I2,I3\n1,2,2.5\n1,1,2\n", "row 2"),
+    ("I1,I2,I3\n", "no bodies"),
+])
+def test_bad_bodies_file(tmp_path, text, message):
+    path = tmp_path / "bodies.csv"
+    path.write_text(text)
+    with pytest.raises(InputError, match=message):
+        bodies_from_csv(path)
+
+
+def test_failed_write_keeps_the_old_file(tmp_path, monkeypatch):
+    path = tmp_path / "keep.csv"
+    path.write_text("good old content\n")
+    frame = orbits.closed_orbits(FIG6, n_max=3)
+
+    def explode(*args, **kwargs):
+        raise RuntimeError("disk full")
+
+    monkeypatch.setattr(pd.DataFrame, "to_csv", explode)
+    with pytest.raises(RuntimeError):
+        write_catalog(frame, path)
+    assert path.read_text() == "good old content\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["keep.csv"]
+
+
+def test_new_files_get_normal_permissions(tmp_path):
+    path = tmp_path / "new.csv"
+    write_catalog(orbits.closed_orbits(FIG6, n_max=3), path)
+    umask = os.umask(0)
+    os.umask(umask)
+    assert path.stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+def test_interrupt_leaves_no_partial_file(tmp_path):
+    bodies = tmp_path / "bodies.csv"
+    grid = orbits.region_grid(60)
+    pd.DataFrame(grid, columns=["I1", "I2", "I3"]).to_csv(bodies, index=False)
+    out = tmp_path / "out.csv"
+    out.write_text("previous good catalog\n")
+    proc = subprocess.Popen([sys.executable, "-m", "orbits.cli", "catalog", "--bodies",
+                             str(bodies), "--n-max", "300", "--q-max", "5", "--out", str(out)],
+                            stderr=subprocess.PIPE, text=True)
+    time.sleep(4.0)
+    assert proc.poll() is None, "the run ended before it could be interrupted"
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130
+    assert err.strip().splitlines() == ["orbits: interrupted; no partial output was written"]
+    assert out.read_text() == "previous good catalog\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bodies.csv", "out.csv"]
+
+
+def committed_commands():
+    for line in (CATALOGS / "regenerate.sh").read_text().splitlines():
+        if line.startswith("orbits catalog"):
+            yield shlex.split(line)[1:]
+
+
+@pytest.mark.parametrize("argv", list(committed_commands()),
+                         ids=lambda argv: argv[argv.index("--out") + 1])
+def test_committed_catalogs_regenerate(tmp_path, capsys, argv):
+    committed = CATALOGS / Path(argv[argv.index("--out") + 1]).name
+    fresh = tmp_path / committed.name
+    argv = list(argv)
+    argv[argv.index("--out") + 1] = str(fresh)
+    assert main(argv) == 0
+    old, new = read_catalog(committed), read_catalog(fresh)
+    assert old.attrs["header"][1] == "command: orbits " + " ".join(
+        shlex.quote(w) for w in argv[:-1] + [f"catalogs/{committed.name}"])
+    assert (old[["body", "branch", "n", "q"]] == new[["body", "branch", "n", "q"]]).all().all()
+    floats = [c for c in orbits.CATALOG_COLUMNS if old[c].dtype.kind == "f" and c != "residual"]
+    np.testing.assert_allclose(new[floats], old[floats], rtol=1e-12, atol=0)
+    np.testing.assert_allclose(new["residual"], old["residual"], atol=1e-12)
+    # the independent integration closes every committed orbit
+    assert old["closure_error"].max() <= 1e-8
+    assert new["closure_error"].max() <= 1e-8
+
+
+def test_committed_fig6_matches_the_paper():
+    table = read_catalog(CATALOGS / "fig6_n30.csv")
+    small = table[table.n <= 5]
+    assert small["n"].tolist() == [2, 3, 4, 5, 5, 4, 3, 2]
+    assert np.round(small["theta"], 4).tolist() == [0.9562, 1.0043, 1.0113, 1.0124,
+                                                    1.0139, 1.0207, 1.0611, 1.2742]
+
+
+class TestCli:
+    def test_writes_a_catalog(self, tmp_path, capsys):
+        out = tmp_path / "c.csv"
+        assert main(["catalog", "--ellipsoid", "0.4", "0.2", "--n-max", "6", "--q-max", "2",
+                     "--verify", "--out", str(out)]) == 0
+        table = read_catalog(out)
+        assert set(table["q"]) == {1, 2} and table["closure_error"].max() <= 1e-8
+        assert "closed orbits" in capsys.readouterr().err
+
+    @pytest.mark.parametrize("argv, fragment", [
+        (["catalog", "--preset", "fig6", "--n-max", "0", "--out", "x.csv"], "must be >= 1"),
+        (["catalog", "--preset", "nope", "--n-max", "3", "--out", "x.csv"], "invalid choice"),
+        (["catalog", "--moments", "1", "1", "2", "--n-max", "3", "--out", "x.csv"], "symmetric top"),
+        (["catalog", "--moments", "1", "2", "nan", "--n-max", "3", "--out", "x.csv"], "finite"),
+        (["catalog", "--moments", "1", "2", "9", "--n-max", "3", "--out", "x.csv"], "triangle"),
+        (["catalog", "--preset", "fig6", "--n-max", "3", "--out", "/no/such/dir/x.csv"],
+         "does not exist"),
+        (["catalog", "--preset", "fig6", "--n-max", "3"], "--out"),
+        (["catalog", "--bodies", "/no/such/bodies.csv", "--n-max", "3", "--out", "x.csv"],
+         "no bodies file"),
+        (["catalog", "--ellipsoid", "0.9", "0.8", "--n-max", "3", "--out", "x.csv"], "too large"),
+    ])
+    def test_bad_input(self, tmp_path, capsys, monkeypatch, argv, fragment):
+        monkeypatch.chdir(tmp_path)
+        code = main(argv)
+        assert_one_line_error(code, capsys.readouterr().err, fragment)
+        assert not (tmp_path / "x.csv").exists()
+
+    @pytest.mark.parametrize("target", ["/proc/orbits-test.csv", "/sys/orbits-test.csv"])
+    def test_unwritable_filesystem(self, capsys, target):
+        """Not writable even for root: a clear one-line error, nothing left over."""
+        code = main(["catalog", "--preset", "fig6", "--n-max", "3", "--out", target])
+        assert_one_line_error(code, capsys.readouterr().err, f"cannot write {target}")
+
+    def test_unwritable_directory(self, tmp_path, capsys):
+        locked = tmp_path / "locked"
+        locked.mkdir()
+        locked.chmod(0o500)
+        try:
+            if os.access(locked, os.W_OK):
+                pytest.skip("running as a user who can write anywhere")
+            code = main(["catalog", "--preset", "fig6", "--n-max", "3",
+                         "--out", str(locked / "x.csv")])
+            assert_one_line_error(code, capsys.readouterr().err, "not writable")
+        finally:
+            locked.chmod(0o700)
