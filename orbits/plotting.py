@@ -1,0 +1,469 @@
+"""Plotting primitives: each draws one kind of figure into a given Axes.
+
+These functions take a matplotlib ``Axes`` (3-D ones where noted) so that
+users can compose their own figures; :mod:`orbits.figures` assembles them
+into files.  They never call ``pyplot`` and need no display.
+
+Conventions as everywhere in ``orbits``: ``|I| = 1``, ``|omega0| = 1``,
+angles in radians, the herpolhode drawn in the invariable plane (space
+frame, z along the angular momentum).
+"""
+
+import numpy as np
+
+from .bodies import Body, REGION_BOX, region_moments
+from .motion import Motion, _as_body, herpolhode, polhode
+from .phases import critical_angle, phase_limits, phases, total_phase
+
+TWO_PI = 2.0 * np.pi
+# the paper's line styles (Fig. 3b, Fig. 5)
+STYLES = {
+    "total": dict(color="tab:red", linestyle="-"),
+    "dynamic": dict(color="tab:green", linestyle=":"),
+    "geometric": dict(color="tab:blue", linestyle="-."),
+    "period": dict(color="black", linestyle="--"),
+}
+
+
+def herpolhode_points(n, q=1):
+    """Samples enough to draw a herpolhode of ``n`` turns over ``q`` periods."""
+    return int(max(2001, 600 * n * q + 1))
+
+
+def plot_herpolhode(ax, body, theta=None, *, dtheta=None, phi=0.0, periods=1,
+                    points=None, label_axes=True, **line):
+    """Draw a herpolhode (space-frame omega in the invariable plane).
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+    body, theta, dtheta, phi : as :func:`orbits.herpolhode`
+    periods : int
+        Periods to draw (a p/q orbit closes after q).
+    points : int, optional
+        Samples; by default enough for the curve's turns.
+    label_axes : bool
+        Label the axes omega_x, omega_y and set an equal aspect ratio.
+    **line
+        Passed to ``ax.plot``.
+
+    Returns
+    -------
+    matplotlib.lines.Line2D
+        Its data are the curve: ``line.get_xydata()``.
+    """
+    if points is None:
+        turns = abs(float(total_phase(body, theta, dtheta=dtheta, phi=phi))) / TWO_PI
+        points = herpolhode_points(turns, periods)
+    t, omega = herpolhode(body, theta, dtheta=dtheta, phi=phi, periods=periods,
+                          points=points)
+    style = dict(color="tab:purple", linewidth=0.8)
+    style.update(line)
+    (curve,) = ax.plot(omega[:, 0], omega[:, 1], **style)
+    ax.set_aspect("equal", adjustable="datalim")
+    if label_axes:
+        ax.set_xlabel(r"$\omega_x$ (rad/s, invariable plane)")
+        ax.set_ylabel(r"$\omega_y$ (rad/s)")
+    return curve
+
+
+def orbit_label(row, body_name=None, precision=6):
+    """A figure title for a catalog row: multiple, branch, theta, body."""
+    multiple = f"{row.n}" if row.q == 1 else f"{row.n}/{row.q}"
+    name = f"{body_name}: " if body_name else ""
+    return (rf"{name}$\Delta\alpha = 2\pi\cdot{multiple}$, {row.branch}, "
+            rf"$\theta$ = {row.theta:.{precision}f}" + "\n"
+            + rf"$\theta-\theta_c$ = {row.dtheta:.3e} rad")
+
+
+def plot_phase_curves(ax, body, *, points=1500, period_axis=True):
+    """Total, dynamic and geometric phase against theta (Fig. 5).
+
+    The period goes on a twin y axis (dashed black); the critical angle is
+    a gray vertical line.
+
+    Returns
+    -------
+    dict
+        The lines by name (``total``, ``dynamic``, ``geometric``,
+        ``period``) and the twin axes under ``period_axes``.
+    """
+    body = _as_body(body)
+    theta_c = critical_angle(body)
+    theta = _theta_grid(theta_c, points)
+    table = phases(body, theta)
+    lines = {}
+    for name, column, label in (("total", "total_phase", r"total $\Delta\alpha$"),
+                                ("dynamic", "dynamic_phase", r"dynamic $2ET/M$"),
+                                ("geometric", "geometric_phase", r"geometric $\Omega$")):
+        (lines[name],) = ax.plot(theta, table[column], label=label, **STYLES[name])
+    ax.axvline(theta_c, color="0.6", linewidth=1.0)
+    ax.set_xlabel(r"polar angle of $\omega_0$ from the body $z$ axis, $\theta$ (rad)")
+    ax.set_ylabel("phase (rad)")
+    ax.set_xlim(0.0, 0.5 * np.pi)
+    top = float(np.nanpercentile(table["dynamic_phase"], 90))
+    ax.set_ylim(min(0.0, float(table["geometric_phase"].min())) - 1.0, top)
+    handles = list(lines.values())
+    if period_axis:
+        twin = ax.twinx()
+        (lines["period"],) = twin.plot(theta, table["period"], label="period $T$",
+                                       **STYLES["period"])
+        twin.set_ylabel(r"period $T$ (s, for $|\omega_0| = 1$ rad/s)")
+        twin.set_ylim(0.0, float(np.nanpercentile(table["period"], 90)))
+        lines["period_axes"] = twin
+        handles.append(lines["period"])
+    ax.legend(handles=handles, loc="upper left", fontsize="small")
+    return lines
+
+
+def _theta_grid(theta_c, points):
+    """Theta over [0, pi/2], clustered (cubically) at theta_c, never on it."""
+    s = np.linspace(0.0, 1.0, points // 2)[1:]
+    left = theta_c * (1.0 - s**3)
+    right = theta_c + (0.5 * np.pi - theta_c) * s**3
+    grid = np.unique(np.concatenate([left, right]))
+    return grid[grid != theta_c]
+
+
+def plot_total_phase(ax, body, orbits=None, *, n_levels=None, points=2000):
+    """Total phase against theta with the 2 pi n levels and roots (Fig. 6).
+
+    Parameters
+    ----------
+    orbits : DataFrame, optional
+        Catalog rows (:func:`orbits.closed_orbits`) to mark as dots.
+    n_levels : int, optional
+        Draw the levels 2 pi n for n up to this (default: those in view).
+
+    Returns
+    -------
+    dict
+        ``curve`` (Line2D), ``levels`` (list of Line2D), ``roots``
+        (PathCollection or None).
+    """
+    body = _as_body(body)
+    theta_c = critical_angle(body)
+    theta = _theta_grid(theta_c, points)
+    values = total_phase(body, theta)
+    (curve,) = ax.plot(theta, values, label=r"total phase $\Delta\alpha(\theta)$",
+                       **STYLES["total"])
+    top = 2 * np.pi * (n_levels + 0.5) if n_levels else float(np.percentile(values, 85))
+    ax.set_ylim(0.0, top)
+    ax.set_xlim(0.0, 0.5 * np.pi)
+    levels = []
+    for n in range(1, int(top / TWO_PI) + 1):
+        levels.append(ax.axhline(TWO_PI * n, color="0.75", linewidth=0.6, zorder=0))
+        ax.annotate(rf"$2\pi\cdot{n}$", (0.01, TWO_PI * n), xycoords=("axes fraction", "data"),
+                    va="bottom", fontsize="x-small", color="0.4")
+    ax.axvline(theta_c, color="0.6", linewidth=1.0)
+    roots = None
+    if orbits is not None and len(orbits):
+        shown = orbits[orbits["total_phase"] <= top]
+        roots = ax.scatter(shown["theta"], shown["total_phase"], s=14, color="black",
+                           zorder=3, label=r"closed orbits, $\Delta\alpha = 2\pi n$")
+    ax.set_xlabel(r"polar angle of $\omega_0$ from the body $z$ axis, $\theta$ (rad)")
+    ax.set_ylabel(r"total phase $\Delta\alpha$ (rad)")
+    ax.legend(loc="upper left", fontsize="small")
+    return {"curve": curve, "levels": levels, "roots": roots}
+
+
+def body_space_grid(resolution=300):
+    """The minimum total phase on a grid over the body region (Fig. 2 data).
+
+    Returns
+    -------
+    i1, i2 : ndarray (N, N)
+        Grid of the paper's I1-I2 plane (``|I| = 1``).
+    minimum : ndarray (N, N)
+        The minimum of Delta alpha over all spins (phi = 0) of each body,
+        from the closed-orbit scan (:func:`orbits.minimum_phase`); NaN
+        outside the region.
+    """
+    from .search import minimum_phase
+    (lo1, hi1), (lo2, hi2) = REGION_BOX
+    axis1 = np.linspace(lo1, hi1, resolution)
+    axis2 = np.linspace(lo2, hi2, resolution)
+    i1, i2 = np.meshgrid(axis1, axis2, indexing="xy")
+    moments, inside = region_moments(i1, i2)
+    minimum = np.full(i1.shape, np.nan)
+    for index in zip(*np.nonzero(inside)):
+        minimum[index] = minimum_phase(moments[index])[0]
+    return i1, i2, minimum
+
+
+def region_boundaries(samples=400):
+    """The prolate, oblate and flat boundary curves of the body region.
+
+    Returns a dict of name -> (I1, I2) arrays (the paper's Sec. II.A).
+    """
+    rod_to_sphere = np.linspace(0.0, 1.0 / np.sqrt(3.0), samples)
+    disk_to_sphere = np.linspace(1.0 / np.sqrt(6.0), 1.0 / np.sqrt(3.0), samples)
+    rod_to_disk = np.linspace(0.0, 1.0 / np.sqrt(6.0), samples)
+    return {
+        "prolate": (rod_to_sphere, np.sqrt((1.0 - rod_to_sphere**2) / 2.0)),
+        "oblate": (disk_to_sphere, disk_to_sphere),
+        "flat": (rod_to_disk, 0.5 * (np.sqrt(2.0 - 3.0 * rod_to_disk**2) - rod_to_disk)),
+    }
+
+
+def kink_locus(samples=400):
+    """Where the two limits (eqns alphamin1, alphamin2) are equal.
+
+    ``I1 I2 / ((I3-I2)(I3-I1)) = I2 I3 / ((I2-I1)(I3-I1))`` reduces to
+    ``I1 (I2 - I1) = I3 (I3 - I2)``, i.e. ``theta_c = pi/4``.  Returns
+    (I1, I2) arrays of the curve inside the region.
+    """
+    from scipy.optimize import brentq
+    points = []
+    for value in np.linspace(1e-4, 1.0 / np.sqrt(3.0) - 1e-6, samples):
+        def gap(i2):
+            i3 = np.sqrt(max(1.0 - value**2 - i2**2, 0.0))
+            return value * (i2 - value) - i3 * (i3 - i2)
+        lo = max(value, 0.5 * (np.sqrt(2.0 - 3.0 * value**2) - value))
+        hi = np.sqrt((1.0 - value**2) / 2.0)
+        if lo < hi and gap(lo) * gap(hi) < 0:
+            points.append((value, brentq(gap, lo, hi, xtol=1e-14)))
+    points = np.array(points)
+    return points[:, 0], points[:, 1]
+
+
+DEFAULT_CONTOURS = TWO_PI * np.array([1.02, 1.05, 1.1, 1.2, 1.35, 1.5, 2.0, 3.0, 5.0])
+
+
+def plot_body_space(ax, grid=None, *, resolution=300, levels=None, colorbar=True):
+    """The body-space map of Fig. 2.
+
+    Parameters
+    ----------
+    grid : tuple (i1, i2, minimum), optional
+        From :func:`body_space_grid` or a survey; computed if omitted.
+    levels : array_like, optional
+        Contour levels of the minimum total phase (rad).
+
+    Returns
+    -------
+    dict
+        ``contours`` (ContourSet), ``boundaries`` (dict of Line2D), ``kink``
+        (Line2D), ``filled`` (the filled ContourSet), ``colorbar``.
+    """
+    i1, i2, minimum = grid if grid is not None else body_space_grid(resolution)
+    levels = DEFAULT_CONTOURS if levels is None else np.asarray(levels)
+    ceiling = TWO_PI * 8.0
+    filled = ax.contourf(i1, i2, np.minimum(minimum, ceiling),
+                         levels=np.concatenate([[TWO_PI], levels, [ceiling]]),
+                         cmap="viridis", extend="max")
+    contours = ax.contour(i1, i2, minimum, levels=levels, colors="white", linewidths=0.7)
+    ax.clabel(contours, fmt=lambda v: rf"{v / TWO_PI:.2f}$\cdot 2\pi$", fontsize="xx-small")
+    boundaries = {}
+    for name, (x, y) in region_boundaries().items():
+        (boundaries[name],) = ax.plot(x, y, color="tab:red", linewidth=1.5)
+    label_at = {"prolate": (0.18, 0.71), "oblate": (0.47, 0.45), "flat": (0.12, 0.6)}
+    for name, (x, y) in label_at.items():
+        ax.annotate(name, (x, y), color="tab:red", fontsize="small")
+    x, y = kink_locus()
+    (kink,) = ax.plot(x, y, color="white", linestyle="--", linewidth=1.0,
+                      label=r"kinks: $\Delta\alpha_{\theta\to0} = \Delta\alpha_{\theta\to\pi/2}$")
+    ax.set_xlabel(r"$I_1$ (J s$^2$, $|I| = 1$)")
+    ax.set_ylabel(r"$I_2$ (J s$^2$)")
+    ax.set_aspect("equal")
+    (lo1, hi1), (lo2, hi2) = REGION_BOX
+    ax.set_xlim(lo1, hi1 + 0.01)
+    ax.set_ylim(lo2 - 0.01, hi2 + 0.01)
+    ax.legend(loc="lower right", fontsize="x-small", facecolor="0.3", labelcolor="white")
+    bar = None
+    if colorbar:
+        bar = ax.figure.colorbar(filled, ax=ax, shrink=0.75)
+        bar.set_ticks(levels)
+        bar.set_ticklabels([rf"{v / TWO_PI:.2f}$\cdot 2\pi$" for v in levels])
+        bar.set_label(r"minimum total phase over all spins, $\min_\theta \Delta\alpha$ (rad)")
+    return {"contours": contours, "filled": filled, "boundaries": boundaries,
+            "kink": kink, "colorbar": bar}
+
+
+def _ellipsoid_surface(semi_axes, center=(0.0, 0.0, 0.0), resolution=40):
+    u = np.linspace(0.0, 2.0 * np.pi, resolution)
+    v = np.linspace(0.0, np.pi, resolution // 2)
+    x = semi_axes[0] * np.outer(np.cos(u), np.sin(v)) + center[0]
+    y = semi_axes[1] * np.outer(np.sin(u), np.sin(v)) + center[1]
+    z = semi_axes[2] * np.outer(np.ones_like(u), np.cos(v)) + center[2]
+    return x, y, z
+
+
+def _box_faces(lo, hi):
+    (x0, y0, z0), (x1, y1, z1) = lo, hi
+    corners = np.array([[x0, y0, z0], [x1, y0, z0], [x1, y1, z0], [x0, y1, z0],
+                        [x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]])
+    faces = [[0, 1, 2, 3], [4, 5, 6, 7], [0, 1, 5, 4], [2, 3, 7, 6], [1, 2, 6, 5],
+             [0, 3, 7, 4]]
+    return [corners[f] for f in faces]
+
+
+def plot_t_handle(ax3d, l1=8.0, l2=4.0, w=1.0, *, shrink=0.25):
+    """The T-handle and its equivalent ellipsoid, in 3-D (Fig. 1).
+
+    The cross piece lies along x, the shaft along y (from the cross piece's
+    edge), both of square section w; the ellipsoid with the same principal
+    moments (semi-axes from :meth:`Body.equivalent_ellipsoid`) is drawn at
+    the centre of mass, shrunk by ``shrink`` as in the paper.
+
+    Returns
+    -------
+    dict
+        ``bars`` (Poly3DCollection), ``boxes`` (the two bars' corner
+        pairs), ``ellipsoid`` (surface) and ``semi_axes`` (the unshrunk
+        a, b, c).
+    """
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+    total = l1 + l2
+    com_y = (l2 / total) * 0.5 * (w + l2)
+    boxes = [((-l1 / 2, -w / 2 - com_y, -w / 2), (l1 / 2, w / 2 - com_y, w / 2)),
+             ((-w / 2, w / 2 - com_y, -w / 2), (w / 2, w / 2 + l2 - com_y, w / 2))]
+    faces = _box_faces(*boxes[0]) + _box_faces(*boxes[1])
+    bars = Poly3DCollection(faces, facecolor="tab:green", edgecolor="darkgreen",
+                            alpha=0.1, linewidths=0.8)
+    ax3d.add_collection3d(bars)
+    semi = Body.t_handle(l1, l2, w).equivalent_ellipsoid()
+    x, y, z = _ellipsoid_surface(np.array(semi) * shrink, resolution=60)
+    surface = ax3d.plot_surface(x, y, z, color="tab:orange", alpha=0.95, linewidth=0,
+                                shade=True)
+    ax3d.view_init(elev=35, azim=-55)
+    span = 0.55 * max(l1, l2 + w)
+    ax3d.set_xlim(-span, span)
+    ax3d.set_ylim(-span, span)
+    ax3d.set_zlim(-span, span)
+    ax3d.set_box_aspect((1, 1, 1))
+    ax3d.set_xlabel("x (cross piece, $I_1$ axis; length units)")
+    ax3d.set_ylabel("y (shaft, $I_2$ axis)")
+    ax3d.set_zlabel("z ($I_3$ axis)")
+    return {"bars": bars, "boxes": boxes, "ellipsoid": surface, "semi_axes": semi}
+
+
+def plot_binet(ax3d, body, theta=None, *, dtheta=None, phi=0.0):
+    """The momentum sphere meeting the Binet ellipsoid, and the polhode (Fig. 3a).
+
+    Both surfaces in angular-momentum space for the given spin (``|I| = 1``,
+    ``|omega0| = 1``): the sphere ``|M| = M`` and the ellipsoid
+    ``M1^2/I1 + M2^2/I2 + M3^2/I3 = 2E``; their intersection is the polhode.
+
+    Returns
+    -------
+    dict
+        ``sphere``, ``ellipsoid`` (surfaces), ``polhode`` (Line3D) and
+        ``energy``, ``momentum``.
+    """
+    body = _as_body(body)
+    unit = body.normalized_moments
+    row = phases(unit, theta, phi, dtheta=dtheta).iloc[0]
+    x, y, z = _ellipsoid_surface([row.momentum] * 3, resolution=50)
+    sphere = ax3d.plot_surface(x, y, z, color="tab:blue", alpha=0.25, linewidth=0)
+    semi = np.sqrt(2.0 * row.energy * unit)
+    x, y, z = _ellipsoid_surface(semi, resolution=50)
+    ellipsoid = ax3d.plot_surface(x, y, z, color="gold", alpha=0.35, linewidth=0)
+    _, momentum = polhode(unit, theta, dtheta=dtheta, phi=phi, points=1500)
+    (curve,) = ax3d.plot(momentum[:, 0], momentum[:, 1], momentum[:, 2], color="black",
+                         linewidth=1.5, label="polhode")
+    limit = 1.05 * semi.max()
+    for setter in (ax3d.set_xlim, ax3d.set_ylim, ax3d.set_zlim):
+        setter(-limit, limit)
+    ax3d.set_box_aspect((1, 1, 1))
+    ax3d.set_xlabel("$M_1$ (J s)")
+    ax3d.set_ylabel("$M_2$ (J s)")
+    ax3d.set_zlabel("$M_3$ (J s)")
+    return {"sphere": sphere, "ellipsoid": ellipsoid, "polhode": curve,
+            "energy": row.energy, "momentum": row.momentum}
+
+
+def plot_omega_components(ax, body, theta=None, *, dtheta=None, phi=0.0, periods=2.0,
+                          points=3001):
+    """The body-frame components of omega against time, period marked (Fig. 3b).
+
+    Returns
+    -------
+    dict
+        ``lines`` (three Line2D: x solid red, y dashed green, z dot-dashed
+        blue, as the paper) and ``period`` (the gray vertical line's x).
+    """
+    body = _as_body(body)
+    motion = Motion.from_spin(body, theta, dtheta=dtheta, phi=phi)
+    t = np.linspace(0.0, periods * motion.period, points)
+    omega = motion.omega(t)
+    styles = (dict(color="tab:red", linestyle="-"), dict(color="tab:green", linestyle="--"),
+              dict(color="tab:blue", linestyle="-."))
+    lines = [ax.plot(t, omega[:, k], label=rf"$\omega_{axis}$ ({name})", **style)[0]
+             for k, (axis, name, style) in enumerate(zip("xyz", ("smallest $I$",
+                                                                   "intermediate $I$",
+                                                                   "largest $I$"), styles))]
+    ax.axvline(motion.period, color="0.6", linewidth=1.2)
+    ax.annotate(f"T = {motion.period:.4f} s", (motion.period, 0.02),
+                xycoords=("data", "axes fraction"), fontsize="small", color="0.35",
+                ha="left")
+    ax.set_xlabel("time t (s)")
+    ax.set_ylabel(r"body angular velocity $\omega_i$ (rad/s)")
+    ax.set_xlim(0.0, t[-1])
+    ax.legend(loc="upper right", fontsize="x-small", framealpha=0.9)
+    return {"lines": lines, "period": motion.period}
+
+
+def plot_polhode_foliation(ax3d, body, *, count=48, energy=0.5, cmap="twilight"):
+    """The Binet ellipsoid foliated by polhodes coloured by Delta alpha mod 2 pi (Fig. 4).
+
+    Polhodes for ``count`` spins over both branches, each scaled to the
+    same energy (the phase does not depend on ``|omega|``), drawn with
+    their mirror images so that they cover the ellipsoid.
+
+    Returns
+    -------
+    dict
+        ``polhodes`` (list of (Line3D, phase mod 2 pi)), ``colorbar``,
+        ``ellipsoid``.
+    """
+    import matplotlib as mpl
+    body = _as_body(body)
+    unit = body.normalized_moments
+    theta_c = critical_angle(unit)
+    thetas = np.concatenate([np.linspace(0.04, 0.985, count // 2) * theta_c,
+                             theta_c + np.linspace(0.015, 0.96, count // 2)
+                             * (0.5 * np.pi - theta_c)])
+    table = phases(unit, thetas)
+    colormap = mpl.colormaps[cmap]
+    norm = mpl.colors.Normalize(0.0, TWO_PI)
+    semi = np.sqrt(2.0 * energy * unit)
+    x, y, z = _ellipsoid_surface(semi, resolution=50)
+    ellipsoid = ax3d.plot_surface(x, y, z, color="0.85", alpha=0.25, linewidth=0)
+    drawn = []
+    for theta, row in zip(thetas, table.itertuples()):
+        _, momentum = polhode(unit, theta, points=600)
+        momentum *= np.sqrt(energy / row.energy)
+        phase = row.total_phase % TWO_PI
+        color = colormap(norm(phase))
+        for flip in (1.0, -1.0):
+            mirrored = momentum.copy()
+            if row.branch == "SAM":
+                mirrored[:, 2] *= flip
+            else:
+                mirrored[:, 0] *= flip
+            (line,) = ax3d.plot(*mirrored.T, color=color, linewidth=1.2)
+            drawn.append((line, phase))
+    bar = ax3d.figure.colorbar(mpl.cm.ScalarMappable(norm=norm, cmap=colormap), ax=ax3d,
+                               shrink=0.7, pad=0.1)
+    bar.set_label(r"total phase $\Delta\alpha$ mod $2\pi$ (rad)")
+    bar.set_ticks([0, np.pi / 2, np.pi, 1.5 * np.pi, TWO_PI])
+    bar.set_ticklabels(["0", r"$\pi/2$", r"$\pi$", r"$3\pi/2$", r"$2\pi$"])
+    limit = 1.05 * semi.max()
+    for setter in (ax3d.set_xlim, ax3d.set_ylim, ax3d.set_zlim):
+        setter(-limit, limit)
+    ax3d.set_box_aspect((1, 1, 1))
+    ax3d.set_xlabel("$M_1$ (J s)")
+    ax3d.set_ylabel("$M_2$ (J s)")
+    ax3d.set_zlabel("$M_3$ (J s)")
+    return {"polhodes": drawn, "colorbar": bar, "ellipsoid": ellipsoid}
+
+
+def limits_field(i1, i2):
+    """min(eqn:alphamin1, eqn:alphamin2) on a grid (NaN outside the region)."""
+    moments, inside = region_moments(i1, i2)
+    out = np.full(np.shape(i1), np.nan)
+    if inside.any():
+        lim = phase_limits(moments[inside])
+        out[inside] = np.minimum(lim.theta_zero, lim.theta_half_pi)
+    return out

@@ -1,0 +1,135 @@
+"""Figure files: the paper's figures, herpolhode sets, determinism, the CLI."""
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.image as mpimg  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+import orbits  # noqa: E402
+from orbits import Body, figures  # noqa: E402
+from orbits.cli import main  # noqa: E402
+
+FIG6 = Body.preset("fig6")
+
+
+def all_axes(figure):
+    return [ax for ax in figure.get_axes() if ax.get_label() != "<colorbar>"]
+
+
+def assert_not_blank(path):
+    image = mpimg.imread(path)
+    assert image.std() > 0.05, f"{path} looks blank"
+    assert image.shape[0] > 300 and image.shape[1] > 300
+
+
+@pytest.fixture(scope="module")
+def paper(tmp_path_factory):
+    out = tmp_path_factory.mktemp("paper")
+    built = {name: build() for name, build in figures.PAPER_FIGURES.items()}
+    for name, figure in built.items():
+        figures.save_figure(figure, out / name, ("png",))
+    return out, built
+
+
+@pytest.mark.parametrize("name", list(figures.PAPER_FIGURES))
+def test_paper_figure_is_drawn_and_labelled(paper, name):
+    out, built = paper
+    assert_not_blank(out / f"{name}.png")
+    figure = built[name]
+    for ax in all_axes(figure):
+        if not ax.get_visible() or not ax.axison:
+            continue
+        if ax in getattr(figure, "inset_axes_list", []):
+            continue
+        if hasattr(ax, "get_zlabel"):
+            assert ax.get_xlabel() and ax.get_ylabel() and ax.get_zlabel(), name
+        elif ax.get_xticks().size and ax.get_xlabel() == "" and ax.get_ylabel() == "":
+            # insets of Fig. 6 carry only a title
+            assert ax.get_title(), name
+        else:
+            assert ax.get_xlabel() or ax.get_ylabel(), name
+
+
+@pytest.mark.parametrize("name", ["fig2", "fig4"])
+def test_maps_have_colour_bars(paper, name):
+    _, built = paper
+    bars = [ax for ax in built[name].get_axes() if ax.get_label() == "<colorbar>"]
+    assert len(bars) == 1 and bars[0].get_ylabel()
+
+
+def test_fig6_insets_are_closed_catalog_orbits(paper):
+    _, built = paper
+    catalog = orbits.closed_orbits(FIG6, n_max=8)
+    insets = built["fig6"].insets
+    assert len(insets) >= 6
+    for inset, row in insets:
+        assert row.dtheta in set(catalog["dtheta"])
+        (line,) = inset.get_lines()
+        xy = line.get_xydata()
+        assert np.abs(xy[-1] - xy[0]).max() <= 1e-9
+
+
+def test_fig5_marks_the_critical_angle(paper):
+    _, built = paper
+    ax = built["fig5"].get_axes()[0]
+    verticals = [line.get_xdata()[0] for line in ax.get_lines()
+                 if len(set(line.get_xdata())) == 1]
+    assert verticals == [pytest.approx(orbits.critical_angle(Body.preset("t-handle")))]
+
+
+def test_herpolhode_set_files_order_and_closure(tmp_path):
+    written = figures.herpolhode_set(FIG6, 5, tmp_path, q_max=2, formats=("png", "svg"))
+    catalog = orbits.closed_orbits(FIG6, n_max=5, q_max=2)
+    stems = sorted({p.stem for p in written})
+    assert "contact_sheet" in stems
+    assert len(stems) == len(catalog) + 1
+    assert {p.suffix for p in written} == {".png", ".svg"}
+    for path in written:
+        if path.suffix == ".png":
+            assert_not_blank(path)
+    sheet = figures.contact_sheet(FIG6, catalog)
+    drawn = [ax for ax in sheet.get_axes() if ax.get_lines()]
+    thetas = [float(ax.get_title().split("=")[-1]) for ax in drawn]
+    assert thetas == sorted(thetas)              # the paper's left-to-right order
+    for ax in drawn:
+        xy = ax.get_lines()[0].get_xydata()
+        assert np.abs(xy[-1] - xy[0]).max() <= 1e-9      # p/q drawn over q periods
+
+
+def test_output_is_deterministic(tmp_path):
+    for fmt in ("png", "svg", "pdf"):
+        first = figures.save_figure(figures.figure5(), tmp_path / "a", (fmt,))[0]
+        second = figures.save_figure(figures.figure5(), tmp_path / "b", (fmt,))[0]
+        assert first.read_bytes() == second.read_bytes(), fmt
+
+
+class TestCli:
+    def test_paper(self, tmp_path, capsys):
+        assert main(["figures", "--paper", "--formats", "png", "--out", str(tmp_path)]) == 0
+        assert sorted(p.name for p in tmp_path.iterdir()) == [f"fig{k}.png" for k in range(1, 7)]
+
+    def test_body_set(self, tmp_path, capsys):
+        out = tmp_path / "made" / "here"
+        assert main(["figures", "--t-handle", "8", "4", "1", "--n-max", "3",
+                     "--formats", "svg", "--out", str(out)]) == 0
+        names = sorted(p.name for p in out.iterdir())
+        assert "contact_sheet.svg" in names and "herpolhode_SAM_n002.svg" in names
+
+    @pytest.mark.parametrize("argv, fragment", [
+        (["figures", "--out", "d"], "exactly one"),
+        (["figures", "--paper", "--preset", "fig6", "--out", "d"], "exactly one"),
+        (["figures", "--preset", "fig6", "--out", "d"], "--n-max is required"),
+        (["figures", "--preset", "fig6", "--n-max", "0", "--out", "d"], "must be >= 1"),
+        (["figures", "--moments", "1", "1", "2", "--n-max", "2", "--out", "d"], "symmetric"),
+        (["figures", "--preset", "nope", "--n-max", "2", "--out", "d"], "invalid choice"),
+        (["figures", "--paper", "--formats", "gif", "--out", "d"], "invalid choice"),
+        (["figures", "--paper", "--out", "/proc/orbits-figures"], "cannot create"),
+    ])
+    def test_bad_input(self, tmp_path, capsys, monkeypatch, argv, fragment):
+        monkeypatch.chdir(tmp_path)
+        code = main(argv)
+        err = capsys.readouterr().err.strip().splitlines()
+        assert code == 2 and len(err) == 1 and fragment in err[0], err

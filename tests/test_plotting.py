@@ -1,0 +1,154 @@
+"""Plotting primitives: what is drawn is the physics."""
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib as mpl  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+import orbits  # noqa: E402
+from orbits import Body, plotting  # noqa: E402
+from orbits.figures import new_figure  # noqa: E402
+
+FIG6 = Body.preset("fig6")
+T_HANDLE = Body.preset("t-handle")
+SPIN = dict(theta=np.pi / 2 - 0.15, phi=np.pi / 2 - 0.2)
+
+
+def test_closed_herpolhode_closes_and_is_labelled():
+    table = orbits.closed_orbits(FIG6, n_max=4, q_max=2)
+    for row in table.itertuples():
+        ax = new_figure().add_subplot()
+        line = plotting.plot_herpolhode(ax, FIG6, dtheta=row.dtheta, periods=row.q)
+        xy = line.get_xydata()
+        assert np.abs(xy[-1] - xy[0]).max() <= 1e-9
+        assert ax.get_aspect() == 1.0
+        assert "omega_x" in ax.get_xlabel() and "omega_y" in ax.get_ylabel()
+        # the drawn points are the herpolhode
+        t, omega = orbits.herpolhode(FIG6, dtheta=row.dtheta, periods=row.q,
+                                     points=len(xy))
+        np.testing.assert_array_equal(xy, omega[:, :2])
+
+
+def test_body_space_map_matches_the_limit_formulas():
+    grid = plotting.body_space_grid(150)
+    i1, i2, minimum = grid
+    limits = plotting.limits_field(i1, i2)
+    inside = np.isfinite(limits)
+    assert inside.sum() > 300
+    # the numerical minimum over theta is the smaller of the two limits
+    np.testing.assert_allclose(minimum[inside], limits[inside], rtol=1e-12)
+    assert np.all(np.isnan(minimum[~inside]))
+    ax = new_figure().add_subplot()
+    drawn = plotting.plot_body_space(ax, grid)
+    # every drawn contour vertex sits on its level of min(alphamin1, alphamin2)
+    # to the accuracy of linear interpolation on the grid: the field has
+    # kinks (the dashed locus) so it converges at first order, measured
+    # 0.87% at 150 points and 0.46% at the figure's 300; the end vertices
+    # touch the NaN cells outside the region and are left out
+    checked = 0
+    for level, segments in zip(drawn["contours"].levels, drawn["contours"].allsegs):
+        for segment in segments:
+            values = plotting.limits_field(segment[1:-1, 0], segment[1:-1, 1])
+            ok = np.isfinite(values)
+            np.testing.assert_allclose(values[ok], level, rtol=1e-2)
+            checked += ok.sum()
+    assert checked > 100
+    # the kink locus: the two limits agree there (theta_c = pi/4)
+    x, y = drawn["kink"].get_data()
+    moments = np.stack([x, y, np.sqrt(1 - x**2 - y**2)], axis=-1)
+    lim = orbits.phase_limits(moments)
+    np.testing.assert_allclose(lim.theta_zero, lim.theta_half_pi, rtol=1e-9)
+    np.testing.assert_allclose(orbits.critical_angle(moments), np.pi / 4, rtol=1e-9)
+    # the boundaries are the prolate (I2 = I3), oblate (I1 = I2), flat (I3 = I1 + I2) curves
+    b = drawn["boundaries"]
+    x, y = b["prolate"].get_data()
+    np.testing.assert_allclose(y, np.sqrt(1 - x**2 - y**2), atol=1e-12)
+    x, y = b["oblate"].get_data()
+    np.testing.assert_array_equal(x, y)
+    x, y = b["flat"].get_data()
+    np.testing.assert_allclose(np.sqrt(np.clip(1 - x**2 - y**2, 0, None)), x + y, atol=1e-12)
+    assert drawn["colorbar"].ax.get_ylabel()
+    assert ax.get_xlabel().startswith("$I_1$") and ax.get_ylabel().startswith("$I_2$")
+
+
+def test_phase_curves_are_the_closed_form():
+    ax = new_figure().add_subplot()
+    lines = plotting.plot_phase_curves(ax, T_HANDLE)
+    theta, total = lines["total"].get_data()
+    table = orbits.phases(T_HANDLE, theta)
+    np.testing.assert_array_equal(total, table["total_phase"])
+    np.testing.assert_allclose(lines["geometric"].get_ydata(),
+                               lines["dynamic"].get_ydata() - total, atol=1e-12)
+    np.testing.assert_array_equal(lines["period"].get_ydata(), table["period"])
+    assert lines["period_axes"].get_ylabel().startswith("period")
+    assert orbits.critical_angle(T_HANDLE) not in theta
+
+
+def test_total_phase_plot_marks_the_catalog_roots():
+    ax = new_figure().add_subplot()
+    table = orbits.closed_orbits(FIG6, n_max=8)
+    drawn = plotting.plot_total_phase(ax, FIG6, table, n_levels=8)
+    marked = drawn["roots"].get_offsets()
+    np.testing.assert_array_equal(marked[:, 0], table["theta"])
+    np.testing.assert_allclose(marked[:, 1], 2 * np.pi * table["n"], rtol=1e-14)
+    assert [line.get_ydata()[0] for line in drawn["levels"]] == pytest.approx(
+        2 * np.pi * np.arange(1, 9))
+
+
+def test_omega_components_are_the_exact_motion():
+    ax = new_figure().add_subplot()
+    drawn = plotting.plot_omega_components(ax, T_HANDLE, **SPIN)
+    motion = orbits.Motion.from_spin(T_HANDLE, **SPIN)
+    t = drawn["lines"][0].get_xdata()
+    omega = motion.omega(t)
+    for k, line in enumerate(drawn["lines"]):
+        np.testing.assert_array_equal(line.get_ydata(), omega[:, k])
+    assert drawn["period"] == pytest.approx(23.8181, abs=5e-5)
+    assert [line.get_linestyle() for line in drawn["lines"]] == ["-", "--", "-."]
+
+
+def test_binet_polhode_lies_on_both_surfaces():
+    ax = new_figure().add_subplot(projection="3d")
+    drawn = plotting.plot_binet(ax, T_HANDLE, **SPIN)
+    x, y, z = drawn["polhode"].get_data_3d()
+    unit = T_HANDLE.normalized_moments
+    np.testing.assert_allclose(np.sqrt(x**2 + y**2 + z**2), drawn["momentum"], rtol=1e-13)
+    np.testing.assert_allclose(x**2 / unit[0] + y**2 / unit[1] + z**2 / unit[2],
+                               2 * drawn["energy"], rtol=1e-13)
+    assert drawn["energy"] == pytest.approx(0.264805, abs=5e-7)
+
+
+def test_foliation_colours_are_the_phase():
+    ax = new_figure().add_subplot(projection="3d")
+    drawn = plotting.plot_polhode_foliation(ax, T_HANDLE, count=12)
+    cmap = mpl.colormaps["twilight"]
+    unit = T_HANDLE.normalized_moments
+    for line, phase in drawn["polhodes"]:
+        assert line.get_color() == pytest.approx(cmap(phase / (2 * np.pi)))
+        x, y, z = line.get_data_3d()
+        # all polhodes on the one Binet ellipsoid of energy 1/2
+        np.testing.assert_allclose(x**2 / unit[0] + y**2 / unit[1] + z**2 / unit[2], 1.0,
+                                   rtol=1e-12)
+    assert drawn["colorbar"].ax.get_ylabel()
+
+
+def test_t_handle_drawing():
+    ax = new_figure().add_subplot(projection="3d")
+    drawn = plotting.plot_t_handle(ax)
+    assert drawn["semi_axes"] == pytest.approx((4.23281, 3.07318, 0.645497), abs=5e-6)
+    # the bars are drawn about their centre of mass, and their moments about
+    # it are the T-handle's (unit density, then normalised to unit mass)
+    boxes = [(np.array(lo), np.array(hi)) for lo, hi in drawn["boxes"]]
+    volumes = np.array([np.prod(hi - lo) for lo, hi in boxes])
+    centres = np.array([(lo + hi) / 2 for lo, hi in boxes])
+    np.testing.assert_allclose(volumes @ centres, 0.0, atol=1e-12)
+    tensor = np.zeros((3, 3))
+    for volume, (lo, hi), centre in zip(volumes, boxes, centres):
+        a, b, c = hi - lo
+        tensor += volume / 12 * np.diag([b * b + c * c, a * a + c * c, a * a + b * b])
+        tensor += volume * (centre @ centre * np.eye(3) - np.outer(centre, centre))
+    np.testing.assert_allclose(np.diag(tensor) / volumes.sum(),
+                               np.sort(T_HANDLE.moments)[[0, 1, 2]], rtol=1e-13)
