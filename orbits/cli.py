@@ -294,6 +294,88 @@ def _add_figures(subparsers):
     parser.set_defaults(run=_cmd_figures)
 
 
+# ---------------------------------------------------------------- survey
+def _cmd_survey(args):
+    import json
+    import time
+
+    from .survey import Survey
+    if (args.resolution is None) == (args.bodies is None):
+        raise InputError("orbits survey: give exactly one of --resolution N and --bodies FILE")
+    options = dict(q_max=args.q_max, fmt=args.format, chunk=args.chunk)
+    if args.resolution is not None:
+        survey = Survey.grid(args.out, args.resolution, args.n_max, **options)
+    else:
+        from .catalog import bodies_from_csv
+        survey = Survey.from_bodies(args.out, bodies_from_csv(args.bodies), args.n_max,
+                                    source=args.bodies, **options)
+    survey.prepare()
+    todo = survey.missing()
+    total = survey.moments.shape[0]
+    pending = sum(len(survey.chunk_moments(k)) for k in todo)
+    start = time.perf_counter()
+    with progress_bar(pending, "survey", unit="body") as bar:
+        report = survey.run(scheduler=args.scheduler, progress=bar.update)
+    elapsed = time.perf_counter() - start
+    if args.json:
+        print(json.dumps(report, indent=2))
+    else:
+        conjecture = report["conjecture_minimum_at_the_ends"]
+        rate = f", {pending / elapsed:.0f} bodies/s" if pending else ""
+        print(f"orbits survey: {total} bodies ({pending} computed now in "
+              f"{elapsed:.1f} s{rate}), {report['orbits']} closed orbits with "
+              f"n <= {args.n_max}, in {args.out}")
+        low, high = report["min_total_phase_range"]
+        print(f"minimum total phase: {low / (2 * math.pi):.6f} to "
+              f"{high / (2 * math.pi):.6f} x 2 pi; bodies with a 2 pi orbit: "
+              f"{report['bodies_with_a_two_pi_orbit']}")
+        if conjecture["held_on_every_body"]:
+            print("conjecture (the minimum lies at theta -> 0 or pi/2): held on every body")
+        else:
+            print(f"conjecture (the minimum lies at theta -> 0 or pi/2): FAILED on "
+                  f"{len(conjecture['counterexamples'])} bodies:")
+            for row in conjecture["counterexamples"]:
+                print(f"  body {row['body']}: I = ({row['I1']:.6f}, {row['I2']:.6f}, "
+                      f"{row['I3']:.6f}), minimum {row['min_total_phase']:.9f} at "
+                      f"theta = {row['min_theta']:.9f}")
+    return 0
+
+
+def _add_survey(subparsers):
+    parser = subparsers.add_parser(
+        "survey", help="minimum phases and closed orbits over many bodies",
+        description="Runs the closed-orbit search over the region of physical "
+                    "asymmetric bodies (the paper's I1-I2 plane, |I| = 1) or an "
+                    "explicit list, and writes DIR with manifest.json, the "
+                    "tables bodies/ and orbits/ (partitioned, one file per "
+                    "chunk) and report.json (the minimum-at-the-ends "
+                    "conjecture, bodies with a 2 pi orbit, ...).  Each chunk is "
+                    "written atomically; running the same command again after "
+                    "an interruption computes only the missing chunks; other "
+                    "parameters in the same DIR are refused.")
+    source = parser.add_mutually_exclusive_group()
+    source.add_argument("--resolution", type=_positive_int, metavar="N",
+                        help="an N x N grid over the bounding box of the region, "
+                             "keeping the points inside it")
+    source.add_argument("--bodies", metavar="FILE.csv",
+                        help="a CSV with columns I1, I2, I3 (optionally name)")
+    parser.add_argument("--n-max", type=_positive_int, required=True,
+                        help="largest multiple n (or p/q) of 2 pi searched per body")
+    parser.add_argument("--q-max", type=_positive_int, default=1,
+                        help="also p/q orbits with q up to Q (default 1)")
+    parser.add_argument("--format", choices=["csv", "parquet"], default="csv",
+                        help="table format (default csv; parquet for large surveys)")
+    parser.add_argument("--chunk", type=_positive_int, default=20_000,
+                        help="bodies per chunk (default 20000)")
+    parser.add_argument("--scheduler", metavar="tcp://HOST:PORT",
+                        help="run the chunks on this dask.distributed scheduler "
+                             "(needs orbits[distributed]); default: in-process on "
+                             "all cores")
+    parser.add_argument("--json", action="store_true", help="print the report as JSON")
+    parser.add_argument("--out", required=True, metavar="DIR", help="survey directory")
+    parser.set_defaults(run=_cmd_survey)
+
+
 # ---------------------------------------------------------------- verify
 
 
@@ -408,6 +490,7 @@ def build_parser():
     _add_phase(subparsers)
     _add_catalog(subparsers)
     _add_figures(subparsers)
+    _add_survey(subparsers)
     _add_verify(subparsers)
     _add_bench(subparsers)
     return parser

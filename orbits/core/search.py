@@ -28,7 +28,7 @@ smallest normal double; they are counted, not solved.
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from .phase import (STATUS_OK, angle_triplet, body_constants, spin_gap,
                     total_from_spin)
@@ -381,3 +381,15 @@ def search_body(i1, i2, i3, levels, root_branch, root_level, root_offset, info):
         info[INFO_UNREACHED_SAM + branch_index] = branch_info[3]
         info[INFO_WIDTH_SAM + branch_index] = width
     return found
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def search_many(moments, levels, root_branch, root_level, root_offset, counts, info):
+    """:func:`search_body` for every row of ``moments`` (n, 3), in parallel.
+
+    Row ``b``'s roots go to ``root_*[b, :counts[b]]``; ``counts[b] = -1``
+    when its row of the output arrays was too short.
+    """
+    for b in prange(moments.shape[0]):
+        counts[b] = search_body(moments[b, 0], moments[b, 1], moments[b, 2], levels,
+                                root_branch[b], root_level[b], root_offset[b], info[b])

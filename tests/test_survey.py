@@ -1,0 +1,186 @@
+"""Survey: tables, the conjecture report, resume after a kill, Dask, Fig. 2."""
+
+import json
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import orbits
+from orbits import InputError
+from orbits.cli import main
+from orbits.survey import (BODY_COLUMNS, Survey, _write_table, compute_chunk, read_survey,
+                           survey_grid)
+
+
+def read_bytes(directory):
+    return {p.relative_to(directory).as_posix(): p.read_bytes()
+            for p in sorted(directory.rglob("part-*"))}
+
+
+def test_chunk_matches_closed_orbits():
+    moments = orbits.region_sample(40)
+    bodies, orbits_table = compute_chunk(moments, 8, q_max=2, first_id=100)
+    assert list(bodies.columns) == list(BODY_COLUMNS)
+    assert list(orbits_table.columns) == list(orbits.CATALOG_COLUMNS)
+    assert bodies["body"].tolist() == list(range(100, 140))
+    for k in (0, 7, 23, 39):
+        one = orbits.closed_orbits(moments[k], n_max=8, q_max=2)
+        mine = orbits_table[orbits_table.body == 100 + k].reset_index(drop=True)
+        np.testing.assert_array_equal(mine["dtheta"], one["dtheta"])
+        np.testing.assert_array_equal(mine[["n", "q"]], one[["n", "q"]])
+        assert bodies.loc[k, "orbits"] == len(one)
+        assert bodies.loc[k, "n_smallest"] == one.loc[one.q == 1, "n"].min()
+        value, where = orbits.minimum_phase(moments[k])
+        assert bodies.loc[k, "min_total_phase"] == value
+    lim = orbits.phase_limits(moments)
+    np.testing.assert_array_equal(bodies["limit_theta_zero"], lim.theta_zero)
+    # the conjecture on these bodies: the minimum is the smaller end value
+    np.testing.assert_allclose(bodies["min_total_phase"],
+                               np.minimum(lim.theta_zero, lim.theta_half_pi), rtol=1e-13)
+    assert bodies["min_at_end"].all()
+
+
+def test_grid_survey_report(tmp_path):
+    survey = Survey.grid(tmp_path / "s", 40, 6, chunk=300)
+    report = survey.run()
+    bodies, table = read_survey(tmp_path / "s")
+    assert len(bodies) == len(orbits.region_grid(40)) == report["bodies"]
+    assert bodies["body"].is_unique and len(table) == report["orbits"]
+    conjecture = report["conjecture_minimum_at_the_ends"]
+    assert conjecture["held_on_every_body"] and conjecture["counterexamples"] == []
+    assert report["bodies_with_a_two_pi_orbit"] == 0
+    assert report["min_total_phase_range"][0] > 2 * np.pi
+    assert json.loads((tmp_path / "s" / "report.json").read_text()) == report
+
+
+def test_report_lists_counterexamples(tmp_path):
+    survey = Survey.grid(tmp_path / "s", 12, 3, chunk=50)
+    survey.run()
+    part = tmp_path / "s" / "bodies" / "part-00000.csv"
+    frame = pd.read_csv(part)
+    frame.loc[3, "min_at_end"] = False         # pretend one body's minimum is inside
+    _write_table(frame, part, "csv")
+    report = survey.report()
+    assert not report["conjecture_minimum_at_the_ends"]["held_on_every_body"]
+    assert [row["body"] for row in report["conjecture_minimum_at_the_ends"]["counterexamples"]] == [3]
+
+
+def test_parquet_and_csv_engines_agree(tmp_path):
+    bodies, table = compute_chunk(orbits.region_sample(30), 5)
+    for engine in ("arrow", "pandas"):
+        _write_table(table, tmp_path / f"{engine}.csv", "csv", engine=engine)
+        again = pd.read_csv(tmp_path / f"{engine}.csv")
+        pd.testing.assert_frame_equal(again, table, check_exact=True, check_dtype=False)
+    _write_table(table, tmp_path / "t.parquet", "parquet")
+    pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "t.parquet"), table,
+                                  check_exact=True)
+
+
+def test_other_parameters_are_refused(tmp_path):
+    Survey.grid(tmp_path / "s", 20, 4, chunk=100).run()
+    with pytest.raises(InputError, match="different parameters.*n_max"):
+        Survey.grid(tmp_path / "s", 20, 5, chunk=100).run()
+    with pytest.raises(InputError, match="different parameters"):
+        Survey.grid(tmp_path / "s", 21, 4, chunk=100).run()
+    (tmp_path / "other").mkdir()
+    (tmp_path / "other" / "notes.txt").write_text("mine")
+    with pytest.raises(InputError, match="not a survey directory"):
+        Survey.grid(tmp_path / "other", 20, 4).run()
+
+
+def test_resume_after_a_kill(tmp_path):
+    reference = tmp_path / "reference"
+    Survey.grid(reference, 120, 10, chunk=400).run()
+    target = tmp_path / "killed"
+    argv = [sys.executable, "-m", "orbits.cli", "survey", "--resolution", "120",
+            "--n-max", "10", "--chunk", "400", "--out", str(target)]
+    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.time() + 120
+    while time.time() < deadline:
+        done = list((target / "bodies").glob("part-*")) if (target / "bodies").exists() else []
+        if len(done) >= 3:
+            break
+        time.sleep(0.01)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    finished = sorted(p.name for p in (target / "bodies").glob("part-*"))
+    total = Survey.grid(target, 120, 10, chunk=400).chunks
+    assert 3 <= len(finished) < total, "the kill came too late to test a resume"
+    # a second run computes only the missing chunks
+    calls = []
+    import orbits.survey as module
+    original = module.compute_chunk
+
+    def counting(moments, *args, **kwargs):
+        calls.append(len(moments))
+        return original(moments, *args, **kwargs)
+
+    module.compute_chunk = counting
+    try:
+        Survey.grid(target, 120, 10, chunk=400).run()
+    finally:
+        module.compute_chunk = original
+    assert len(calls) == total - len(finished)
+    assert read_bytes(target) == read_bytes(reference)      # nothing lost or doubled
+    assert not list(target.rglob("*.part"))
+
+
+def test_distributed_equals_local(tmp_path):
+    distributed = pytest.importorskip("distributed")
+    local = tmp_path / "local"
+    Survey.grid(local, 60, 8, chunk=500).run()
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            Survey.grid(tmp_path / "client", 60, 8, chunk=500).run(scheduler=client)
+        # and by address, as --scheduler tcp://host:port does
+        code = main(["survey", "--resolution", "60", "--n-max", "8", "--chunk", "500",
+                     "--scheduler", cluster.scheduler_address, "--out",
+                     str(tmp_path / "address")])
+        assert code == 0
+    assert read_bytes(tmp_path / "client") == read_bytes(local)
+    assert read_bytes(tmp_path / "address") == read_bytes(local)
+
+
+def test_fig2_from_a_survey(tmp_path, capsys):
+    survey_dir = tmp_path / "s"
+    Survey.grid(survey_dir, 50, 3, chunk=5000).run()
+    i1, i2, minimum = survey_grid(survey_dir)
+    inside = np.isfinite(minimum)
+    assert inside.sum() == len(orbits.region_grid(50))
+    from orbits.plotting import limits_field
+    np.testing.assert_allclose(minimum[inside], limits_field(i1, i2)[inside], rtol=1e-12)
+    assert main(["figures", "--survey", str(survey_dir), "--formats", "png", "--out",
+                 str(tmp_path / "fig")]) == 0
+    assert (tmp_path / "fig" / "fig2.png").exists()
+
+
+def test_cli_survey_and_errors(tmp_path, capsys, monkeypatch):
+    import orbits.survey as module
+    monkeypatch.setattr(module, "CONNECT_TIMEOUT", 2)
+    bodies = tmp_path / "bodies.csv"
+    bodies.write_text("name,I1,I2,I3\na,0.26,0.55,0.793662\nb,1,1.7,2.2\n")
+    assert main(["survey", "--bodies", str(bodies), "--n-max", "6", "--json",
+                 "--out", str(tmp_path / "s")]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["bodies"] == 2
+    for argv, fragment in [
+        (["survey", "--n-max", "3", "--out", "x"], "exactly one"),
+        (["survey", "--resolution", "10", "--n-max", "0", "--out", "x"], "must be >= 1"),
+        (["survey", "--resolution", "10", "--n-max", "3", "--format", "xml", "--out", "x"],
+         "invalid choice"),
+        (["survey", "--resolution", "10", "--n-max", "3", "--out", "/proc/orbits-survey"],
+         "cannot create"),
+        (["survey", "--resolution", "10", "--n-max", "3", "--scheduler",
+          "tcp://127.0.0.1:9", "--out", str(tmp_path / "dask")], "scheduler"),
+        (["figures", "--survey", str(tmp_path / "s"), "--out", str(tmp_path / "f")],
+         "grid survey"),
+    ]:
+        code = main(argv)
+        err = capsys.readouterr().err.strip().splitlines()
+        assert code == 2 and len(err) == 1 and fragment in err[0], (argv, err)
