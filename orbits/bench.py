@@ -90,7 +90,7 @@ def _herpolhode_by_integration(motion, times):
     momentum = inertia * w0
     theta0 = np.arctan2(np.hypot(momentum[0], momentum[1]), momentum[2])
     psi0 = np.arctan2(momentum[0], momentum[1])
-    q0 = Rotation.from_euler("ZXZ", [0.0, theta0, psi0]).as_quat(scalar_first=True)
+    q0 = np.roll(Rotation.from_euler("ZXZ", [0.0, theta0, psi0]).as_quat(), 1)
 
     def rhs(t, y):
         dy = np.empty(7)
@@ -100,7 +100,7 @@ def _herpolhode_by_integration(motion, times):
     solution = solve_ivp(rhs, (0.0, times[-1]), np.concatenate([w0, q0]),
                          method="DOP853", rtol=1e-12, atol=1e-12, dense_output=True)
     states = solution.sol(times)
-    rotation = Rotation.from_quat(states[3:].T, scalar_first=True)
+    rotation = Rotation.from_quat(np.roll(states[3:].T, -1, axis=-1))
     return rotation.apply(states[:3].T)
 
 

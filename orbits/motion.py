@@ -127,15 +127,12 @@ class Motion:
             raise AngleError(f"speed must be positive, got {speed}")
         if (theta is None) == (dtheta is None):
             raise AngleError("give exactly one of theta and dtheta")
-        i1, i2, i3 = body.moments
-        cphi, sphi, theta_c, co_theta_c, root_a, root_b, root_ab = \
-            _phase.body_constants(i1, i2, i3, float(phi))
         if not np.isfinite(phi):
             raise AngleError(f"phi must be finite, got {phi}")
         from_offset = dtheta is not None
-        angle = float(dtheta if from_offset else theta)
-        theta_, dtheta_, co_theta, status = _phase.angle_triplet(
-            angle, from_offset, theta_c, co_theta_c)
+        status, theta_, _, _, w1, w2, w3, scale, offset, closing = \
+            _phase.spin_from_angle(_phase.body_constants(*body.moments, float(phi)),
+                                   float(dtheta if from_offset else theta), from_offset)
         if status == _phase.STATUS_NOT_FINITE:
             raise AngleError(f"{'dtheta' if from_offset else 'theta'} must be finite")
         if status == _phase.STATUS_OUT_OF_RANGE:
@@ -143,8 +140,6 @@ class Motion:
         if status == _phase.STATUS_SEPARATRIX:
             raise SeparatrixError("the spin lies on the separatrix; pass a "
                                   "nonzero dtheta")
-        w1, w2, w3, scale, offset, closing = _phase.spin_gap(
-            cphi, sphi, root_a, root_b, root_ab, theta_, dtheta_, co_theta)
         omega = speed * np.array([w1, w2, w3])
         # the gap scales with speed^2 like omega's squares
         return cls(body, omega, (scale * speed * speed, offset, closing))

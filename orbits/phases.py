@@ -231,7 +231,15 @@ def phases(body_or_moments, theta=None, phi=0.0, *, dtheta=None):
         "I1": i1 / norm, "I2": i2 / norm, "I3": i3 / norm,
         "theta": theta, "dtheta": dtheta, "phi": _flat(phi, shape),
         "theta_crit": theta_c,
-        "branch": _branch_categorical(branch),
+        **_parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total),
+    })
+
+
+def _parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total):
+    """The columns shared by :func:`phases` and :func:`spin_phases`."""
+    return {
+        "branch": pd.Categorical.from_codes((branch < 0).astype(np.int8),
+                                            categories=["SAM", "LAM"]),
         "energy": 0.5 * two_e / norm,
         "momentum": np.sqrt(m_sq) / norm,
         "m": m_param,
@@ -239,12 +247,7 @@ def phases(body_or_moments, theta=None, phi=0.0, *, dtheta=None):
         "dynamic_phase": dynamic,
         "total_phase": total,
         "geometric_phase": dynamic - total,
-    })
-
-
-def _branch_categorical(codes):
-    return pd.Categorical.from_codes((codes < 0).astype(np.int8),
-                                     categories=["SAM", "LAM"])
+    }
 
 
 def phase_limits(body_or_moments):
@@ -330,12 +333,5 @@ def spin_phases(body_or_moments, omega):
     norm = np.sqrt(i1 * i1 + i2 * i2 + i3 * i3)
     return pd.DataFrame({
         "w1": w1, "w2": w2, "w3": w3,
-        "branch": _branch_categorical(branch),
-        "energy": 0.5 * two_e / norm,
-        "momentum": np.sqrt(m_sq) / norm,
-        "m": m_param,
-        "period": period,
-        "dynamic_phase": dynamic,
-        "total_phase": total,
-        "geometric_phase": dynamic - total,
+        **_parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total),
     })

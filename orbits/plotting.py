@@ -338,6 +338,16 @@ def plot_t_handle(ax3d, l1=8.0, l2=4.0, w=1.0, *, shrink=0.25):
     return {"bars": bars, "boxes": boxes, "ellipsoid": surface, "semi_axes": semi}
 
 
+def _momentum_axes(ax3d, limit):
+    """Cube limits, equal aspect and labels of angular-momentum space."""
+    for setter in (ax3d.set_xlim, ax3d.set_ylim, ax3d.set_zlim):
+        setter(-limit, limit)
+    ax3d.set_box_aspect((1, 1, 1))
+    ax3d.set_xlabel("$M_1$ (J s)")
+    ax3d.set_ylabel("$M_2$ (J s)")
+    ax3d.set_zlabel("$M_3$ (J s)")
+
+
 def plot_binet(ax3d, body, theta=None, *, dtheta=None, phi=0.0):
     """The momentum sphere meeting the Binet ellipsoid, and the polhode (Fig. 3a).
 
@@ -362,13 +372,7 @@ def plot_binet(ax3d, body, theta=None, *, dtheta=None, phi=0.0):
     _, momentum = polhode(unit, theta, dtheta=dtheta, phi=phi, points=1500)
     (curve,) = ax3d.plot(momentum[:, 0], momentum[:, 1], momentum[:, 2], color="black",
                          linewidth=1.5, label="polhode")
-    limit = 1.05 * semi.max()
-    for setter in (ax3d.set_xlim, ax3d.set_ylim, ax3d.set_zlim):
-        setter(-limit, limit)
-    ax3d.set_box_aspect((1, 1, 1))
-    ax3d.set_xlabel("$M_1$ (J s)")
-    ax3d.set_ylabel("$M_2$ (J s)")
-    ax3d.set_zlabel("$M_3$ (J s)")
+    _momentum_axes(ax3d, 1.05 * semi.max())
     return {"sphere": sphere, "ellipsoid": ellipsoid, "polhode": curve,
             "energy": row.energy, "momentum": row.momentum}
 
@@ -449,13 +453,7 @@ def plot_polhode_foliation(ax3d, body, *, count=48, energy=0.5, cmap="twilight")
     bar.set_label(r"total phase $\Delta\alpha$ mod $2\pi$ (rad)")
     bar.set_ticks([0, np.pi / 2, np.pi, 1.5 * np.pi, TWO_PI])
     bar.set_ticklabels(["0", r"$\pi/2$", r"$\pi$", r"$3\pi/2$", r"$2\pi$"])
-    limit = 1.05 * semi.max()
-    for setter in (ax3d.set_xlim, ax3d.set_ylim, ax3d.set_zlim):
-        setter(-limit, limit)
-    ax3d.set_box_aspect((1, 1, 1))
-    ax3d.set_xlabel("$M_1$ (J s)")
-    ax3d.set_ylabel("$M_2$ (J s)")
-    ax3d.set_zlabel("$M_3$ (J s)")
+    _momentum_axes(ax3d, 1.05 * semi.max())
     return {"polhodes": drawn, "colorbar": bar, "ellipsoid": ellipsoid}
 
 

@@ -33,7 +33,7 @@ def circular(a, b):
 def integrate(motion, times, rtol=1e-12):
     """DOP853 from the exact motion's initial omega and orientation."""
     inertia = motion.body.moments
-    q0 = Rotation.from_matrix(motion.rotation(np.array([0.0]))[0]).as_quat(scalar_first=True)
+    q0 = np.roll(Rotation.from_matrix(motion.rotation(np.array([0.0]))[0]).as_quat(), 1)
 
     def rhs(t, y):
         dy = np.empty(7)
@@ -43,7 +43,7 @@ def integrate(motion, times, rtol=1e-12):
     solution = solve_ivp(rhs, (0.0, times[-1]), np.concatenate([motion.omega0, q0]),
                          method="DOP853", rtol=rtol, atol=1e-14, t_eval=times)
     assert solution.success
-    rotation = Rotation.from_quat(solution.y[3:].T, scalar_first=True).as_matrix()
+    rotation = Rotation.from_quat(np.roll(solution.y[3:].T, -1, axis=-1)).as_matrix()
     return solution.y[:3].T, rotation
 
 
@@ -192,7 +192,7 @@ def test_quaternion_is_continuous():
         q = motion.quaternion(np.linspace(0.0, 5 * motion.period, 20001))
         assert np.abs(np.diff(q, axis=0)).max() < 0.01
         np.testing.assert_allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-15)
-        r = Rotation.from_quat(q, scalar_first=True).as_matrix()
+        r = Rotation.from_quat(np.roll(q, -1, axis=-1)).as_matrix()
         np.testing.assert_allclose(
             r, motion.rotation(np.linspace(0.0, 5 * motion.period, 20001)), atol=1e-13)
 

@@ -27,15 +27,14 @@ TWO_PI = 2.0 * math.pi
 
 
 @njit(cache=True, nogil=True)
-def rotation_after_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol, max_steps):
-    """Integrate ``periods`` periods; return ``(period, angle, off_axis)``.
+def _integrate_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol, max_steps, y_end):
+    """Integrate from the identity orientation until omega has returned
+    ``periods`` times; returns the time (-1 if not reached, NaN for a steady
+    spin) with the final state in ``y_end``.
 
-    The period is the time between returns of omega to omega0, found as
-    the crossings of one component of omega through its initial value (the
-    ``sn`` or ``cn`` component, never the ``dn`` one, which returns twice
-    per period).  ``angle`` is the rotation about M, in [0, 2 pi);
-    ``off_axis`` is ``2 |q_vec x M^|``, the size (radians) of the part of the
-    final rotation that is not about M.  All NaN if no return was found.
+    The return is the crossing of one component of omega through its
+    initial value: the ``sn`` or the ``cn`` component (never the ``dn`` one,
+    which returns twice per period), whichever moves faster at the start.
     """
     inertia = np.array([i1, i2, i3])
     y0 = np.array([w1, w2, w3, 1.0, 0.0, 0.0, 0.0])
@@ -45,14 +44,29 @@ def rotation_after_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol, max_step
     m_sq = i1 * i1 * w1 * w1 + i2 * i2 * w2 * w2 + i3 * i3 * w3 * w3
     cn_index = 0 if m_sq > two_e * i2 else 2
     component = 1 if abs(f0[1]) >= abs(f0[cn_index]) else cn_index
-    direction = 1.0 if f0[component] > 0.0 else -1.0
     if f0[component] == 0.0:
-        return np.nan, np.nan, np.nan
-    y_end = np.empty(STATE_SIZE)
+        return np.nan
+    direction = 1.0 if f0[component] > 0.0 else -1.0
     t_end, _ = integrate_to_event(inertia, y0, component, y0[component], direction,
-                                  periods, rtol, atol, 1e12, y_end, max_steps)
-    if t_end < 0.0:
+                                  periods, rtol, atol, 1e15, y_end, max_steps)
+    return t_end
+
+
+@njit(cache=True, nogil=True)
+def rotation_after_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol, max_steps):
+    """Integrate ``periods`` periods; return ``(period, angle, off_axis)``.
+
+    The period is the time between returns of omega to omega0 (see
+    :func:`_integrate_periods`).  ``angle`` is the rotation about M, in [0, 2 pi);
+    ``off_axis`` is ``2 |q_vec x M^|``, the size (radians) of the part of the
+    final rotation that is not about M.  All NaN if no return was found.
+    """
+    y_end = np.empty(STATE_SIZE)
+    t_end = _integrate_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol,
+                               max_steps, y_end)
+    if not t_end >= 0.0:
         return np.nan, np.nan, np.nan
+    m_sq = i1 * i1 * w1 * w1 + i2 * i2 * w2 * w2 + i3 * i3 * w3 * w3
     norm_q = math.sqrt(y_end[3] ** 2 + y_end[4] ** 2 + y_end[5] ** 2 + y_end[6] ** 2)
     momentum = math.sqrt(m_sq)
     m1 = i1 * w1 / momentum
@@ -159,22 +173,10 @@ def phase_by_quarter(i1, i2, i3, gap_m1, gap_3m, scale, offset, closing, rtol):
 def rotation_angle_after_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol,
                                  max_steps):
     """Angle of the rotation ``R(q T) R(0)^-1`` (full integration), in [0, pi]."""
-    inertia = np.array([i1, i2, i3])
-    y0 = np.array([w1, w2, w3, 1.0, 0.0, 0.0, 0.0])
-    f0 = np.empty(STATE_SIZE)
-    euler_rhs(inertia, y0, f0)
-    two_e = i1 * w1 * w1 + i2 * w2 * w2 + i3 * w3 * w3
-    m_sq = i1 * i1 * w1 * w1 + i2 * i2 * w2 * w2 + i3 * i3 * w3 * w3
-    cn_index = 0 if m_sq > two_e * i2 else 2
-    component = 1 if abs(f0[1]) >= abs(f0[cn_index]) else cn_index
-    if f0[component] == 0.0:
-        return np.nan
-    direction = 1.0 if f0[component] > 0.0 else -1.0
     y_end = np.empty(STATE_SIZE)
-    t_end, _ = integrate_to_event(inertia, y0, component, y0[component],
-                                  direction, periods, rtol, atol, 1e15, y_end,
-                                  max_steps)
-    if t_end < 0.0:
+    t_end = _integrate_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol,
+                               max_steps, y_end)
+    if not t_end >= 0.0:
         return np.nan
     vector = math.sqrt(y_end[4] ** 2 + y_end[5] ** 2 + y_end[6] ** 2)
     return 2.0 * math.atan2(vector, abs(y_end[3]))
@@ -206,16 +208,12 @@ def check_batch(moments, theta, phi, ode_rtol, ode_atol, quad_rtol, out):
         i1 = moments[k, 0]
         i2 = moments[k, 1]
         i3 = moments[k, 2]
-        cphi, sphi, theta_c, co_theta_c, root_a, root_b, root_ab = \
-            _phase.body_constants(i1, i2, i3, phi[k])
-        th, dth, co_th, code = _phase.angle_triplet(theta[k], False, theta_c,
-                                                    co_theta_c)
+        code, _, _, _, w1, w2, w3, _, _, _ = _phase.spin_from_angle(
+            _phase.body_constants(i1, i2, i3, phi[k]), theta[k], False)
         if code != _phase.STATUS_OK:
             for j in range(out.shape[1]):
                 out[k, j] = np.nan
             continue
-        w1, w2, w3, scale, offset, closing = _phase.spin_gap(
-            cphi, sphi, root_a, root_b, root_ab, th, dth, co_th)
         # every evaluation below follows the orbit through the double
         # vector (w1, w2, w3); its separatrix gap is computed exactly
         gap = separatrix_gap_exact(i1, i2, i3, w1, w3)
@@ -257,15 +255,11 @@ def closure_batch(moments, dtheta, periods, rtol, out):
         i1 = moments[k, 0]
         i2 = moments[k, 1]
         i3 = moments[k, 2]
-        cphi, sphi, theta_c, co_theta_c, root_a, root_b, root_ab = \
-            _phase.body_constants(i1, i2, i3, 0.0)
-        th, dth, co_th, code = _phase.angle_triplet(dtheta[k], True, theta_c,
-                                                    co_theta_c)
+        code, _, _, _, w1, w2, w3, scale, offset, closing = _phase.spin_from_angle(
+            _phase.body_constants(i1, i2, i3, 0.0), dtheta[k], True)
         if code != _phase.STATUS_OK:
             out[k] = np.nan
             continue
-        w1, w2, w3, scale, offset, closing = _phase.spin_gap(
-            cphi, sphi, root_a, root_b, root_ab, th, dth, co_th)
         if abs(dtheta[k]) >= FULL_INTEGRATION_FROM:
             out[k] = rotation_angle_after_periods(i1, i2, i3, w1, w2, w3,
                                                   periods[k], rtol, 1e-14,

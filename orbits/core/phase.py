@@ -165,6 +165,25 @@ def spin_gap(cphi, sphi, root_a, root_b, root_ab, theta, dtheta, co_theta):
 
 
 @njit(cache=True, nogil=True)
+def spin_from_angle(constants, angle, from_offset):
+    """The unit spin and its separatrix gap from one polar angle.
+
+    ``constants`` from :func:`body_constants`; ``angle`` is ``theta`` or,
+    with ``from_offset``, ``dtheta``.  Returns ``code, theta, dtheta, theta_c,
+    w1, w2, w3, scale, offset, closing`` (see :func:`angle_triplet` and
+    :func:`spin_gap`); when ``code`` is not ``STATUS_OK`` the spin is zero.
+    """
+    cphi, sphi, theta_c, co_theta_c, root_a, root_b, root_ab = constants
+    theta, dtheta, co_theta, code = angle_triplet(angle, from_offset, theta_c,
+                                                  co_theta_c)
+    if code != STATUS_OK:
+        return code, theta, dtheta, theta_c, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    w1, w2, w3, scale, offset, closing = spin_gap(
+        cphi, sphi, root_a, root_b, root_ab, theta, dtheta, co_theta)
+    return code, theta, dtheta, theta_c, w1, w2, w3, scale, offset, closing
+
+
+@njit(cache=True, nogil=True)
 def vector_gap(i1, i2, i3, w1, w2, w3):
     """``M^2 - 2 E I2`` in the factor form of :func:`spin_gap` for a vector.
 
@@ -291,36 +310,24 @@ def total_phase_one_body(i1, i2, i3, phi, angles, from_offset, out, status):
     Per-body constants are computed once.  ``status`` receives one of the
     ``STATUS_*`` codes per point; ``out`` is inf where it is not OK.
     """
-    cphi, sphi, theta_c, co_theta_c, root_a, root_b, root_ab = body_constants(
-        i1, i2, i3, phi)
+    constants = body_constants(i1, i2, i3, phi)
     for k in prange(angles.shape[0]):
-        theta, dtheta, co_theta, code = angle_triplet(angles[k], from_offset,
-                                                      theta_c, co_theta_c)
+        code, _, _, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
+            constants, angles[k], from_offset)
         status[k] = code
-        if code != STATUS_OK:
-            out[k] = np.inf
-            continue
-        w1, w2, w3, scale, offset, closing = spin_gap(
-            cphi, sphi, root_a, root_b, root_ab, theta, dtheta, co_theta)
-        out[k] = total_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing)
+        out[k] = (total_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing)
+                  if code == STATUS_OK else np.inf)
 
 
 @njit(cache=True, nogil=True, parallel=True)
 def total_phase_many(i1, i2, i3, phi, angles, from_offset, out, status):
     """Total phase with every input an array of the same length."""
     for k in prange(angles.shape[0]):
-        cphi, sphi, theta_c, co_theta_c, root_a, root_b, root_ab = body_constants(
-            i1[k], i2[k], i3[k], phi[k])
-        theta, dtheta, co_theta, code = angle_triplet(angles[k], from_offset,
-                                                      theta_c, co_theta_c)
+        code, _, _, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
+            body_constants(i1[k], i2[k], i3[k], phi[k]), angles[k], from_offset)
         status[k] = code
-        if code != STATUS_OK:
-            out[k] = np.inf
-            continue
-        w1, w2, w3, scale, offset, closing = spin_gap(
-            cphi, sphi, root_a, root_b, root_ab, theta, dtheta, co_theta)
-        out[k] = total_from_spin(i1[k], i2[k], i3[k], w1, w2, w3, scale, offset,
-                                 closing)
+        out[k] = (total_from_spin(i1[k], i2[k], i3[k], w1, w2, w3, scale, offset,
+                                  closing) if code == STATUS_OK else np.inf)
 
 
 PARTS_COLUMNS = ("theta", "dtheta", "theta_crit", "two_e", "m_sq", "m",
@@ -328,25 +335,25 @@ PARTS_COLUMNS = ("theta", "dtheta", "theta_crit", "two_e", "m_sq", "m",
 
 
 @njit(cache=True, nogil=True)
-def _store_parts(out, k, parts):
+def _store_parts(out, k, first, parts):
+    """Write the seven values of :func:`parts_from_spin` from column ``first``."""
     two_e, m_sq, m_param, branch, period, dynamic, total = parts
-    out[k, 3] = two_e
-    out[k, 4] = m_sq
-    out[k, 5] = m_param
-    out[k, 6] = branch
-    out[k, 7] = period
-    out[k, 8] = dynamic
-    out[k, 9] = total
+    out[k, first] = two_e
+    out[k, first + 1] = m_sq
+    out[k, first + 2] = m_param
+    out[k, first + 3] = branch
+    out[k, first + 4] = period
+    out[k, first + 5] = dynamic
+    out[k, first + 6] = total
 
 
 @njit(cache=True, nogil=True, parallel=True)
 def phase_parts_many(i1, i2, i3, phi, angles, from_offset, out, status):
     """All closed-form quantities; ``out[k]`` follows :data:`PARTS_COLUMNS`."""
     for k in prange(angles.shape[0]):
-        cphi, sphi, theta_c, co_theta_c, root_a, root_b, root_ab = body_constants(
-            i1[k], i2[k], i3[k], phi[k])
-        theta, dtheta, co_theta, code = angle_triplet(angles[k], from_offset,
-                                                      theta_c, co_theta_c)
+        code, theta, dtheta, theta_c, w1, w2, w3, scale, offset, closing = \
+            spin_from_angle(body_constants(i1[k], i2[k], i3[k], phi[k]), angles[k],
+                            from_offset)
         status[k] = code
         out[k, 0] = theta
         out[k, 1] = dtheta
@@ -355,10 +362,8 @@ def phase_parts_many(i1, i2, i3, phi, angles, from_offset, out, status):
             for j in range(3, 10):
                 out[k, j] = np.nan
             continue
-        w1, w2, w3, scale, offset, closing = spin_gap(
-            cphi, sphi, root_a, root_b, root_ab, theta, dtheta, co_theta)
-        _store_parts(out, k, parts_from_spin(i1[k], i2[k], i3[k], w1, w2, w3,
-                                             scale, offset, closing))
+        _store_parts(out, k, 3, parts_from_spin(i1[k], i2[k], i3[k], w1, w2, w3,
+                                                scale, offset, closing))
 
 
 @njit(cache=True, nogil=True, parallel=True)
@@ -373,12 +378,5 @@ def parts_from_vector_array(i1, i2, i3, w1, w2, w3, out):
     """:func:`parts_from_spin` for arbitrary spin vectors; ``out`` (n, 7)."""
     for k in prange(out.shape[0]):
         scale, offset, closing = vector_gap(i1[k], i2[k], i3[k], w1[k], w2[k], w3[k])
-        two_e, m_sq, m_param, branch, period, dynamic, total = parts_from_spin(
-            i1[k], i2[k], i3[k], w1[k], w2[k], w3[k], scale, offset, closing)
-        out[k, 0] = two_e
-        out[k, 1] = m_sq
-        out[k, 2] = m_param
-        out[k, 3] = branch
-        out[k, 4] = period
-        out[k, 5] = dynamic
-        out[k, 6] = total
+        _store_parts(out, k, 0, parts_from_spin(i1[k], i2[k], i3[k], w1[k], w2[k],
+                                                w3[k], scale, offset, closing))

@@ -30,8 +30,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from .phase import (STATUS_OK, angle_triplet, body_constants, spin_gap,
-                    total_from_spin)
+from .phase import STATUS_OK, body_constants, spin_from_angle, total_from_spin
 
 SMALLEST_OFFSET = 2.2250738585072014e-308
 LOG_POINTS = 64
@@ -56,13 +55,12 @@ def phase_of_offset(d, params):
 
     ``params = (I1, I2, I3, sign, *body_constants(I1, I2, I3, 0))``.
     """
-    theta, dtheta, co_theta, code = angle_triplet(params[3] * d, True,
-                                                  params[6], params[7])
+    constants = (params[4], params[5], params[6], params[7], params[8], params[9],
+                 params[10])
+    code, _, _, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
+        constants, params[3] * d, True)
     if code != STATUS_OK:
         return np.nan
-    w1, w2, w3, scale, offset, closing = spin_gap(
-        params[4], params[5], params[8], params[9], params[10], theta, dtheta,
-        co_theta)
     return total_from_spin(params[0], params[1], params[2], w1, w2, w3, scale,
                            offset, closing)
 
