@@ -8,7 +8,6 @@ angle they accumulate geometrically, so each root is stored as its offset
 ``dtheta = theta - theta_crit`` to full relative precision.
 """
 
-import math
 import warnings
 from fractions import Fraction
 

@@ -354,11 +354,9 @@ class Survey:
 
 
 def _require_pyarrow():
-    try:
-        import pyarrow  # noqa: F401
-    except ImportError:
+    if not _have_pyarrow():
         raise InputError("--format parquet needs pyarrow: "
-                         "pip install 'orbits[parquet]'") from None
+                         "pip install 'orbits[parquet]'")
 
 
 def _write_table(frame, path, fmt, engine=None):
@@ -374,20 +372,16 @@ def _write_table(frame, path, fmt, engine=None):
         if fmt == "parquet":
             frame.to_parquet(temporary, index=False)
         elif engine == "arrow":
-            import pyarrow
-            import pyarrow.csv
-            pyarrow.csv.write_csv(pyarrow.Table.from_pandas(frame, preserve_index=False),
-                                  temporary)
+            from pyarrow import Table
+            from pyarrow.csv import write_csv
+            write_csv(Table.from_pandas(frame, preserve_index=False), temporary)
         else:
             frame.to_csv(temporary, index=False, float_format=FLOAT_FORMAT)
 
 
 def _have_pyarrow():
-    try:
-        import pyarrow.csv  # noqa: F401
-    except ImportError:
-        return False
-    return True
+    from importlib.util import find_spec
+    return find_spec("pyarrow") is not None
 
 
 def read_table(out_dir, table):

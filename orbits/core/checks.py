@@ -124,7 +124,6 @@ def phase_by_quarter(i1, i2, i3, gap_m1, gap_3m, scale, offset, closing, rtol):
     (eqn:alphaproto).
     """
     d21 = i2 - i1
-    d31 = i3 - i1
     d32 = i3 - i2
     magnitude = abs(offset)
     sam = offset < 0.0

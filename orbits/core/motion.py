@@ -32,7 +32,6 @@ Formulas (Mecholsky 2019, appendix; Landau & Lifshitz, Mechanics, Sec. 37):
 
 import math
 
-import numpy as np
 from numba import njit, prange
 
 from .elliptic import (AGM_LEVELS, agm_table, carlson_rj, ellipf_kc,
