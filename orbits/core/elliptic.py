@@ -333,7 +333,7 @@ def agm_table(kc, means, geometric):
 
 
 @njit(cache=True, nogil=True)
-def jacobi_from_table(u, kc, levels, means, geometric):
+def jacobi_from_table(u, levels, means, geometric):
     """``sn, cn, dn`` of ``u`` and its half-period reduction, from :func:`agm_table`.
 
     Returns
@@ -386,6 +386,6 @@ def jacobi_amplitude(u, kc):
     means = np.empty(AGM_LEVELS)
     geometric = np.empty(AGM_LEVELS)
     levels = agm_table(kc, means, geometric)
-    sn, cn, dn, j, r = jacobi_from_table(u, kc, levels, means, geometric)
+    sn, cn, dn, j, r = jacobi_from_table(u, levels, means, geometric)
     parity = 1.0 - 2.0 * (j % 2.0 != 0.0)
     return j * math.pi + math.atan2(parity * sn, parity * cn), sn, cn, dn, j, r

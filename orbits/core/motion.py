@@ -36,7 +36,8 @@ from numba import njit, prange
 
 from .elliptic import (AGM_LEVELS, agm_table, carlson_rj, ellipf_kc,
                        ellippi_complete_carlson, jacobi_from_table)
-from .phase import BRANCH_SAM, BRANCH_SEPARATRIX, orbit_constants
+from .phase import (BRANCH_SAM, BRANCH_SEPARATRIX, elliptic_parameter,
+                    orbit_constants)
 
 HALF_PI = 0.5 * math.pi
 TWO_PI = 2.0 * math.pi
@@ -44,8 +45,8 @@ TWO_PI = 2.0 * math.pi
 (SLOT_BRANCH, SLOT_I1, SLOT_I2, SLOT_I3, SLOT_A1, SLOT_A2, SLOT_A3, SLOT_KC,
  SLOT_RATE, SLOT_TAU0, SLOT_QUARTER, SLOT_N, SLOT_PI_COMPLETE, SLOT_PI_START,
  SLOT_COEF, SLOT_MOMENTUM, SLOT_PRECESSION, SLOT_TWO_E, SLOT_PERIOD,
- SLOT_M, SLOT_STILL, SLOT_LEVELS) = range(22)
-SLOT_MEANS = 22
+ SLOT_M, SLOT_STILL, SLOT_LEVELS, SLOT_GAP_3M) = range(23)
+SLOT_MEANS = 23
 SLOT_GEOMETRIC = SLOT_MEANS + AGM_LEVELS
 ORBIT_SIZE = SLOT_GEOMETRIC + AGM_LEVELS
 
@@ -60,8 +61,7 @@ def _pi_of_u(orbit, u):
     levels = int(orbit[SLOT_LEVELS])
     means = orbit[SLOT_MEANS:SLOT_MEANS + AGM_LEVELS]
     geometric = orbit[SLOT_GEOMETRIC:SLOT_GEOMETRIC + AGM_LEVELS]
-    sn, cn, dn, j, r = jacobi_from_table(u, orbit[SLOT_KC], levels, means,
-                                         geometric)
+    sn, cn, dn, j, r = jacobi_from_table(u, levels, means, geometric)
     parity = 1.0 - 2.0 * (j % 2.0 != 0.0)
     s = parity * sn            # sin and cos of am(r), |am(r)| <= pi/2
     c = parity * cn
@@ -92,7 +92,7 @@ def orbit_setup(i1, i2, i3, w1, w2, w3, scale, offset, closing, orbit):
     int
         The branch code (0 on the separatrix, where nothing is filled).
     """
-    branch, two_e, m_sq, kc, q, p, b = orbit_constants(
+    branch, two_e, m_sq, gap_m1, gap_3m, kc, q, p, b = orbit_constants(
         i1, i2, i3, w1, w2, w3, scale, offset, closing)
     orbit[SLOT_BRANCH] = branch
     if branch == BRANCH_SEPARATRIX:
@@ -100,8 +100,6 @@ def orbit_setup(i1, i2, i3, w1, w2, w3, scale, offset, closing, orbit):
     d21 = i2 - i1
     d31 = i3 - i1
     d32 = i3 - i2
-    gap_m1 = i2 * d21 * w2 * w2 + i3 * d31 * w3 * w3      # M^2 - 2 E I1
-    gap_3m = i1 * d31 * w1 * w1 + i2 * d32 * w2 * w2      # 2 E I3 - M^2
     a1 = math.sqrt(gap_3m / (i1 * d31))
     a3 = math.sqrt(gap_m1 / (i3 * d31))
     if branch == BRANCH_SAM:
@@ -111,7 +109,6 @@ def orbit_setup(i1, i2, i3, w1, w2, w3, scale, offset, closing, orbit):
         cos0 = w1 / amp1 if amp1 > 0.0 else 1.0
         sin0 = w2 / amp2 if a2 > 0.0 else 0.0
         n = -i3 * d21 / (i1 * d32)
-        m_param = d21 * gap_3m / (d32 * gap_m1)
     else:
         a2 = math.sqrt(gap_m1 / (i2 * d21))
         sign = 1.0 if w1 >= 0.0 else -1.0       # w1 ~ dn never vanishes
@@ -119,7 +116,6 @@ def orbit_setup(i1, i2, i3, w1, w2, w3, scale, offset, closing, orbit):
         cos0 = w3 / amp3 if amp3 > 0.0 else 1.0
         sin0 = w2 / amp2 if a2 > 0.0 else 0.0
         n = -i3 * gap_m1 / (i1 * gap_3m)
-        m_param = d32 * gap_m1 / (d21 * gap_3m)
     levels = agm_table(kc, orbit[SLOT_MEANS:SLOT_MEANS + AGM_LEVELS],
                        orbit[SLOT_GEOMETRIC:SLOT_GEOMETRIC + AGM_LEVELS])
     quarter = HALF_PI / orbit[SLOT_MEANS + levels]
@@ -141,7 +137,8 @@ def orbit_setup(i1, i2, i3, w1, w2, w3, scale, offset, closing, orbit):
     orbit[SLOT_PRECESSION] = momentum / i3
     orbit[SLOT_TWO_E] = two_e
     orbit[SLOT_PERIOD] = 4.0 * quarter / rate
-    orbit[SLOT_M] = m_param
+    orbit[SLOT_M] = elliptic_parameter(i1, i2, i3, branch, gap_m1, gap_3m)
+    orbit[SLOT_GAP_3M] = gap_3m
     # a steady spin about I3: the Euler angles phi and psi share one axis
     orbit[SLOT_STILL] = 1.0 if (branch == BRANCH_SAM and gap_3m == 0.0) else 0.0
     orbit[SLOT_LEVELS] = levels
@@ -252,13 +249,13 @@ def omega_space_at(orbit, t):
         w3 = orbit[SLOT_A3] * cn
     momentum = orbit[SLOT_MOMENTUM]
     height = orbit[SLOT_TWO_E] / momentum
-    gap_3m = i1 * (i3 - i1) * w1 * w1 + i2 * (i3 - i2) * w2 * w2
     # |omega|^2 - (2E/M)^2 = |omega x M^|^2, as a sum of squares
     c1 = (i3 - i2) * w2 * w3
     c2 = (i1 - i3) * w3 * w1
     c3 = (i2 - i1) * w1 * w2
     rho = math.sqrt(c1 * c1 + c2 * c2 + c3 * c3) / momentum
-    azimuth = phi + math.atan2(w3 * gap_3m / momentum, c3)
+    # 2 E I3 - M^2 is an invariant: taken from the orbit, not from omega(t)
+    azimuth = phi + math.atan2(w3 * orbit[SLOT_GAP_3M] / momentum, c3)
     return rho * math.cos(azimuth), rho * math.sin(azimuth), height
 
 

@@ -209,9 +209,10 @@ def orbit_constants(i1, i2, i3, w1, w2, w3, scale, offset, closing):
 
     Returns
     -------
-    branch, two_e, m_sq, kc, q, p, b : float
+    branch, two_e, m_sq, gap_m1, gap_3m, kc, q, p, b : float
         Branch code (+1 SAM, -1 LAM, 0 separatrix); ``2E`` and ``M^2``
-        (eqn:E, eqn:J); ``kc = sqrt(1 - k^2)`` for the ``k`` of eqn:TK;
+        (eqn:E, eqn:J); the invariants ``M^2 - 2 E I1`` and ``2 E I3 - M^2``;
+        ``kc = sqrt(1 - k^2)`` for the ``k`` of eqn:TK;
         ``q`` with ``D^2 = q / (I1 I2 I3)`` for the ``D`` of eqn:ABCD(d);
         and ``p, b`` such that ``cel(kc, p, 1, b) = (I1 K + (I3-I1) Pi(n|k^2))
         / I3`` with ``p = 1 - n`` of eqn:GeometricPhase.  On LAM every
@@ -235,16 +236,17 @@ def orbit_constants(i1, i2, i3, w1, w2, w3, scale, offset, closing):
     s3 = w3 * w3
     two_e = i1 * s1 + i2 * s2 + i3 * s3
     m_sq = i1 * i1 * s1 + i2 * i2 * s2 + i3 * i3 * s3
+    gap_m1 = i2 * d21 * s2 + i3 * d31 * s3          # M^2 - 2 E I1
+    gap_3m = i1 * d31 * s1 + i2 * d32 * s2          # 2 E I3 - M^2
     if offset == 0.0 or closing == 0.0:
-        return 0, two_e, m_sq, 0.0, 0.0, 0.0, 0.0
+        return 0, two_e, m_sq, gap_m1, gap_3m, 0.0, 0.0, 0.0, 0.0
     if offset < 0.0:                                 # M^2 > 2 E I2
         branch = BRANCH_SAM
-        q = d32 * (i2 * d21 * s2 + i3 * d31 * s3)    # (I3-I2)(M^2 - 2 E I1)
+        q = d32 * gap_m1
         p = i2 * d31 / (i1 * d32)
         b = d31 / d32
     else:
         branch = BRANCH_LAM
-        gap_3m = i1 * d31 * s1 + i2 * d32 * s2       # 2 E I3 - M^2
         q = d21 * gap_3m
         p = d31 * m_sq / (i1 * gap_3m)
         b = two_e * d31 / gap_3m
@@ -254,7 +256,16 @@ def orbit_constants(i1, i2, i3, w1, w2, w3, scale, offset, closing):
     else:
         kc = (math.sqrt(d31 / q) * math.sqrt(scale) * math.sqrt(magnitude)
               * math.sqrt(closing))
-    return branch, two_e, m_sq, kc, q, p, b
+    return branch, two_e, m_sq, gap_m1, gap_3m, kc, q, p, b
+
+
+@njit(cache=True, nogil=True)
+def elliptic_parameter(i1, i2, i3, branch, gap_m1, gap_3m):
+    """``m = k^2`` of eqn:TK: ``(I2-I1)(2EI3-M^2) / ((I3-I2)(M^2-2EI1))`` on
+    SAM, its 1 <-> 3 image on LAM."""
+    if branch == BRANCH_SAM:
+        return (i2 - i1) * gap_3m / ((i3 - i2) * gap_m1)
+    return (i3 - i2) * gap_m1 / ((i2 - i1) * gap_3m)
 
 
 @njit(cache=True, nogil=True)
@@ -264,7 +275,7 @@ def total_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing):
     ``Delta alpha = 4 M cel(kc, p, 1, b) / (I1 D) - 2 pi [SAM]``, where
     ``4 M / (I1 D) = 4 sqrt(M^2 I2 I3 / (I1 q))``.  Inf on the separatrix.
     """
-    branch, two_e, m_sq, kc, q, p, b = orbit_constants(
+    branch, two_e, m_sq, _, _, kc, q, p, b = orbit_constants(
         i1, i2, i3, w1, w2, w3, scale, offset, closing)
     if branch == BRANCH_SEPARATRIX:
         return np.inf
@@ -280,19 +291,11 @@ def parts_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing):
     loop as the total phase.  On the separatrix ``T``, ``2ET/M`` and
     ``Delta alpha`` are inf and ``m = 1``.
     """
-    branch, two_e, m_sq, kc, q, p, b = orbit_constants(
+    branch, two_e, m_sq, gap_m1, gap_3m, kc, q, p, b = orbit_constants(
         i1, i2, i3, w1, w2, w3, scale, offset, closing)
     if branch == BRANCH_SEPARATRIX:
         return two_e, m_sq, 1.0, 0, np.inf, np.inf, np.inf
-    d21 = i2 - i1
-    d31 = i3 - i1
-    d32 = i3 - i2
-    gap_m1 = i2 * d21 * w2 * w2 + i3 * d31 * w3 * w3
-    gap_3m = i1 * d31 * w1 * w1 + i2 * d32 * w2 * w2
-    if branch == BRANCH_SAM:
-        m_param = d21 * gap_3m / (d32 * gap_m1)
-    else:
-        m_param = d32 * gap_m1 / (d21 * gap_3m)
+    m_param = elliptic_parameter(i1, i2, i3, branch, gap_m1, gap_3m)
     bracket, quarter = cel_pair(kc, p, 1.0, b, 1.0, p)
     rate = math.sqrt(q / (i1 * i2 * i3))
     momentum = math.sqrt(m_sq)
