@@ -119,19 +119,19 @@ def _rotation_scipy(moments, omega0, periods, rtol, atol):
         euler_rhs(inertia, y, dy)
         return dy
 
-    f0 = rhs(0.0, y0)
-    two_e = inertia @ (omega0 * omega0)
-    m_sq = (inertia * inertia) @ (omega0 * omega0)
-    cn_index = 0 if m_sq > two_e * inertia[1] else 2
-    component = 1 if abs(f0[1]) >= abs(f0[cn_index]) else cn_index
+    component, direction = _checks.return_event(*inertia, *omega0)
+    if direction == 0.0:
+        return np.nan, np.nan, np.nan
     target = y0[component]
 
     def event(t, y):
         return y[component] - target
 
-    event.direction = 1.0 if f0[component] > 0 else -1.0
+    event.direction = direction
     # SciPy counts a zero at the very start as a crossing: ask for one more
     event.terminal = periods + 1
+    two_e = inertia @ (omega0 * omega0)
+    m_sq = (inertia * inertia) @ (omega0 * omega0)
     guess = 2.0 * np.pi * np.sqrt(m_sq) / two_e * 1e6
     solution = solve_ivp(rhs, (0.0, guess), y0, method="DOP853", rtol=rtol,
                          atol=atol, events=event)
@@ -141,13 +141,9 @@ def _rotation_scipy(moments, omega0, periods, rtol, atol):
     times, states = times[keep], states[keep]
     if times.size < periods:
         return np.nan, np.nan, np.nan
-    t_end, y_end = times[periods - 1], states[periods - 1]
-    q = y_end[3:] / np.linalg.norm(y_end[3:])
-    mhat = inertia * omega0 / np.sqrt(m_sq)
-    along = q[1:] @ mhat
-    angle = np.mod(2.0 * np.arctan2(along, q[0]), TWO_PI)
-    off_axis = 2.0 * np.linalg.norm(q[1:] - along * mhat)
-    return t_end / periods, float(angle), float(off_axis)
+    angle, off_axis = _checks.rotation_about_momentum(states[periods - 1][3:], *inertia,
+                                                      *omega0)
+    return times[periods - 1] / periods, float(angle), float(off_axis)
 
 
 def montgomery(body_or_moments, theta=None, *, dtheta=None, phi=0.0, rtol=1e-14):

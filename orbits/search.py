@@ -125,7 +125,7 @@ def closed_orbits(body, n_max=10, q_max=1):
     if moments.shape != (3,):
         raise InputError("closed_orbits takes one body; use orbits.catalog.catalog "
                          "for many")
-    branch, level, offset, info = find_roots(moments, values)
+    _, level, offset, info = find_roots(moments, values)
     unreached = int(info[_kernels.INFO_UNREACHED_SAM] + info[_kernels.INFO_UNREACHED_LAM])
     if unreached:
         warnings.warn(
@@ -134,18 +134,45 @@ def closed_orbits(body, n_max=10, q_max=1):
             "stored in double precision; they are left out",
             UnresolvedOrbitsWarning, stacklevel=2)
     order = np.argsort(offset, kind="stable")
-    branch, level, offset = branch[order], level[order], offset[order]
-    table = phases(moments, dtheta=offset) if offset.size else phases(
-        moments, dtheta=np.empty(0))
-    target = values[level]
+    frame = catalog_rows(_label(body, moments), moments, level[order], offset[order],
+                         p, q, values)
+    frame.attrs["unresolved"] = unreached
+    frame.attrs["minimum_phase"] = {
+        "SAM": (float(info[_kernels.INFO_MIN_SAM]), float(info[_kernels.INFO_MIN_AT_SAM])),
+        "LAM": (float(info[_kernels.INFO_MIN_LAM]), float(info[_kernels.INFO_MIN_AT_LAM])),
+    }
+    return frame
+
+
+def catalog_rows(body, moments, level, offset, p, q, levels):
+    """Catalog rows (:data:`CATALOG_COLUMNS`) for roots of the search.
+
+    Parameters
+    ----------
+    body : str, int or ndarray
+        The ``body`` column: one label, or one id per root.
+    moments : ndarray, shape (3,) or (n_roots, 3)
+    level : ndarray of int
+        Index of each root's level into ``p``, ``q``, ``levels``.
+    offset : ndarray
+        Each root's ``dtheta``.
+
+    Raises
+    ------
+    RuntimeError
+        A root misses its level by more than ``RESIDUAL_TOLERANCE`` (the
+        search guarantees it does not: this would be a bug).
+    """
+    table = phases(moments, dtheta=offset)
+    target = levels[level]
     residual = table["total_phase"].to_numpy() - target
     bad = np.abs(residual) > RESIDUAL_TOLERANCE * target
-    if bad.any():      # the search guarantees this; a failure is a bug
+    if bad.any():
         k = int(np.flatnonzero(bad)[0])
         raise RuntimeError(f"root {offset[k]!r} misses its level {target[k]!r} "
                            f"by {residual[k]!r}")
-    frame = pd.DataFrame({
-        "body": _label(body, moments),
+    return pd.DataFrame({
+        "body": body,
         "I1": table["I1"], "I2": table["I2"], "I3": table["I3"],
         "theta_crit": table["theta_crit"],
         "branch": table["branch"].astype(str),
@@ -159,12 +186,6 @@ def closed_orbits(body, n_max=10, q_max=1):
         "m": table["m"],
         "residual": residual,
     }, columns=list(CATALOG_COLUMNS))
-    frame.attrs["unresolved"] = unreached
-    frame.attrs["minimum_phase"] = {
-        "SAM": (float(info[_kernels.INFO_MIN_SAM]), float(info[_kernels.INFO_MIN_AT_SAM])),
-        "LAM": (float(info[_kernels.INFO_MIN_LAM]), float(info[_kernels.INFO_MIN_AT_LAM])),
-    }
-    return frame
 
 
 def minimum_phase(body):

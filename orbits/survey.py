@@ -30,8 +30,8 @@ from .atomic import FLOAT_FORMAT, atomic_path, write_text_atomic
 from .bodies import as_moments, region_grid
 from .core import search as _kernels
 from .errors import InputError
-from .phases import phase_limits, phases
-from .search import CATALOG_COLUMNS, phase_levels
+from .phases import phase_limits
+from .search import catalog_rows, phase_levels
 
 FORMATS = ("csv", "parquet")
 DEFAULT_CHUNK = 20_000
@@ -74,63 +74,32 @@ def compute_chunk(moments, n_max, q_max=1, first_id=0):
     offset = np.empty((count, capacity))
     found = np.empty(count, dtype=np.int64)
     _kernels.search_many(moments, levels, branch, level, offset, found, info)
-    rows_body, rows_branch, rows_level, rows_offset = _flatten(
-        moments, levels, branch, level, offset, found, info)
+    rows_body, rows_level, rows_offset = _flatten(moments, levels, level, offset,
+                                                  found, info)
     ids = first_id + np.arange(count)
-    orbits = _orbit_rows(moments, ids, rows_body, rows_branch, rows_level,
-                         rows_offset, p, q, levels)
+    orbits = catalog_rows(ids[rows_body], moments[rows_body], rows_level, rows_offset,
+                          p, q, levels)
     bodies = _body_rows(moments, ids, info, orbits, rows_body)
     return bodies, orbits
 
 
-def _flatten(moments, levels, branch, level, offset, found, info):
+def _flatten(moments, levels, level, offset, found, info):
     """Per-body root arrays to flat rows, sorted by body then dtheta.
 
     A body whose roots overflowed its row (``found < 0``: a phase with
     many monotone pieces) is searched again with room to spare.
     """
-    mask = np.arange(branch.shape[1])[None, :] < np.maximum(found, 0)[:, None]
-    body, rows_branch = np.nonzero(mask)[0], branch[mask]
-    rows_level, rows_offset = level[mask], offset[mask]
+    mask = np.arange(level.shape[1])[None, :] < np.maximum(found, 0)[:, None]
+    body, rows_level, rows_offset = np.nonzero(mask)[0], level[mask], offset[mask]
     for b in np.flatnonzero(found < 0):
-        size = 8 * branch.shape[1]
+        size = 8 * level.shape[1]
         extra = (np.empty(size, np.int8), np.empty(size, np.int64), np.empty(size))
         n = _kernels.search_body(*moments[b], levels, *extra, info[b])
         body = np.concatenate([body, np.full(n, b)])
-        rows_branch = np.concatenate([rows_branch, extra[0][:n]])
         rows_level = np.concatenate([rows_level, extra[1][:n]])
         rows_offset = np.concatenate([rows_offset, extra[2][:n]])
     order = np.lexsort((rows_offset, body))
-    return body[order], rows_branch[order], rows_level[order], rows_offset[order]
-
-
-def _orbit_rows(moments, ids, body, branch, level, offset, p, q, levels):
-    table = phases(moments[body], dtheta=offset) if offset.size else None
-    if table is None:
-        return pd.DataFrame({name: pd.Series(dtype=_catalog_dtype(name))
-                             for name in CATALOG_COLUMNS})
-    target = levels[level]
-    residual = table["total_phase"].to_numpy() - target
-    if np.any(np.abs(residual) > 1e-10 * target):
-        raise RuntimeError("a survey root misses its level")      # a bug
-    return pd.DataFrame({
-        "body": ids[body],
-        "I1": table["I1"], "I2": table["I2"], "I3": table["I3"],
-        "theta_crit": table["theta_crit"],
-        "branch": np.where(branch > 0, "SAM", "LAM"),
-        "n": p[level], "q": q[level],
-        "theta": table["theta"], "dtheta": offset,
-        "total_phase": table["total_phase"], "dynamic_phase": table["dynamic_phase"],
-        "geometric_phase": table["geometric_phase"], "period": table["period"],
-        "energy": table["energy"], "momentum": table["momentum"], "m": table["m"],
-        "residual": residual,
-    }, columns=list(CATALOG_COLUMNS))
-
-
-def _catalog_dtype(name):
-    if name == "branch":
-        return object
-    return np.int64 if name in ("body", "n", "q") else float
+    return body[order], rows_level[order], rows_offset[order]
 
 
 def _body_rows(moments, ids, info, orbits, body_of_row):

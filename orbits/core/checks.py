@@ -27,28 +27,61 @@ TWO_PI = 2.0 * math.pi
 
 
 @njit(cache=True, nogil=True)
-def _integrate_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol, max_steps, y_end):
-    """Integrate from the identity orientation until omega has returned
-    ``periods`` times; returns the time (-1 if not reached, NaN for a steady
-    spin) with the final state in ``y_end``.
+def return_event(i1, i2, i3, w1, w2, w3):
+    """How to see omega return to omega0: ``(component, direction)``.
 
-    The return is the crossing of one component of omega through its
-    initial value: the ``sn`` or the ``cn`` component (never the ``dn`` one,
-    which returns twice per period), whichever moves faster at the start.
+    The crossing of one component of omega through its initial value: the
+    ``sn`` or the ``cn`` component (never the ``dn`` one, which returns twice
+    per period), whichever moves faster at the start; ``direction`` is the
+    sign of its initial rate, 0 for a steady spin.
     """
-    inertia = np.array([i1, i2, i3])
-    y0 = np.array([w1, w2, w3, 1.0, 0.0, 0.0, 0.0])
     f0 = np.empty(STATE_SIZE)
-    euler_rhs(inertia, y0, f0)
+    euler_rhs(np.array([i1, i2, i3]), np.array([w1, w2, w3, 1.0, 0.0, 0.0, 0.0]), f0)
     two_e = i1 * w1 * w1 + i2 * w2 * w2 + i3 * w3 * w3
     m_sq = i1 * i1 * w1 * w1 + i2 * i2 * w2 * w2 + i3 * i3 * w3 * w3
     cn_index = 0 if m_sq > two_e * i2 else 2
     component = 1 if abs(f0[1]) >= abs(f0[cn_index]) else cn_index
-    if f0[component] == 0.0:
+    rate = f0[component]
+    return component, (1.0 if rate > 0.0 else (-1.0 if rate < 0.0 else 0.0))
+
+
+@njit(cache=True, nogil=True)
+def rotation_about_momentum(q, i1, i2, i3, w1, w2, w3):
+    """Split a rotation (quaternion ``q``, from the identity) about M^ = I w / |I w|.
+
+    Returns ``(angle, off_axis)``: the rotation angle about M in [0, 2 pi),
+    and ``2 |q_vec x M^|``, the size (radians) of the part not about M.
+    """
+    norm_q = math.sqrt(q[0] ** 2 + q[1] ** 2 + q[2] ** 2 + q[3] ** 2)
+    momentum = math.sqrt((i1 * w1) ** 2 + (i2 * w2) ** 2 + (i3 * w3) ** 2)
+    m1 = i1 * w1 / momentum
+    m2 = i2 * w2 / momentum
+    m3 = i3 * w3 / momentum
+    v1 = q[1] / norm_q
+    v2 = q[2] / norm_q
+    v3 = q[3] / norm_q
+    along = v1 * m1 + v2 * m2 + v3 * m3
+    p1 = v1 - along * m1
+    p2 = v2 - along * m2
+    p3 = v3 - along * m3
+    angle = 2.0 * math.atan2(along, q[0] / norm_q)
+    angle -= TWO_PI * math.floor(angle / TWO_PI)
+    return angle, 2.0 * math.sqrt(p1 * p1 + p2 * p2 + p3 * p3)
+
+
+@njit(cache=True, nogil=True)
+def _integrate_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol, max_steps, y_end):
+    """Integrate from the identity orientation until omega has returned
+    ``periods`` times (:func:`return_event`); returns the time (-1 if not
+    reached, NaN for a steady spin) with the final state in ``y_end``.
+    """
+    component, direction = return_event(i1, i2, i3, w1, w2, w3)
+    if direction == 0.0:
         return np.nan
-    direction = 1.0 if f0[component] > 0.0 else -1.0
-    t_end, _ = integrate_to_event(inertia, y0, component, y0[component], direction,
-                                  periods, rtol, atol, 1e15, y_end, max_steps)
+    y0 = np.array([w1, w2, w3, 1.0, 0.0, 0.0, 0.0])
+    t_end, _ = integrate_to_event(np.array([i1, i2, i3]), y0, component, y0[component],
+                                  direction, periods, rtol, atol, 1e15, y_end,
+                                  max_steps)
     return t_end
 
 
@@ -57,32 +90,16 @@ def rotation_after_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol, max_step
     """Integrate ``periods`` periods; return ``(period, angle, off_axis)``.
 
     The period is the time between returns of omega to omega0 (see
-    :func:`_integrate_periods`).  ``angle`` is the rotation about M, in [0, 2 pi);
-    ``off_axis`` is ``2 |q_vec x M^|``, the size (radians) of the part of the
-    final rotation that is not about M.  All NaN if no return was found.
+    :func:`return_event`); ``angle`` and ``off_axis`` as in
+    :func:`rotation_about_momentum`.  All NaN if no return was found.
     """
     y_end = np.empty(STATE_SIZE)
     t_end = _integrate_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol,
                                max_steps, y_end)
     if not t_end >= 0.0:
         return np.nan, np.nan, np.nan
-    m_sq = i1 * i1 * w1 * w1 + i2 * i2 * w2 * w2 + i3 * i3 * w3 * w3
-    norm_q = math.sqrt(y_end[3] ** 2 + y_end[4] ** 2 + y_end[5] ** 2 + y_end[6] ** 2)
-    momentum = math.sqrt(m_sq)
-    m1 = i1 * w1 / momentum
-    m2 = i2 * w2 / momentum
-    m3 = i3 * w3 / momentum
-    q0 = y_end[3] / norm_q
-    v1 = y_end[4] / norm_q
-    v2 = y_end[5] / norm_q
-    v3 = y_end[6] / norm_q
-    along = v1 * m1 + v2 * m2 + v3 * m3
-    p1 = v1 - along * m1
-    p2 = v2 - along * m2
-    p3 = v3 - along * m3
-    angle = 2.0 * math.atan2(along, q0)
-    angle -= TWO_PI * math.floor(angle / TWO_PI)
-    return t_end / periods, angle, 2.0 * math.sqrt(p1 * p1 + p2 * p2 + p3 * p3)
+    angle, off_axis = rotation_about_momentum(y_end[3:], i1, i2, i3, w1, w2, w3)
+    return t_end / periods, angle, off_axis
 
 
 @njit(cache=True, nogil=True)
@@ -264,8 +281,8 @@ def closure_batch(moments, dtheta, periods, rtol, out):
                                                   periods[k], rtol, 1e-14,
                                                   100_000_000)
         else:
-            gap_m1 = i2 * (i2 - i1) * w2 * w2 + i3 * (i3 - i1) * w3 * w3
-            gap_3m = i1 * (i3 - i1) * w1 * w1 + i2 * (i3 - i2) * w2 * w2
+            gap_m1, gap_3m = _phase.orbit_constants(i1, i2, i3, w1, w2, w3, scale,
+                                                    offset, closing)[3:5]
             total, _ = phase_by_quarter(i1, i2, i3, gap_m1, gap_3m, scale,
                                         offset, closing, rtol)
             turned = periods[k] * total
