@@ -242,12 +242,8 @@ def _cmd_figures(args):
             grid = survey_grid(args.survey)
         names = ["fig2"] if args.survey else list(figures.PAPER_FIGURES)
         with progress_bar(len(names), "figures", unit="figure") as bar:
-            written = []
-            for name in names:
-                build = figures.PAPER_FIGURES[name]
-                figure = build(grid) if (name == "fig2" and grid is not None) else build()
-                written += figures.save_figure(figure, out / name, args.formats)
-                bar.update(1)
+            written = figures.paper_figures(out, formats=args.formats, survey_grid=grid,
+                                            progress=bar.update, names=names)
     else:
         if args.n_max is None:
             raise InputError("orbits figures: --n-max is required with a body")

@@ -229,14 +229,16 @@ PAPER_FIGURES = {"fig1": figure1, "fig2": figure2, "fig3": figure3, "fig4": figu
                  "fig5": figure5, "fig6": figure6}
 
 
-def paper_figures(out_dir, *, formats=("png", "svg"), survey_grid=None, progress=None):
-    """Write the paper's six figures as ``fig1`` ... ``fig6``.
+def paper_figures(out_dir, *, formats=("png", "svg"), survey_grid=None, progress=None,
+                  names=None):
+    """Write the paper's figures as ``fig1`` ... ``fig6`` (or those in ``names``).
 
     ``survey_grid``: optional (i1, i2, minimum) for Fig. 2 (from a survey).
     """
     out_dir = _directory(out_dir)
     written = []
-    for name, build in PAPER_FIGURES.items():
+    for name in names or PAPER_FIGURES:
+        build = PAPER_FIGURES[name]
         figure = build(survey_grid) if (name == "fig2" and survey_grid is not None) else build()
         written += save_figure(figure, out_dir / name, formats)
         if progress is not None:
