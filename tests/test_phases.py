@@ -349,7 +349,7 @@ def test_invariant_along_the_polhode(data, fraction):
     assert orbits.spin_phases(body, omega).total_phase[0] == pytest.approx(base, rel=1e-12)
     # the same spin through the (theta, phi) interface with phi != 0
     unit = omega / np.linalg.norm(omega)
-    theta2 = math.acos(unit[2])
+    theta2 = math.atan2(math.hypot(unit[0], unit[1]), unit[2])
     phi2 = math.atan2(unit[1], unit[0])
     assert orbits.total_phase(body, theta2, phi=phi2) == pytest.approx(base, rel=1e-12)
 
