@@ -2,12 +2,28 @@
 
 Every file ``orbits`` writes goes first to a temporary file in the target's
 directory, is flushed and fsync'ed, and then replaces the target with
-``os.replace`` (atomic on POSIX and Windows).  On any exception, including
-``KeyboardInterrupt``, the temporary file is removed and an existing target
-is left untouched.
+``os.replace`` (atomic on POSIX).  The guarantees:
+
+* On any exception, including ``KeyboardInterrupt`` and the SIGTERM/SIGHUP
+  the command line turns into :class:`Terminated`, the temporary file is
+  removed and an existing target is left untouched.
+* A target that exists and is not a regular file (a device such as
+  ``/dev/null``, a FIFO, a socket, or a symlink to one) is refused: it is
+  never replaced by a regular file.  A symlink to a regular file has its
+  target replaced (the link stays).
+* Temporary names are ``.NAME.PID.RANDOM.part``.  A process killed with
+  SIGKILL cannot clean up, so every later write to the same directory
+  removes the leftovers of ``.NAME.*.part`` whose process is gone; the
+  temporaries of a live process are never touched.
+* A write that fails (disk full, quota, I/O error) raises
+  :class:`~orbits.errors.InputError` naming the path.
 """
 
+import errno
 import os
+import re
+import stat
+import sys
 import tempfile
 from contextlib import contextmanager
 from pathlib import Path
@@ -18,8 +34,35 @@ from .errors import InputError
 FLOAT_FORMAT = "%.17g"
 
 
+def csv_float_options():
+    """``read_csv`` keyword arguments that read floats back bit for bit.
+
+    pandas 3 parses floats correctly rounded by default (and deprecates the
+    option); pandas 2.x needs ``float_precision="round_trip"``.
+    """
+    import pandas as pd
+    major = int(pd.__version__.split(".")[0])
+    return {} if major >= 3 else {"float_precision": "round_trip"}
+
+
+class Terminated(BaseException):
+    """SIGTERM or SIGHUP, raised so that clean-up code runs (see the CLI)."""
+
+    def __init__(self, signum):
+        super().__init__(signum)
+        self.signum = signum
+
+
 def ensure_writable(path):
-    """Raise :class:`InputError` now if ``path`` could not be written later."""
+    """Raise :class:`InputError` now if ``path`` could not be written later.
+
+    ``path`` may be a string: a trailing ``/`` names a directory, which
+    cannot take a file's contents, and is refused with a clear message.
+    """
+    text = os.fspath(path)
+    if isinstance(text, str) and text.endswith(os.sep) and text != os.sep:
+        raise InputError(f"cannot write {text}: the trailing '/' names a directory; "
+                         f"give a file name (e.g. {text}catalog.csv)")
     path = Path(path)
     directory = path.parent if str(path.parent) else Path(".")
     if not directory.is_dir():
@@ -28,6 +71,48 @@ def ensure_writable(path):
         raise InputError(f"cannot write {path}: directory {directory} is not writable")
     if path.is_dir():
         raise InputError(f"cannot write {path}: it is a directory")
+    _refuse_special(path)
+
+
+def _refuse_special(path):
+    """Refuse a target that exists and is not a regular file (after symlinks)."""
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        if os.path.islink(path):
+            raise InputError(f"cannot write {path}: it is a dangling symbolic link") from None
+        return
+    except OSError as error:
+        raise InputError(f"cannot write {path}: {error.strerror}") from None
+    if stat.S_ISREG(mode):
+        through = _magic_link(path)
+        if through:
+            raise InputError(f"cannot write {path}: it is a symbolic link into {through} "
+                             "(a process's stream or a device); orbits only replaces "
+                             "regular files (use '--out -' for standard output)")
+        return
+    kind = ("a directory" if stat.S_ISDIR(mode) else
+            "a character device" if stat.S_ISCHR(mode) else
+            "a block device" if stat.S_ISBLK(mode) else
+            "a FIFO (named pipe)" if stat.S_ISFIFO(mode) else
+            "a socket" if stat.S_ISSOCK(mode) else "not a regular file")
+    link = " (through a symbolic link)" if os.path.islink(path) else ""
+    raise InputError(f"cannot write {path}: it is {kind}{link}; orbits only "
+                     "replaces regular files (use '--out -' for standard output)")
+
+
+def _magic_link(path):
+    """``/proc`` or ``/dev`` if a symlink chain from ``path`` passes through it."""
+    current = os.path.abspath(path)
+    for _ in range(40):
+        for root in ("/proc/", "/dev/"):
+            if current.startswith(root):
+                return root.rstrip("/")
+        if not os.path.islink(current):
+            return ""
+        target = os.readlink(current)
+        current = os.path.normpath(os.path.join(os.path.dirname(current), target))
+    return ""
 
 
 def _target_mode(path):
@@ -39,6 +124,50 @@ def _target_mode(path):
         return 0o666 & ~umask
 
 
+def _pid_alive(pid):
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True           # exists, owned by someone else
+    return True
+
+
+def remove_stale_temporaries(directory, name, regex=False):
+    """Remove ``.NAME.PID.*.part`` files of processes that no longer exist.
+
+    ``name`` is a file name, or with ``regex`` a regular expression for one.
+
+    Returns
+    -------
+    int
+        How many were removed.  Temporaries of live processes (including
+        this one) and files of any other pattern are never touched.
+    """
+    pattern = re.compile(r"^\." + (name if regex else re.escape(name))
+                         + r"\.(\d+)\.[^/]*\.part$")
+    removed = 0
+    try:
+        entries = list(os.scandir(directory))
+    except OSError:
+        return 0
+    for entry in entries:
+        match = pattern.match(entry.name)
+        if not match or not entry.is_file(follow_symlinks=False):
+            continue
+        if _pid_alive(int(match.group(1))):
+            continue
+        try:
+            os.unlink(entry.path)
+            removed += 1
+        except FileNotFoundError:
+            pass
+    return removed
+
+
 @contextmanager
 def atomic_path(path):
     """Yield a temporary path; on success move it onto ``path``.
@@ -46,14 +175,20 @@ def atomic_path(path):
     Raises
     ------
     InputError
-        The target's directory does not exist or is not writable.
+        The target's directory does not exist or is not writable, the target
+        is not a regular file, or the write failed (the message names the
+        path and the reason, e.g. no space left on device).
     """
-    path = Path(path)
     ensure_writable(path)
+    path = Path(path)
+    if path.is_symlink():
+        # replace the regular file the link points to, keep the link
+        path = Path(os.path.realpath(path))
+    directory = path.parent if str(path.parent) else Path(".")
+    remove_stale_temporaries(directory, path.name)
     try:
         handle, temporary = tempfile.mkstemp(
-            prefix=f".{path.name}.", suffix=".part",
-            dir=path.parent if str(path.parent) else ".")
+            prefix=f".{path.name}.{os.getpid()}.", suffix=".part", dir=directory)
     except OSError as error:
         raise InputError(f"cannot write {path}: {error.strerror}") from None
     os.close(handle)
@@ -64,13 +199,22 @@ def atomic_path(path):
         yield Path(temporary)
         with open(temporary, "rb") as done:
             os.fsync(done.fileno())
+        # a special file may have appeared since the check: never replace it
+        _refuse_special(path)
         os.replace(temporary, path)
-    except BaseException:
+    except BaseException as error:
         try:
             os.unlink(temporary)
         except FileNotFoundError:
             pass
+        if isinstance(error, OSError) and not isinstance(error, InputError) and \
+                error.errno in _WRITE_ERRNOS:
+            raise InputError(f"cannot write {path}: {os.strerror(error.errno)}") from None
         raise
+
+
+_WRITE_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EIO, errno.EFBIG, errno.EROFS,
+                 errno.EACCES, errno.EPERM, errno.ENOENT}
 
 
 def write_text_atomic(path, text):
@@ -79,12 +223,25 @@ def write_text_atomic(path, text):
         temporary.write_text(text)
 
 
+def write_bytes_atomic(path, data):
+    """Write ``data`` (bytes) to ``path`` atomically."""
+    with atomic_path(path) as temporary:
+        temporary.write_bytes(data)
+
+
 def write_csv_atomic(frame, path, header_lines=()):
     """Write a DataFrame as CSV atomically, floats round-tripping exactly.
 
     ``header_lines`` are written first, each prefixed with ``# `` (read back
-    with ``pandas.read_csv(path, comment="#")``).
+    with ``pandas.read_csv(path, comment="#")``).  ``path`` ``"-"`` writes
+    to standard output.
     """
+    if os.fspath(path) == "-":
+        for line in header_lines:
+            sys.stdout.write(f"# {line}\n")
+        frame.to_csv(sys.stdout, index=False, float_format=FLOAT_FORMAT)
+        sys.stdout.flush()
+        return
     with atomic_path(path) as temporary:
         with open(temporary, "w", newline="") as handle:
             for line in header_lines:

@@ -1,30 +1,131 @@
 """Catalogs of closed orbits: building them for many bodies, CSV in and out.
 
 A catalog is a CSV file: a few ``#`` comment lines (package version, the
-command that made it) and then one row per closed orbit with the columns
-of :data:`orbits.search.CATALOG_COLUMNS` (plus ``closure_error`` when
-verified).  Floats are written with 17 significant digits, so they read
-back bit for bit::
+command that made it, the row count and the SHA-256 of the data section)
+and then one row per closed orbit with the columns of
+:data:`orbits.search.CATALOG_COLUMNS` (plus ``closure_error`` when
+verified).  Floats are written as the shortest decimal that reads back to
+the same double, so they read back bit for bit::
 
-    pandas.read_csv(path, comment="#")
+    orbits.read_catalog(path)            # also checks schema and checksum
+    pandas.read_csv(path, comment="#")   # pandas >= 3; pandas 2.x: add
+                                         # float_precision="round_trip"
 
-:func:`read_catalog` does the same and checks the schema.
+Text cells are always quoted (so a ``#`` inside a name is not a comment),
+and a name that a spreadsheet would run as a formula (first character
+``= + - @``, tab or carriage return) is written with a leading ``'`` as
+OWASP recommends; :func:`read_catalog` removes it again.
+
+Bodies files (``--bodies``) are read strictly by :func:`read_bodies_csv`.
 """
+
+import csv
+import hashlib
+import io
+import math
+import os
+import re
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
 from ._version import __version__
-from .atomic import write_csv_atomic
+from .atomic import atomic_path, csv_float_options
 from .bodies import Body
 from .errors import InputError, OrbitsError
-from .search import CATALOG_COLUMNS, closed_orbits
+from .search import CATALOG_COLUMNS, _count, closed_orbits
 
 VERIFIED_COLUMN = "closure_error"
 CLOSURE_TOLERANCE = 1e-8
-READ_HINT = 'read with pandas.read_csv(path, comment="#")'
+READ_HINT = ('read with orbits.read_catalog(path), or pandas.read_csv(path, comment="#") '
+             '(pandas 2.x: add float_precision="round_trip")')
+ROWS_KEY = "rows: "
+CHECKSUM_KEY = "sha256 of the data section: "
+# first characters a spreadsheet takes as the start of a formula (OWASP CSV
+# injection); the quote itself is escaped too so that reading back is exact
+FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+_ESCAPE = "'"
 
 
+# --------------------------------------------------------------- bounds
+def memory_budget():
+    """Bytes one run may use: half the machine's physical memory."""
+    try:
+        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        total = 8 << 30
+    return total // 2
+
+
+# measured here (phase_levels(1000, 30): 465,000 candidate fractions in 1.9 s)
+_SECONDS_PER_CANDIDATE = 4e-6
+_BYTES_PER_LEVEL = 400          # Fraction set, sorted list and level arrays
+_BYTES_PER_ROW = 600            # catalog row: search arrays, DataFrame, CSV text
+_SECONDS_PER_BODY_LEVEL = 2e-7  # root search per body and level, one core
+MAX_SECONDS = 24 * 3600
+
+
+def search_estimate(n_max, q_max, bodies=1):
+    """Rough memory (bytes) and time (s) of a closed-orbit search.
+
+    The levels are the fractions ``p/q <= n_max`` with ``q <= q_max`` in
+    lowest terms: about ``(6/pi^2) n_max q_max^2 / 2`` of them, built from
+    ``n_max q_max (q_max + 1) / 2`` candidates; each body gives at most two
+    orbits per level.
+    """
+    candidates = float(n_max) * q_max * (q_max + 1) / 2.0
+    levels = candidates * 6.0 / math.pi ** 2 + n_max
+    memory = levels * _BYTES_PER_LEVEL + 2.0 * levels * bodies * _BYTES_PER_ROW
+    seconds = candidates * _SECONDS_PER_CANDIDATE + levels * bodies * _SECONDS_PER_BODY_LEVEL
+    return memory, seconds
+
+
+def check_search_bounds(n_max, q_max, bodies=1, what="this search"):
+    """Refuse a search whose memory or time would exceed the machine.
+
+    Returns
+    -------
+    memory, seconds : float
+        The estimate, for a progress message.
+
+    Raises
+    ------
+    InputError
+        The estimate exceeds :func:`memory_budget` or a day.
+    """
+    memory, seconds = search_estimate(n_max, q_max, bodies)
+    budget = memory_budget()
+    if memory > budget:
+        raise InputError(f"{what} (n_max={n_max}, q_max={q_max}, {bodies} body(ies)) "
+                         f"would need about {_bytes(memory)} of memory, more than the "
+                         f"{_bytes(budget)} allowed (half of this machine's); "
+                         "lower --n-max or --q-max")
+    if seconds > MAX_SECONDS:
+        raise InputError(f"{what} (n_max={n_max}, q_max={q_max}, {bodies} body(ies)) "
+                         f"would take about {_duration(seconds)}; lower --n-max or --q-max")
+    return memory, seconds
+
+
+def _bytes(count):
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if count < 1024 or unit == "PiB":
+            return f"{count:.3g} {unit}"
+        count /= 1024
+    return f"{count:.3g} EiB"
+
+
+def _duration(seconds):
+    if seconds < 120:
+        return f"{seconds:.0f} s"
+    if seconds < 7200:
+        return f"{seconds / 60:.0f} min"
+    if seconds < 3 * 86400:
+        return f"{seconds / 3600:.1f} h"
+    return f"{seconds / 86400:.3g} days"
+
+
+# --------------------------------------------------------------- building
 def catalog(bodies, n_max=10, q_max=1, *, verify=False, progress=None):
     """Closed orbits of one or many bodies, as one DataFrame.
 
@@ -44,10 +145,22 @@ def catalog(bodies, n_max=10, q_max=1, *, verify=False, progress=None):
     -------
     pandas.DataFrame
         The rows of every body in turn, each body's sorted by theta.
+
+    Raises
+    ------
+    InputError
+        No bodies, ``n_max``/``q_max`` not integers >= 1, or a search whose
+        memory or time would exceed the machine (see
+        :func:`check_search_bounds`; refused before any work).
     """
     from .checks import closure_errors
     if isinstance(bodies, Body):
         bodies = [bodies]
+    bodies = list(bodies)
+    if not bodies:
+        raise InputError("no bodies given")
+    n_max, q_max = _count("n_max", n_max), _count("q_max", q_max)
+    check_search_bounds(n_max, q_max, len(bodies), "the catalog")
     frames = []
     for body in bodies:
         frame = closed_orbits(body, n_max=n_max, q_max=q_max)
@@ -57,48 +170,146 @@ def catalog(bodies, n_max=10, q_max=1, *, verify=False, progress=None):
         frames.append(frame)
         if progress is not None:
             progress(1)
-    if not frames:
-        raise InputError("no bodies given")
     return pd.concat(frames, ignore_index=True)
 
 
-def write_catalog(frame, path, command=None):
+# --------------------------------------------------------------- CSV text
+def neutralize(text):
+    """A text cell safe for spreadsheets (OWASP): formula starts get a ``'``."""
+    if text[:1] in FORMULA_STARTS or text[:1] == _ESCAPE:
+        return _ESCAPE + text
+    return text
+
+
+def unneutralize(text):
+    """Inverse of :func:`neutralize`."""
+    return text[1:] if text[:1] == _ESCAPE else text
+
+
+def csv_text(frame):
+    """The CSV text of a DataFrame: floats exact, text quoted and neutralised.
+
+    Floats are written by ``repr`` (the shortest decimal that reads back to
+    the same double), integers as integers, every text cell quoted (a ``#``
+    or ``,`` inside a name stays data) and passed through :func:`neutralize`.
+    """
+    buffer = io.StringIO()
+    buffer.write(",".join(frame.columns) + "\n")
+    writer = csv.writer(buffer, quoting=csv.QUOTE_NONNUMERIC, lineterminator="\n")
+    columns = []
+    for name in frame.columns:
+        values = frame[name]
+        if values.dtype.kind in "fiu":
+            columns.append(values.tolist())
+        elif values.dtype.kind == "b":
+            columns.append([str(v) for v in values.tolist()])
+        else:
+            columns.append([neutralize(str(v)) for v in values.tolist()])
+    writer.writerows(zip(*columns))
+    return buffer.getvalue()
+
+
+# --------------------------------------------------------------- write / read
+def write_catalog(frame, path, command=None, notes=()):
     """Write a catalog CSV atomically with its provenance header.
 
-    ``command`` is recorded as given (the CLI passes its own command line).
+    ``command`` is recorded as given (the CLI passes its own command line);
+    ``notes`` are extra header lines (e.g. the rows ``--skip-invalid``
+    skipped).  The header ends with the row count and the SHA-256 of the
+    data section (every byte after the header), which :func:`read_catalog`
+    checks.  ``path`` ``"-"`` writes to standard output.
     """
+    data = csv_text(frame)
     header = [f"orbits {__version__} closed-orbit catalog",
               f"command: {command if command else '(Python API)'}",
               READ_HINT]
-    write_csv_atomic(frame, path, header_lines=header)
+    header += [" ".join(str(note).split()) for note in notes]
+    header += [f"{ROWS_KEY}{len(frame)}",
+               f"{CHECKSUM_KEY}{hashlib.sha256(data.encode()).hexdigest()}"]
+    text = "".join(f"# {line}\n" for line in header) + data
+    if os.fspath(path) == "-":
+        import sys
+        sys.stdout.write(text)
+        sys.stdout.flush()
+        return
+    with atomic_path(path) as temporary:
+        with open(temporary, "w", newline="", encoding="utf-8") as handle:
+            handle.write(text)
 
 
-def read_catalog(path):
-    """Read a catalog CSV and check its schema.
+def _split_header(raw):
+    """Header lines (without ``# ``) and the data bytes of a catalog file."""
+    header, position = [], 0
+    while raw.startswith(b"#", position):
+        end = raw.find(b"\n", position)
+        end = len(raw) if end < 0 else end + 1
+        header.append(raw[position + 1:end].decode("utf-8").strip())
+        position = end
+    return header, raw[position:]
+
+
+def read_catalog(path, *, check=True):
+    """Read a catalog CSV and check its checksum, row count and schema.
+
+    Parameters
+    ----------
+    path : str or Path
+    check : bool
+        Require and check the row count and SHA-256 lines of the header
+        (default).  ``False`` reads a catalog without them (e.g. written by
+        hand) but still checks the schema and types.
 
     Returns
     -------
     pandas.DataFrame
-        With ``attrs["header"]``, the comment lines of the file.
+        With ``attrs["header"]``, the comment lines of the file.  Floats
+        are bit for bit those written; names come back unneutralised.
 
     Raises
     ------
     InputError
-        Missing file, wrong or misordered columns, bad branch labels,
-        non-integer ``n``/``q``, or non-finite numbers.
+        Missing file; no or wrong checksum (a changed, added or removed
+        byte, e.g. a truncated file); row count not as recorded; wrong or
+        misordered columns; a cell of the wrong type (``abc`` in a numeric
+        column); bad branch labels; ``n``/``q`` not integers >= 1;
+        non-finite numbers.
     """
     try:
-        with open(path) as handle:
-            header = []
-            for line in handle:
-                if not line.startswith("#"):
-                    break
-                header.append(line[1:].strip())
-        frame = pd.read_csv(path, comment="#")
+        with open(path, "rb") as handle:
+            raw = handle.read()
     except FileNotFoundError:
         raise InputError(f"no catalog at {path}") from None
-    except (pd.errors.ParserError, UnicodeDecodeError, pd.errors.EmptyDataError) as error:
-        raise InputError(f"{path} is not a catalog CSV: {error}") from None
+    except IsADirectoryError:
+        raise InputError(f"{path} is a directory, not a catalog") from None
+    except OSError as error:
+        raise InputError(f"cannot read {path}: {error.strerror}") from None
+    try:
+        header, data = _split_header(raw)
+    except UnicodeDecodeError:
+        raise InputError(f"{path} is not a catalog CSV (not UTF-8 text)") from None
+    recorded = {key: line[len(key):] for line in header
+                for key in (ROWS_KEY, CHECKSUM_KEY) if line.startswith(key)}
+    if check:
+        if len(recorded) != 2:
+            raise InputError(f"{path}: no row count and checksum in the header (not an "
+                             "orbits catalog, or written before checksums; "
+                             "read_catalog(path, check=False) skips the check)")
+        if hashlib.sha256(data).hexdigest() != recorded[CHECKSUM_KEY]:
+            raise InputError(f"{path} is damaged: the data section does not match its "
+                             "SHA-256 (changed, truncated or extended)")
+    dtypes = {name: float for name in CATALOG_COLUMNS + (VERIFIED_COLUMN,)}
+    dtypes.update(body=str, branch=str, n="int64", q="int64")
+    try:
+        frame = pd.read_csv(io.BytesIO(data), dtype=dtypes, keep_default_na=False,
+                            **csv_float_options())
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as error:
+        raise InputError(f"{path} is not a catalog CSV: {_one_line(error)}") from None
+    except (ValueError, TypeError) as error:
+        raise InputError(f"{path}: a cell has the wrong type for its column "
+                         f"({_one_line(error)})") from None
+    if check and str(len(frame)) != recorded[ROWS_KEY].strip():
+        raise InputError(f"{path} is damaged: {len(frame)} rows, the header records "
+                         f"{recorded[ROWS_KEY].strip()}")
     columns = list(frame.columns)
     expected = list(CATALOG_COLUMNS)
     if columns[:len(expected)] != expected:
@@ -113,40 +324,224 @@ def read_catalog(path):
         if not pd.api.types.is_integer_dtype(frame[name]) or (frame[name] < 1).any():
             raise InputError(f"{path}: column {name} must hold integers >= 1")
     numeric = frame[expected[1:5] + expected[8:] + extra]
-    if not np.all(np.isfinite(numeric.select_dtypes("number").to_numpy())):
+    for name in numeric.columns:
+        if numeric[name].dtype.kind != "f":
+            raise InputError(f"{path}: column {name} must hold numbers")
+    if not np.all(np.isfinite(numeric.to_numpy(dtype=float))):
         raise InputError(f"{path}: non-finite numbers")
+    frame["body"] = frame["body"].map(unneutralize).astype(frame["body"].dtype)
     frame.attrs["header"] = header
     return frame
 
 
-def bodies_from_csv(path):
+def _one_line(error):
+    return " ".join(str(error).split())
+
+
+# --------------------------------------------------------------- bodies files
+# a plain decimal number: no True, 1_000, 0x10, nan, inf or empty cell
+NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+BODY_FILE_COLUMNS = ("I1", "I2", "I3", "name")
+
+
+@dataclass
+class BodiesFile:
+    """The bodies of a ``--bodies`` CSV, as read by :func:`read_bodies_csv`.
+
+    Attributes
+    ----------
+    moments : ndarray, shape (n, 3)
+        As given on each row (any order and scale), validated.
+    names : list of str or None
+        The ``name`` column, verbatim; None when the file has none.
+    rows : ndarray of int
+        The 1-based data-row number of each body (header not counted).
+    skipped : list of (int, str)
+        Rows skipped by ``skip_invalid``: row number and the reason.
+    """
+
+    path: str
+    moments: np.ndarray
+    names: list
+    rows: np.ndarray
+    skipped: list = field(default_factory=list)
+
+    def bodies(self):
+        """One :class:`Body` per row, named by ``name`` or ``row N``."""
+        result = []
+        for k, (moments, row) in enumerate(zip(self.moments, self.rows)):
+            name = self.names[k] if self.names is not None else f"row {row}"
+            try:
+                result.append(Body(moments, name=name))
+            except OrbitsError as error:
+                raise InputError(f"{self.path}, row {row}: {error}") from None
+        return result
+
+    def skipped_note(self):
+        """One header line listing the skipped rows (empty if none)."""
+        if not self.skipped:
+            return []
+        rows = ", ".join(str(row) for row, _ in self.skipped)
+        return [f"skipped {len(self.skipped)} invalid row(s) of {self.path} "
+                f"(--skip-invalid): {rows}"]
+
+
+def read_bodies_csv(path, skip_invalid=False):
+    """Read a bodies CSV strictly (columns ``I1, I2, I3`` and optionally ``name``).
+
+    The first line is the header; lines before it starting with ``#`` are
+    comments.  Every data row must have exactly the header's fields (no
+    implicit index column); cells are plain decimal numbers (``True``,
+    ``1_000``, ``nan``, an empty cell are errors); names are kept verbatim,
+    ``#`` included (quote a name holding a comma).  Validation is
+    vectorised, so a bad row in a large file fails fast.
+
+    Parameters
+    ----------
+    skip_invalid : bool
+        Skip bad rows (listed in :attr:`BodiesFile.skipped`) instead of
+        raising.
+
+    Raises
+    ------
+    InputError
+        Missing or unreadable file, bad header, no bodies, or (without
+        ``skip_invalid``) the first bad row, named by its row number, with
+        the count of further bad rows.
+    """
+    try:
+        with open(path, newline="", encoding="utf-8") as handle:
+            text = handle.read()
+    except FileNotFoundError:
+        raise InputError(f"no bodies file at {path}") from None
+    except IsADirectoryError:
+        raise InputError(f"{path} is a directory, not a bodies file") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path} is not a CSV of bodies (not UTF-8 text)") from None
+    except OSError as error:
+        raise InputError(f"cannot read {path}: {error.strerror}") from None
+    lines = text.split("\n")
+    start = 0
+    while start < len(lines) and lines[start].startswith("#"):
+        start += 1
+    try:
+        records = list(csv.reader(io.StringIO("\n".join(lines[start:])), strict=True))
+    except csv.Error as error:
+        raise InputError(f"{path} is not a CSV of bodies: {error}") from None
+    records = [r for r in records if r]       # blank lines
+    if not records:
+        raise InputError(f"{path}: no header line (need I1, I2, I3 and optionally name)")
+    header = [cell.strip() for cell in records[0]]
+    unknown = [c for c in header if c not in BODY_FILE_COLUMNS]
+    duplicate = sorted({c for c in header if header.count(c) > 1})
+    missing = [c for c in ("I1", "I2", "I3") if c not in header]
+    if missing or unknown or duplicate:
+        what = "; ".join(filter(None, [
+            missing and f"missing column(s) {', '.join(missing)}",
+            unknown and f"unknown column(s) {', '.join(map(repr, unknown))}",
+            duplicate and f"repeated column(s) {', '.join(duplicate)}"]))
+        raise InputError(f"{path}: {what} (the header must name I1, I2, I3 and "
+                         "optionally name)")
+    data = records[1:]
+    if not data:
+        raise InputError(f"{path}: no bodies")
+    width = len(header)
+    count = len(data)
+    problems = {}                  # row index -> first reason
+    lengths = np.fromiter((len(r) for r in data), dtype=np.int64, count=count)
+    for k in np.flatnonzero(lengths != width):
+        problems[int(k)] = (f"{lengths[k]} fields, the header has {width} "
+                            "(no implicit index column)")
+    good_shape = lengths == width
+    cells = {}
+    for column in ("I1", "I2", "I3"):
+        j = header.index(column)
+        values = pd.Series([r[j] if len(r) == width else "0" for r in data], dtype=object)
+        stripped = values.str.strip()
+        numeric = stripped.str.fullmatch(NUMBER.pattern).to_numpy(dtype=bool)
+        for k in np.flatnonzero(~numeric & good_shape):
+            problems.setdefault(int(k), f"{column} {values[k]!r} is not a number")
+        cells[column] = np.where(numeric, stripped.to_numpy(dtype=object), "nan")
+    with np.errstate(over="ignore"):
+        moments = np.column_stack([cells[c].astype(float) for c in ("I1", "I2", "I3")])
+    candidate = np.array(sorted(set(range(count)) - set(problems)), dtype=np.int64)
+    for k in _invalid_moments(moments[candidate]):
+        index = int(candidate[k])
+        problems[index] = _body_error(moments[index])
+    names = None
+    if "name" in header:
+        j = header.index("name")
+        names = [r[j] if len(r) == width else "" for r in data]
+
+    def label(k):
+        return f"{path}, row {k + 1}" + (f" ({names[k]!r})" if names is not None
+                                         and len(data[k]) == width else "")
+    bad = sorted(problems)
+    if bad and not skip_invalid:
+        more = len(bad) - 1
+        tail = (f"; {more} more bad row(s) (--skip-invalid skips them)" if more else "")
+        raise InputError(f"{label(bad[0])}: {problems[bad[0]]}{tail}")
+    keep = np.ones(count, dtype=bool)
+    keep[bad] = False
+    if not keep.any():
+        raise InputError(f"{path}: all {count} rows are invalid (first: row {bad[0] + 1}: "
+                         f"{problems[bad[0]]})")
+    return BodiesFile(
+        path=str(path), moments=moments[keep],
+        names=None if names is None else [n for n, k in zip(names, keep) if k],
+        rows=np.flatnonzero(keep) + 1,
+        skipped=[(k + 1, f"{label(k)}: {problems[k]}") for k in bad])
+
+
+def _invalid_moments(moments):
+    """Indices of rows that :func:`orbits.bodies.validate_moments` rejects."""
+    from .bodies import _FLAT_SLACK, validate_moments
+    if moments.shape[0] == 0:
+        return []
+    ordered = np.sort(moments, axis=1)
+    try:
+        validate_moments(ordered)
+        return []
+    except OrbitsError:
+        pass
+    # at least one bad row: find every one (vectorised checks first, then
+    # the validator row by row on what they did not explain)
+    with np.errstate(invalid="ignore", over="ignore"):
+        flags = (~np.all(np.isfinite(ordered), axis=1) | (ordered[:, 0] <= 0)
+                 | (ordered[:, 0] == ordered[:, 1]) | (ordered[:, 1] == ordered[:, 2])
+                 | (ordered[:, 2] - (ordered[:, 0] + ordered[:, 1])
+                    > _FLAT_SLACK * ordered[:, 2]))
+    bad = set(np.flatnonzero(flags).tolist())
+    rest = np.flatnonzero(~flags)
+    try:
+        validate_moments(ordered[rest])
+    except OrbitsError:
+        for k in rest:
+            try:
+                validate_moments(ordered[k:k + 1])
+            except OrbitsError:
+                bad.add(int(k))
+    return sorted(bad)
+
+
+def _body_error(moments):
+    try:
+        Body(moments)
+    except OrbitsError as error:
+        return str(error)
+    return "invalid moments"
+
+
+def bodies_from_csv(path, skip_invalid=False):
     """Bodies listed in a CSV with columns ``I1, I2, I3`` (and optionally ``name``).
 
-    Moments may be in any order and scale on each row.
+    Moments may be in any order and scale on each row.  See
+    :func:`read_bodies_csv` for the rules; this returns the list of
+    :class:`Body`.
 
     Raises
     ------
     InputError
         Missing file or columns; the row number of an invalid body.
     """
-    try:
-        table = pd.read_csv(path, comment="#")
-    except FileNotFoundError:
-        raise InputError(f"no bodies file at {path}") from None
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as error:
-        raise InputError(f"{path} is not a CSV of bodies: {error}") from None
-    missing = {"I1", "I2", "I3"} - set(table.columns)
-    if missing:
-        raise InputError(f"{path}: missing column(s) {', '.join(sorted(missing))} "
-                         "(need I1, I2, I3 and optionally name)")
-    if table.empty:
-        raise InputError(f"{path}: no bodies")
-    bodies = []
-    for row_number, row in enumerate(table.itertuples(index=False), start=1):
-        name = str(row.name) if "name" in table.columns else f"row {row_number}"
-        try:
-            moments = [float(row.I1), float(row.I2), float(row.I3)]
-            bodies.append(Body(moments, name=name))
-        except (OrbitsError, ValueError) as error:
-            raise InputError(f"{path}, row {row_number} ({name}): {error}") from None
-    return bodies
+    return read_bodies_csv(path, skip_invalid).bodies()

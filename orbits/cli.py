@@ -1,8 +1,11 @@
 """The ``orbits`` command line.
 
 Every failure the user can cause (a bad argument, non-physical moments, an
-unwritable path) ends with exit code 2 and one line on stderr, never a
-traceback.  Ctrl-C ends with exit code 130 and leaves no partial output.
+unwritable path, a damaged input file, a size beyond the machine) ends with
+exit code 2 and one line on stderr, never a traceback.  Ctrl-C (exit 130),
+SIGTERM (143) and SIGHUP (129) end with one line and leave no partial
+output: the handlers turn the signals into exceptions, so every atomic
+write removes its temporary file.
 """
 
 import argparse
@@ -82,11 +85,30 @@ def add_body_options(parser, many=False):
         exclusive.add_argument("--bodies", metavar="FILE.csv",
                                help="many bodies: a CSV with columns I1, I2, I3 "
                                     "and optionally name")
+        group.add_argument("--skip-invalid", action="store_true",
+                           help="with --bodies: skip invalid rows (listed on stderr "
+                                "and in the output) instead of stopping")
+    group.add_argument("--name", help="name of the single body (catalog and figure "
+                                      "labels); not with --bodies")
     return group
 
 
 def body_from_args(args):
     """The :class:`Body` selected by :func:`add_body_options` options."""
+    try:
+        body = _body_from_args(args)
+    except (OverflowError, FloatingPointError, ZeroDivisionError):
+        raise InputError("the body's moments overflow a double: use smaller "
+                         "lengths or moments") from None
+    name = getattr(args, "name", None)
+    if name is not None:
+        if not name.strip():
+            raise InputError("--name must not be empty")
+        body.name = name
+    return body
+
+
+def _body_from_args(args):
     if args.moments is not None:
         return Body(args.moments, name="moments({:g}, {:g}, {:g})".format(*args.moments))
     if args.t_handle is not None:
@@ -140,23 +162,56 @@ def command_line(argv):
     return "orbits " + " ".join(shlex.quote(word) for word in words)
 
 
+def bodies_file_from_args(args):
+    """The strictly read ``--bodies`` file; skipped rows reported on stderr."""
+    from .catalog import read_bodies_csv
+    if getattr(args, "name", None) is not None:
+        raise InputError("--name names a single body; a --bodies file has a name column")
+    table = read_bodies_csv(args.bodies, skip_invalid=args.skip_invalid)
+    for _, message in table.skipped[:20]:
+        print(f"orbits: warning: skipped {message}", file=sys.stderr)
+    if len(table.skipped) > 20:
+        print(f"orbits: warning: skipped {len(table.skipped) - 20} more invalid rows",
+              file=sys.stderr)
+    return table
+
+
 def bodies_from_args(args):
-    """The list of bodies selected by the body options (``--bodies`` or one)."""
-    if getattr(args, "bodies", None):
-        from .catalog import bodies_from_csv
-        return bodies_from_csv(args.bodies)
-    return [body_from_args(args)]
+    """The bodies selected by the body options and header notes (skipped rows)."""
+    if getattr(args, "bodies", None) is not None:
+        table = bodies_file_from_args(args)
+        return table.bodies(), table.skipped_note()
+    if getattr(args, "skip_invalid", False):
+        raise InputError("--skip-invalid applies to a --bodies file")
+    return [body_from_args(args)], []
+
+
+def _check_out(path):
+    """``--out`` for a file: '-' is standard output; else it must be writable."""
+    if path == "-":
+        return
+    from .atomic import ensure_writable
+    ensure_writable(path)
+
+
+def announce(command, seconds, memory):
+    """One stderr line before a step estimated to take more than 2 s."""
+    if seconds > 2:
+        from .catalog import _bytes, _duration
+        print(f"orbits {command}: estimated {_duration(seconds)}, up to {_bytes(memory)}"
+              " of memory; working...", file=sys.stderr, flush=True)
 
 
 def _cmd_catalog(args):
     import time
     import warnings
 
-    from .atomic import ensure_writable
-    from .catalog import CLOSURE_TOLERANCE, catalog, write_catalog
+    from .catalog import CLOSURE_TOLERANCE, catalog, check_search_bounds, write_catalog
     from .search import UnresolvedOrbitsWarning
-    ensure_writable(args.out)
-    bodies = bodies_from_args(args)
+    _check_out(args.out)
+    bodies, notes = bodies_from_args(args)
+    memory, seconds = check_search_bounds(args.n_max, args.q_max, len(bodies), "the catalog")
+    announce("catalog", seconds * (3 if args.verify else 1), memory)
     start = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UnresolvedOrbitsWarning)
@@ -164,7 +219,7 @@ def _cmd_catalog(args):
                           unit="body") as bar:
             frame = catalog(bodies, n_max=args.n_max, q_max=args.q_max,
                             verify=args.verify, progress=bar.update)
-    write_catalog(frame, args.out, command=command_line(args.argv))
+    write_catalog(frame, args.out, command=command_line(args.argv), notes=notes)
     for warning in caught:
         print(f"orbits: warning: {warning.message}", file=sys.stderr)
     elapsed = time.perf_counter() - start
@@ -173,7 +228,8 @@ def _cmd_catalog(args):
         worst = float(frame["closure_error"].max()) if len(frame) else 0.0
         note = f"; largest closure error {worst:.2e} rad"
     print(f"orbits catalog: {len(frame)} closed orbits of {len(bodies)} "
-          f"body(ies) written to {args.out} in {elapsed:.2f} s{note}", file=sys.stderr)
+          f"body(ies) written to {'standard output' if args.out == '-' else args.out} "
+          f"in {elapsed:.2f} s{note}", file=sys.stderr)
     if args.verify and len(frame) and frame["closure_error"].max() > CLOSURE_TOLERANCE:
         print(f"orbits: error: closure errors above {CLOSURE_TOLERANCE:g} rad",
               file=sys.stderr)
@@ -203,7 +259,8 @@ def _add_catalog(subparsers):
                              "each orbit over q periods (exit 1 if any exceeds "
                              "1e-8 rad)")
     parser.add_argument("--out", required=True, metavar="FILE.csv",
-                        help="output CSV")
+                        help="output CSV ('-': standard output); never a device, "
+                             "FIFO or socket")
     parser.set_defaults(run=_cmd_catalog)
 
 
@@ -295,23 +352,38 @@ def _cmd_survey(args):
     import json
     import time
 
-    from .survey import Survey
+    from .survey import Survey, check_survey
+    if args.check:
+        return _check_survey_directory(args, check_survey)
+    if args.out is None:
+        raise InputError("orbits survey: --out DIR is required (or --check DIR)")
+    if args.n_max is None:
+        raise InputError("orbits survey: the following arguments are required: --n-max")
     if (args.resolution is None) == (args.bodies is None):
         raise InputError("orbits survey: give exactly one of --resolution N and --bodies FILE")
+    if args.skip_invalid and args.bodies is None:
+        raise InputError("--skip-invalid applies to a --bodies file")
+    if args.scheduler is not None and not args.scheduler.strip():
+        raise InputError("--scheduler is empty; give tcp://HOST:PORT")
     options = dict(q_max=args.q_max, fmt=args.format, chunk=args.chunk)
     if args.resolution is not None:
         survey = Survey.grid(args.out, args.resolution, args.n_max, **options)
     else:
-        from .catalog import bodies_from_csv
-        survey = Survey.from_bodies(args.out, bodies_from_csv(args.bodies), args.n_max,
-                                    source=args.bodies, **options)
-    survey.prepare()
-    todo = survey.missing()
+        table = bodies_file_from_args(args)
+        survey = Survey(args.out, table.moments, {"file": str(args.bodies)}, args.n_max,
+                        names=table.names,
+                        skipped=[message for _, message in table.skipped], **options)
+    from .survey import survey_estimate
+    memory, seconds = survey_estimate(survey.moments.shape[0], survey.n_max,
+                                      survey.q_max, survey.chunk)
     total = survey.moments.shape[0]
-    pending = sum(len(survey.chunk_moments(k)) for k in todo)
     start = time.perf_counter()
-    with progress_bar(pending, "survey", unit="body") as bar:
-        report = survey.run(scheduler=args.scheduler, progress=bar.update)
+    with progress_bar(total, "survey", unit="body") as bar:
+        def notify(message):
+            bar.write(f"orbits survey: {message}", file=sys.stderr)
+        announce("survey", seconds, memory)
+        report = survey.run(scheduler=args.scheduler, progress=bar.update, notify=notify)
+    pending = sum(len(survey.chunk_moments(k)) for k in survey.last_todo)
     elapsed = time.perf_counter() - start
     if args.json:
         print(json.dumps(report, indent=2))
@@ -337,6 +409,29 @@ def _cmd_survey(args):
     return 0
 
 
+def _check_survey_directory(args, check_survey):
+    """``orbits survey --check DIR``: verify every part, compute nothing."""
+    import json
+    given = [name for name in ("resolution", "bodies", "n_max", "scheduler", "out")
+             if getattr(args, name) is not None]
+    if given:
+        raise InputError(f"orbits survey --check takes only the directory (and --json), "
+                         f"not --{given[0].replace('_', '-')}")
+    status = check_survey(args.check)
+    if args.json:
+        print(json.dumps(status, indent=2))
+    else:
+        verdict = "complete, every part verified" if status["complete"] else "NOT complete"
+        print(f"orbits survey --check {args.check}: {status['verified']} of "
+              f"{status['chunks']} chunk(s) verified; {verdict}")
+        for line in status["damaged"]:
+            print(f"  damaged {line}")
+        if status["missing"]:
+            print(f"  missing: {', '.join(status['missing'][:10])}"
+                  + (" ..." if len(status["missing"]) > 10 else ""))
+    return 0 if status["complete"] else EXIT_CHECK_FAILED
+
+
 def _add_survey(subparsers):
     parser = subparsers.add_parser(
         "survey", help="minimum phases and closed orbits over many bodies",
@@ -346,16 +441,25 @@ def _add_survey(subparsers):
                     "tables bodies/ and orbits/ (partitioned, one file per "
                     "chunk) and report.json (the minimum-at-the-ends "
                     "conjecture, bodies with a 2 pi orbit, ...).  Each chunk is "
-                    "written atomically; running the same command again after "
-                    "an interruption computes only the missing chunks; other "
-                    "parameters in the same DIR are refused.")
+                    "written atomically and recorded in the manifest's ledger "
+                    "(SHA-256 per part); running the same command again checks "
+                    "every part and computes only the missing or damaged ones; "
+                    "other parameters in the same DIR are refused; one run at a "
+                    "time holds DIR (a lock).")
     source = parser.add_mutually_exclusive_group()
     source.add_argument("--resolution", type=_positive_int, metavar="N",
                         help="an N x N grid over the bounding box of the region, "
                              "keeping the points inside it")
     source.add_argument("--bodies", metavar="FILE.csv",
                         help="a CSV with columns I1, I2, I3 (optionally name)")
-    parser.add_argument("--n-max", type=_positive_int, required=True,
+    source.add_argument("--check", metavar="DIR",
+                        help="verify the survey in DIR against its ledger (SHA-256 of "
+                             "every part) without computing; exit 1 if it is damaged "
+                             "or incomplete")
+    parser.add_argument("--skip-invalid", action="store_true",
+                        help="with --bodies: skip invalid rows (listed on stderr and "
+                             "in the manifest) instead of stopping")
+    parser.add_argument("--n-max", type=_positive_int,
                         help="largest multiple n (or p/q) of 2 pi searched per body")
     parser.add_argument("--q-max", type=_positive_int, default=1,
                         help="also p/q orbits with q up to Q (default 1)")
@@ -368,7 +472,7 @@ def _add_survey(subparsers):
                              "(needs orbits[distributed]); default: in-process on "
                              "all cores")
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
-    parser.add_argument("--out", required=True, metavar="DIR", help="survey directory")
+    parser.add_argument("--out", metavar="DIR", help="survey directory")
     parser.set_defaults(run=_cmd_survey)
 
 
@@ -384,14 +488,31 @@ def progress_bar(total, description, enabled=None, unit="orbit"):
                 file=sys.stderr, dynamic_ncols=True)
 
 
+# measured here: 64,460 initial conditions in 1.5 s; the table holds ~20
+# float columns and the integrations keep a few more per condition
+_VERIFY_SECONDS_PER_CONDITION = 3e-5
+_VERIFY_BYTES_PER_CONDITION = 2000
+
+
 def _cmd_verify(args):
     import json
 
     from .checks import verify
+    if not args.tolerance > 0:
+        raise InputError(f"--tolerance must be a positive number of radians, "
+                         f"got {args.tolerance:g}")
     if args.table:
         from .atomic import ensure_writable
         ensure_writable(args.table)
     total = args.bodies * args.angles
+    from .catalog import _bytes, memory_budget
+    memory = total * _VERIFY_BYTES_PER_CONDITION
+    if memory > memory_budget():
+        raise InputError(f"verify with {args.bodies} bodies x {args.angles} angles = "
+                         f"{total} initial conditions would need about {_bytes(memory)} "
+                         f"of memory, more than the {_bytes(memory_budget())} allowed "
+                         "(half of this machine's)")
+    announce("verify", total * _VERIFY_SECONDS_PER_CONDITION, memory)
     with progress_bar(total, "verify", None if not args.no_progress else False) as bar:
         report = verify(args.bodies, args.angles, tolerance=args.tolerance,
                         progress=bar.update)
@@ -492,8 +613,31 @@ def build_parser():
     return parser
 
 
+def _raise_terminated(signum, frame):
+    from .atomic import Terminated
+    raise Terminated(signum)
+
+
+def _install_signal_handlers():
+    """SIGTERM and SIGHUP raise :class:`~orbits.atomic.Terminated` (main thread only)."""
+    import signal
+    import threading
+    if threading.current_thread() is not threading.main_thread():
+        return {}
+    previous = {}
+    for name in ("SIGTERM", "SIGHUP"):
+        number = getattr(signal, name, None)
+        if number is not None:
+            previous[number] = signal.signal(number, _raise_terminated)
+    return previous
+
+
 def main(argv=None):
     """Entry point of the ``orbits`` console script; returns the exit code."""
+    import signal
+
+    from .atomic import Terminated
+    previous = _install_signal_handlers()
     try:
         args = build_parser().parse_args(argv)
         args.argv = argv
@@ -501,8 +645,16 @@ def main(argv=None):
     except KeyboardInterrupt:
         print("orbits: interrupted; no partial output was written", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except Terminated as stop:
+        name = signal.Signals(stop.signum).name
+        print(f"orbits: stopped by {name}; no partial output was written", file=sys.stderr)
+        return 128 + stop.signum
     except OrbitsError as error:
-        print(f"orbits: error: {error}", file=sys.stderr)
+        print(f"orbits: error: {' '.join(str(error).split())}", file=sys.stderr)
+        return EXIT_USAGE
+    except MemoryError:
+        print("orbits: error: out of memory; use smaller sizes (--n-max, --q-max, "
+              "--resolution, --chunk, --bodies)", file=sys.stderr)
         return EXIT_USAGE
     except BrokenPipeError:
         # the reader (e.g. `head`) closed the pipe: not an error of ours
@@ -512,6 +664,9 @@ def main(argv=None):
         print(f"orbits: error: {error.strerror or error}: "
               f"{error.filename or ''}".rstrip(": "), file=sys.stderr)
         return EXIT_USAGE
+    finally:
+        for number, handler in previous.items():
+            signal.signal(number, handler)
 
 
 if __name__ == "__main__":

@@ -60,7 +60,7 @@ def _count(name, value):
 
 def _label(body, moments):
     if isinstance(body, Body) and body.name:
-        return str(body.name).replace("#", "")
+        return str(body.name)
     return "I=({:.9g}, {:.9g}, {:.9g})".format(*moments)
 
 

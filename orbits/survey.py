@@ -3,14 +3,17 @@
 A survey covers the region of physical asymmetric bodies in the paper's
 I1-I2 plane (``|I| = 1``), or an explicit list, and writes a directory::
 
-    DIR/manifest.json          parameters; a rerun must match them
+    DIR/manifest.json          parameters (a rerun must match them) and ledger
     DIR/bodies/part-NNNNN.csv  one row per body (or .parquet)
     DIR/orbits/part-NNNNN.csv  the closed orbits, catalog schema
     DIR/report.json            summary and the minimum-at-the-ends test
 
 The bodies are cut into chunks; each finished chunk is written atomically
-(orbits first, bodies last, so a chunk is done exactly when its bodies part
-exists).  A killed survey run again computes only the missing chunks.
+(orbits, then bodies), and then recorded in the manifest's ledger (file
+names, row counts, body-id range, SHA-256 of each part).  A chunk is done
+exactly when its ledger entry matches its files: a rerun checks every part,
+recomputes the missing or damaged ones and never reads a file that is not
+in the ledger.  One run at a time holds the directory (``fcntl`` lock).
 
 Chunks run in-process on all cores (numba), or on a ``dask.distributed``
 cluster (``scheduler="tcp://host:port"`` or a ``Client``): the same
@@ -144,47 +147,144 @@ def _body_rows(moments, ids, info, orbits, body_of_row):
     }, columns=list(BODY_COLUMNS))
 
 
+# --------------------------------------------------------------- bounds
+# measured here: 1,000,828 bodies with n_max = 10 in 42.8 s on 2 cores
+_SECONDS_PER_BODY = 4e-5
+_SECONDS_PER_BODY_LEVEL = 2e-7
+_BYTES_PER_ROW = 600           # an orbit row: kernel arrays, DataFrame, CSV text
+_BYTES_PER_GRID_POINT = 200    # region_grid: meshgrid, moments and masks
+_GRID_INSIDE = 0.39            # fraction of the bounding box inside the region
+
+
+def survey_estimate(bodies, n_max, q_max, chunk):
+    """Rough peak memory (bytes) and total time (s) of a survey.
+
+    A chunk holds up to two orbits per level and body; the memory is one
+    chunk's rows (chunks are written and dropped one by one).
+    """
+    from .catalog import search_estimate
+    level_memory, _ = search_estimate(n_max, q_max, bodies=0)
+    levels = float(n_max) * q_max * (q_max + 1) / 2.0 * 6.0 / np.pi ** 2 + n_max
+    per_chunk = min(chunk, bodies)
+    memory = level_memory + per_chunk * (2.0 * levels * _BYTES_PER_ROW + 34.0 * levels)
+    seconds = bodies * (_SECONDS_PER_BODY + levels * _SECONDS_PER_BODY_LEVEL)
+    return memory, seconds
+
+
+def check_survey_bounds(bodies, n_max, q_max, chunk):
+    """Refuse a survey whose memory or time would exceed the machine.
+
+    Raises
+    ------
+    InputError
+        With the estimate and the largest ``chunk`` that would fit.
+    """
+    from .catalog import MAX_SECONDS, _bytes, _duration, memory_budget
+    memory, seconds = survey_estimate(bodies, n_max, q_max, chunk)
+    budget = memory_budget()
+    if memory > budget:
+        one, _ = survey_estimate(1, n_max, q_max, 1)
+        fits = int(budget // max(one, 1.0))
+        advice = (f"use --chunk {fits} or less" if fits >= 1 else
+                  "lower --n-max or --q-max")
+        raise InputError(f"this survey (n_max={n_max}, q_max={q_max}, chunk={chunk}) "
+                         f"would need about {_bytes(memory)} of memory per chunk, more "
+                         f"than the {_bytes(budget)} allowed (half of this machine's); "
+                         f"{advice}")
+    if seconds > MAX_SECONDS:
+        raise InputError(f"this survey ({bodies} bodies, n_max={n_max}, q_max={q_max}) "
+                         f"would take about {_duration(seconds)}; use fewer bodies or "
+                         "a lower --n-max")
+    return memory, seconds
+
+
+def check_resolution(resolution):
+    """Refuse a grid whose construction alone would exceed the machine."""
+    from .catalog import _bytes, memory_budget
+    if isinstance(resolution, bool) or int(resolution) != resolution or resolution < 2:
+        raise InputError(f"resolution must be an integer >= 2, got {resolution!r}")
+    memory = float(resolution) ** 2 * _BYTES_PER_GRID_POINT
+    if memory > memory_budget():
+        raise InputError(f"--resolution {resolution} would need about {_bytes(memory)} "
+                         f"of memory for the grid alone, more than the "
+                         f"{_bytes(memory_budget())} allowed (half of this machine's)")
+    return int(resolution)
+
+
 # --------------------------------------------------------------- the survey
+MANIFEST = "manifest.json"
+LOCK = ".lock"
+SURVEY_FORMAT = 2
+TABLES = ("bodies", "orbits")
+
+
 class Survey:
     """A survey's parameters, bodies and output directory.
 
     Build with :meth:`grid` (``N x N`` over the region's bounding box) or
     :meth:`from_bodies`; :meth:`run` computes the missing chunks.
+
+    The directory proves itself: ``manifest.json`` keeps, besides the
+    parameters, a ledger of every finished part (file, row count, body-id
+    range, SHA-256).  A part counts as done only when its ledger entry
+    matches the file; a rerun recomputes the others, and files not in the
+    ledger (e.g. ``part-00001.csv.bak``) are never read.  One run at a time
+    writes a directory (an exclusive ``fcntl`` lock on ``DIR/.lock``).
     """
 
     def __init__(self, out_dir, moments, source, n_max, q_max=1, fmt="csv",
-                 chunk=DEFAULT_CHUNK):
+                 chunk=DEFAULT_CHUNK, names=None, skipped=()):
         if fmt not in FORMATS:
             raise InputError(f"format must be one of {', '.join(FORMATS)}, got {fmt!r}")
         if fmt == "parquet":
             _require_pyarrow()
         for name, value in (("n_max", n_max), ("q_max", q_max), ("chunk", chunk)):
-            if isinstance(value, bool) or int(value) != value or value < 1:
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
+                    or value < 1:
                 raise InputError(f"{name} must be an integer >= 1, got {value!r}")
         self.out_dir = Path(out_dir)
         self.moments = np.ascontiguousarray(as_moments(moments), dtype=float).reshape(-1, 3)
         if self.moments.shape[0] == 0:
             raise InputError("a survey needs at least one body")
         self.n_max, self.q_max, self.format, self.chunk = int(n_max), int(q_max), fmt, int(chunk)
-        digest = hashlib.sha256(self.moments.tobytes()).hexdigest()
+        check_survey_bounds(self.moments.shape[0], self.n_max, self.q_max, self.chunk)
+        if names is not None:
+            names = [str(name) for name in names]
+            if len(names) != self.moments.shape[0]:
+                raise InputError(f"{len(names)} names for {self.moments.shape[0]} bodies")
+        self.names = names
+        self.source = source
+        self.skipped = list(skipped)
+        # what the survey *means*: the bodies by content, not by path
         self.parameters = {
-            "orbits_version": __version__, "bodies": source, "body_count":
-            int(self.moments.shape[0]), "bodies_sha256": digest, "n_max": self.n_max,
-            "q_max": self.q_max, "format": fmt, "chunk": self.chunk,
+            "orbits_version": __version__,
+            "bodies": {"grid": int(source["grid"])} if "grid" in source else "list",
+            "body_count": int(self.moments.shape[0]),
+            "bodies_sha256": hashlib.sha256(self.moments.tobytes()).hexdigest(),
+            "names_sha256": None if names is None else hashlib.sha256(
+                "\n".join(names).encode("utf-8", "surrogatepass")).hexdigest(),
+            "n_max": self.n_max, "q_max": self.q_max, "format": fmt, "chunk": self.chunk,
         }
 
     @classmethod
     def grid(cls, out_dir, resolution, n_max, **kwargs):
         """Bodies on an ``N x N`` grid over the region's bounding box."""
-        if isinstance(resolution, bool) or int(resolution) != resolution or resolution < 2:
-            raise InputError(f"resolution must be an integer >= 2, got {resolution!r}")
-        moments = region_grid(int(resolution))
-        return cls(out_dir, moments, {"grid": int(resolution)}, n_max, **kwargs)
+        resolution = check_resolution(resolution)
+        moments = region_grid(resolution)
+        return cls(out_dir, moments, {"grid": resolution}, n_max, **kwargs)
 
     @classmethod
     def from_bodies(cls, out_dir, bodies, n_max, source="list", **kwargs):
-        """An explicit list of bodies (Body objects or moments)."""
+        """An explicit list of bodies (Body objects or moments).
+
+        Names of :class:`~orbits.Body` objects are kept (a ``name`` column
+        in the bodies table) unless ``names`` is given.
+        """
+        bodies = list(bodies)
         moments = np.array([getattr(b, "moments", b) for b in bodies], dtype=float)
+        if "names" not in kwargs and bodies and all(
+                getattr(b, "name", None) is not None for b in bodies):
+            kwargs["names"] = [b.name for b in bodies]
         return cls(out_dir, moments, {"file": str(source)}, n_max, **kwargs)
 
     @property
@@ -194,8 +294,18 @@ class Survey:
     def _part(self, table, index):
         return self.out_dir / table / f"part-{index:05d}.{self.format}"
 
+    # ------------------------------------------------------------ directory
+    def _refuse_foreign_directory(self):
+        if self.out_dir.exists() and not self.out_dir.is_dir():
+            raise InputError(f"{self.out_dir} exists and is not a directory")
+        if (self.out_dir.is_dir() and not (self.out_dir / MANIFEST).exists()
+                and any(p.name != LOCK for p in self.out_dir.iterdir())):
+            raise InputError(f"{self.out_dir} exists and is not a survey directory")
+
     def prepare(self):
         """Create the directory and manifest, or check an existing one.
+
+        Call under :meth:`lock` (``run`` does).
 
         Raises
         ------
@@ -203,47 +313,94 @@ class Survey:
             The directory holds a survey with other parameters (they never
             mix: use a new directory), or cannot be written.
         """
-        manifest = self.out_dir / "manifest.json"
+        self._refuse_foreign_directory()
+        manifest = self.out_dir / MANIFEST
         if manifest.exists():
-            try:
-                existing = json.loads(manifest.read_text())
-            except ValueError:
-                raise InputError(f"{manifest} is not a survey manifest") from None
-            if existing != self.parameters:
-                changed = sorted(k for k in set(existing) | set(self.parameters)
-                                 if existing.get(k) != self.parameters.get(k))
+            existing = load_manifest(self.out_dir)
+            if existing["parameters"] != self.parameters:
+                old, new = existing["parameters"], self.parameters
+                changed = sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
                 raise InputError(
                     f"{self.out_dir} holds a survey with different parameters "
                     f"({', '.join(changed)}); use a new directory")
+            self._ledger = existing["parts"]
         else:
-            if self.out_dir.exists() and any(self.out_dir.iterdir()):
-                raise InputError(f"{self.out_dir} exists and is not a survey directory")
             try:
-                for sub in ("bodies", "orbits"):
+                for sub in TABLES:
                     (self.out_dir / sub).mkdir(parents=True, exist_ok=True)
             except OSError as error:
                 raise InputError(f"cannot create {self.out_dir}: {error.strerror}") from None
-            write_text_atomic(manifest, json.dumps(self.parameters, indent=2) + "\n")
+            self._ledger = {}
+            self._write_manifest()
+
+    def _write_manifest(self):
+        document = {"orbits_survey": SURVEY_FORMAT, "parameters": self.parameters,
+                    "source": self.source, "skipped_rows": self.skipped,
+                    "parts": self._ledger}
+        write_text_atomic(self.out_dir / MANIFEST, json.dumps(document, indent=1) + "\n")
+
+    def lock(self):
+        """The directory's exclusive lock (a context manager).
+
+        Raises
+        ------
+        InputError
+            Another run holds it.
+        """
+        return _DirectoryLock(self.out_dir)
 
     def clean_partial(self):
-        """Remove temporary files a killed run left behind (never complete parts)."""
-        for table in ("bodies", "orbits"):
-            for leftover in (self.out_dir / table).glob(".part-*.part"):
-                leftover.unlink(missing_ok=True)
+        """Remove temporary files of killed runs (never parts, never a live run's)."""
+        from .atomic import remove_stale_temporaries
+        for table in TABLES:
+            remove_stale_temporaries(self.out_dir / table, r"part-\d+\.\w+", regex=True)
+        remove_stale_temporaries(self.out_dir, MANIFEST)
+        remove_stale_temporaries(self.out_dir, "report.json")
+
+    def verify(self):
+        """Check every ledger entry against its files; drop the bad ones.
+
+        Returns
+        -------
+        damaged : list of str
+            Parts whose files were missing or did not match the ledger
+            (they are removed from the ledger and will be recomputed).
+        """
+        damaged = []
+        for key in sorted(self._ledger, key=int):
+            problem = _check_part(self.out_dir, self._ledger[key])
+            if problem:
+                damaged.append(f"chunk {int(key)}: {problem}")
+                del self._ledger[key]
+        return damaged
 
     def missing(self):
-        """Indices of the chunks not yet written."""
-        return [k for k in range(self.chunks) if not self._part("bodies", k).exists()]
+        """Indices of the chunks not (verifiably) written."""
+        ledger = getattr(self, "_ledger", None)
+        if ledger is None:
+            ledger = load_manifest(self.out_dir)["parts"] if (
+                self.out_dir / MANIFEST).exists() else {}
+        return [k for k in range(self.chunks) if str(k) not in ledger]
 
     def chunk_moments(self, index):
         return self.moments[index * self.chunk:(index + 1) * self.chunk]
 
     def write_chunk(self, index, bodies, orbits):
-        """Write one chunk: orbits first, bodies last (the 'done' mark)."""
-        _write_table(orbits, self._part("orbits", index), self.format)
-        _write_table(bodies, self._part("bodies", index), self.format)
+        """Write one chunk (orbits, then bodies), then its ledger entry."""
+        if self.names is not None:
+            bodies.insert(1, "name", self.names[index * self.chunk:
+                                               index * self.chunk + len(bodies)])
+        entry = {"first_body": int(index * self.chunk),
+                 "last_body": int(index * self.chunk + len(bodies) - 1)}
+        for table, frame in (("orbits", orbits), ("bodies", bodies)):
+            path = self._part(table, index)
+            _write_table(frame, path, self.format)
+            entry[table] = {"file": f"{table}/{path.name}", "rows": int(len(frame)),
+                            "sha256": _sha256(path)}
+        self._ledger[str(index)] = entry
+        self._write_manifest()
 
-    def run(self, scheduler=None, progress=None):
+    def run(self, scheduler=None, progress=None, notify=None):
         """Compute and write every missing chunk; then the report.
 
         Parameters
@@ -253,25 +410,50 @@ class Survey:
             Client): chunks run on its workers.  Default: in-process.
         progress : callable, optional
             Called with the number of bodies of each finished chunk.
+        notify : callable, optional
+            Called with one-line messages (e.g. how many damaged parts are
+            recomputed).
 
         Returns
         -------
         dict
-            The report (also written to ``report.json``).
+            The report (also written to ``report.json``), built from the
+            verified parts only.
+
+        Raises
+        ------
+        InputError
+            Another run holds the directory, it holds another survey, or
+            the scheduler is unusable.
         """
-        self.prepare()
-        self.clean_partial()
-        todo = self.missing()
-        if scheduler is None:
-            for index in todo:
-                bodies, orbits = compute_chunk(self.chunk_moments(index), self.n_max,
-                                               self.q_max, index * self.chunk)
-                self.write_chunk(index, bodies, orbits)
-                if progress is not None:
-                    progress(len(bodies))
-        else:
-            self._run_distributed(scheduler, todo, progress)
-        return self.report()
+        if scheduler is not None:
+            _check_scheduler(scheduler)
+        self._refuse_foreign_directory()
+        try:
+            self.out_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as error:
+            raise InputError(f"cannot create {self.out_dir}: {error.strerror}") from None
+        with self.lock():
+            self.prepare()
+            self.clean_partial()
+            damaged = self.verify()
+            if damaged:
+                self._write_manifest()
+                if notify is not None:
+                    notify(f"{len(damaged)} part(s) missing or damaged, recomputing: "
+                           + "; ".join(damaged[:3]) + (" ..." if len(damaged) > 3 else ""))
+            todo = self.missing()
+            self.last_todo = todo
+            if scheduler is None:
+                for index in todo:
+                    bodies, orbits = compute_chunk(self.chunk_moments(index), self.n_max,
+                                                   self.q_max, index * self.chunk)
+                    self.write_chunk(index, bodies, orbits)
+                    if progress is not None:
+                        progress(len(bodies))
+            else:
+                self._run_distributed(scheduler, todo, progress)
+            return self.report()
 
     def _run_distributed(self, scheduler, todo, progress):
         try:
@@ -282,10 +464,16 @@ class Survey:
         own = not isinstance(scheduler, Client)
         try:
             client = Client(scheduler, timeout=CONNECT_TIMEOUT) if own else scheduler
-        except (OSError, TimeoutError) as error:
-            raise InputError(f"cannot reach the dask scheduler at {scheduler}: "
-                             f"{error}") from None
+        except Exception as error:          # noqa: BLE001 - any failure to connect
+            raise InputError(f"cannot reach the dask scheduler at {scheduler} within "
+                             f"{CONNECT_TIMEOUT} s: {_one_line(error)}") from None
         try:
+            try:
+                client.wait_for_workers(1, timeout=CONNECT_TIMEOUT)
+            except Exception:               # noqa: BLE001 - dask raises TimeoutError
+                raise InputError(f"the dask scheduler at {scheduler} has no workers "
+                                 f"(waited {CONNECT_TIMEOUT} s); start one with "
+                                 f"'dask worker ADDRESS'") from None
             futures = {client.submit(compute_chunk, self.chunk_moments(index), self.n_max,
                                      self.q_max, index * self.chunk, pure=False): index
                        for index in todo}
@@ -299,11 +487,9 @@ class Survey:
                 client.close()
 
     def report(self):
-        """Summary of a complete survey; written to ``report.json``."""
-        if self.missing():
-            raise InputError(f"{self.out_dir}: the survey is not complete")
+        """Summary of a complete survey from its verified parts; written to ``report.json``."""
         bodies = read_table(self.out_dir, "bodies")
-        failed = bodies[~bodies["min_at_end"]]
+        failed = bodies[~bodies["min_at_end"].astype(bool)]
         report = {
             "bodies": int(len(bodies)),
             "orbits": int(bodies["orbits"].sum()),
@@ -317,9 +503,148 @@ class Survey:
             "min_total_phase_range": [float(bodies["min_total_phase"].min()),
                                       float(bodies["min_total_phase"].max())],
             "bodies_with_unresolved_orbits": int((bodies["unresolved"] > 0).sum()),
+            "skipped_rows": len(self.skipped),
         }
         write_text_atomic(self.out_dir / "report.json", json.dumps(report, indent=2) + "\n")
         return report
+
+
+class _DirectoryLock:
+    """An exclusive ``fcntl.flock`` on ``DIR/.lock``, released on exit (or death)."""
+
+    def __init__(self, directory):
+        self.path = Path(directory) / LOCK
+
+    def __enter__(self):
+        import fcntl
+        import os
+        try:
+            self.handle = open(self.path, "a+")
+        except OSError as error:
+            raise InputError(f"cannot lock {self.path.parent}: {error.strerror}") from None
+        try:
+            fcntl.flock(self.handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            self.handle.seek(0)
+            owner = self.handle.read().strip() or "unknown"
+            self.handle.close()
+            raise InputError(f"{self.path.parent} is being written by another orbits run "
+                             f"(pid {owner}); wait for it to finish or use another "
+                             "directory") from None
+        self.handle.seek(0)
+        self.handle.truncate()
+        self.handle.write(f"{os.getpid()}\n")
+        self.handle.flush()
+        return self
+
+    def __exit__(self, *exc):
+        self.handle.close()          # closing releases the lock
+        return False
+
+
+def _one_line(error):
+    return " ".join(str(error).split()) or type(error).__name__
+
+
+def _check_scheduler(scheduler):
+    """Refuse an address that cannot be a dask scheduler before connecting."""
+    import re
+    if not isinstance(scheduler, str):
+        return
+    if not re.fullmatch(r"(?:(?:tcp|tls|ucx|inproc|ws|wss)://)?[\w.\-\[\]:]+:\d{1,5}",
+                        scheduler):
+        raise InputError(f"--scheduler {scheduler!r} is not a dask scheduler address "
+                         "(expected tcp://HOST:PORT)")
+
+
+def _sha256(path):
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def _check_part(out_dir, entry):
+    """The first problem of a ledger entry's files, or '' if they match."""
+    try:
+        for table in TABLES:
+            item = entry[table]
+            path = Path(out_dir) / item["file"]
+            if not path.is_file():
+                return f"{item['file']} is missing"
+            if _sha256(path) != item["sha256"]:
+                return f"{item['file']} does not match its SHA-256 (changed or truncated)"
+    except (KeyError, TypeError):
+        return "malformed ledger entry"
+    except OSError as error:
+        return f"cannot read it: {error.strerror}"
+    return ""
+
+
+def load_manifest(out_dir):
+    """The parsed ``manifest.json`` of a survey directory.
+
+    Raises
+    ------
+    InputError
+        No manifest, not JSON, or not a survey manifest of this version.
+    """
+    manifest = Path(out_dir) / MANIFEST
+    if not Path(out_dir).is_dir():
+        raise InputError(f"{out_dir} is not a directory")
+    try:
+        document = json.loads(manifest.read_text())
+    except FileNotFoundError:
+        raise InputError(f"{out_dir} is not a survey directory (no {MANIFEST})") from None
+    except (ValueError, UnicodeDecodeError):
+        raise InputError(f"{manifest} is damaged (not valid JSON)") from None
+    except OSError as error:
+        raise InputError(f"cannot read {manifest}: {error.strerror}") from None
+    if not isinstance(document, dict) or document.get("orbits_survey") != SURVEY_FORMAT:
+        raise InputError(f"{manifest} is not a survey manifest of this orbits version "
+                         "(no ledger); rerun the survey into a new directory")
+    parameters = document.get("parameters")
+    parts = document.get("parts")
+    required = ("bodies", "body_count", "n_max", "q_max", "format", "chunk")
+    if (not isinstance(parameters, dict) or not isinstance(parts, dict)
+            or any(key not in parameters for key in required)
+            or parameters["format"] not in FORMATS
+            or not all(isinstance(parameters[k], int) and parameters[k] >= 1
+                       for k in ("body_count", "n_max", "q_max", "chunk"))):
+        raise InputError(f"{manifest} is incomplete or damaged")
+    if not all(str(key).isdigit() and isinstance(entry, dict) for key, entry in parts.items()):
+        raise InputError(f"{manifest} has a damaged ledger")
+    return document
+
+
+def check_survey(out_dir):
+    """Verify a survey directory without computing anything.
+
+    Returns
+    -------
+    dict
+        ``chunks`` (expected), ``verified`` (count), ``damaged`` and
+        ``missing`` (lists of one-line descriptions), ``complete`` (bool).
+
+    Raises
+    ------
+    InputError
+        Not a survey directory, or its manifest is damaged.
+    """
+    document = load_manifest(out_dir)
+    parameters, ledger = document["parameters"], document["parts"]
+    chunks = -(-parameters["body_count"] // parameters["chunk"])
+    damaged, verified = [], 0
+    for key in sorted(ledger, key=lambda k: int(k) if str(k).isdigit() else -1):
+        problem = _check_part(out_dir, ledger[key]) if str(key).isdigit() else "bad key"
+        if problem:
+            damaged.append(f"chunk {key}: {problem}")
+        else:
+            verified += 1
+    missing = [f"chunk {k}" for k in range(chunks) if str(k) not in ledger]
+    return {"chunks": chunks, "verified": verified, "damaged": damaged,
+            "missing": missing, "complete": not damaged and not missing}
 
 
 def _require_pyarrow():
@@ -333,10 +658,14 @@ def _write_table(frame, path, fmt, engine=None):
 
     CSV goes through pyarrow's writer when it is installed (ten times
     faster than pandas here, and like it writes the shortest decimal that
-    reads back to the same double); otherwise through pandas.
+    reads back to the same double); otherwise through pandas.  Names are
+    neutralised against spreadsheet formulas (:func:`orbits.catalog.neutralize`).
     """
     if engine is None:
         engine = "arrow" if _have_pyarrow() else "pandas"
+    if fmt == "csv" and "name" in frame.columns:
+        from .catalog import neutralize
+        frame = frame.assign(name=[neutralize(str(v)) for v in frame["name"]])
     with atomic_path(path) as temporary:
         if fmt == "parquet":
             frame.to_parquet(temporary, index=False)
@@ -353,19 +682,66 @@ def _have_pyarrow():
     return find_spec("pyarrow") is not None
 
 
-def read_table(out_dir, table):
-    """One table of a survey directory (``"bodies"`` or ``"orbits"``), all parts."""
-    directory = Path(out_dir) / table
-    parts = sorted(directory.glob("part-*.*"))
-    if not parts:
+def _read_part(path):
+    from .atomic import csv_float_options
+    from .catalog import unneutralize
+    if path.suffix == ".parquet":
+        return pd.read_parquet(path)
+    frame = pd.read_csv(path, dtype={"name": str}, keep_default_na=False,
+                        **csv_float_options())
+    if "name" in frame.columns:
+        frame["name"] = frame["name"].map(unneutralize).astype(frame["name"].dtype)
+    if "min_at_end" in frame.columns and frame["min_at_end"].dtype == object:
+        frame["min_at_end"] = frame["min_at_end"].map({"true": True, "false": False,
+                                                       "True": True, "False": False})
+    return frame
+
+
+def read_table(out_dir, table, verify=True):
+    """One table of a survey directory (``"bodies"`` or ``"orbits"``), all parts.
+
+    Only the parts in the manifest's ledger are read, in order; other files
+    in the directory are ignored.
+
+    Raises
+    ------
+    InputError
+        Not a survey directory, incomplete, or (with ``verify``) a part that
+        is missing or does not match its SHA-256.
+    """
+    document = load_manifest(out_dir)
+    status = check_survey(out_dir) if verify else None
+    if status is not None and not status["complete"]:
+        problems = status["damaged"] + [f"{m} missing" for m in status["missing"]]
+        raise InputError(f"{out_dir} is damaged or incomplete ({len(problems)} "
+                         f"problem(s), first: {problems[0]}); rerun the survey command "
+                         "to recompute, or check it with 'orbits survey --check'")
+    ledger = document["parts"]
+    frames = []
+    for key in sorted(ledger, key=int):
+        try:
+            frames.append(_read_part(Path(out_dir) / ledger[key][table]["file"]))
+        except (OSError, ValueError, KeyError) as error:
+            raise InputError(f"{out_dir}: cannot read chunk {key} of {table}: "
+                             f"{_one_line(error)}") from None
+        except Exception as error:          # noqa: BLE001 - pyarrow's own errors
+            raise InputError(f"{out_dir}: chunk {key} of {table} is damaged: "
+                             f"{_one_line(error)}") from None
+    if not frames:
         raise InputError(f"no {table} table in {out_dir}")
-    reader = pd.read_parquet if parts[0].suffix == ".parquet" else pd.read_csv
-    return pd.concat([reader(part) for part in parts], ignore_index=True)
+    return pd.concat(frames, ignore_index=True)
 
 
-def read_survey(out_dir):
-    """``(bodies, orbits)`` DataFrames of a survey directory."""
-    return read_table(out_dir, "bodies"), read_table(out_dir, "orbits")
+def read_survey(out_dir, verify=True):
+    """``(bodies, orbits)`` DataFrames of a complete, verified survey directory.
+
+    Raises
+    ------
+    InputError
+        Not a survey directory, incomplete, or damaged (a part missing,
+        changed or truncated: each is checked against the ledger's SHA-256).
+    """
+    return read_table(out_dir, "bodies", verify), read_table(out_dir, "orbits", verify)
 
 
 def survey_grid(out_dir):
@@ -374,14 +750,12 @@ def survey_grid(out_dir):
     Raises
     ------
     InputError
-        Not a survey directory, not complete, or not a grid survey.
+        Not a survey directory, damaged, not complete, or not a grid survey.
     """
-    manifest = Path(out_dir) / "manifest.json"
-    if not manifest.exists():
-        raise InputError(f"{out_dir} is not a survey directory (no manifest.json)")
-    parameters = json.loads(manifest.read_text())
-    resolution = parameters["bodies"].get("grid")
-    if resolution is None:
+    parameters = load_manifest(out_dir)["parameters"]
+    grid = parameters["bodies"]
+    resolution = grid.get("grid") if isinstance(grid, dict) else None
+    if not isinstance(resolution, int) or resolution < 2:
         raise InputError(f"{out_dir} surveys a list of bodies; Fig. 2 needs a grid survey")
     bodies = read_table(out_dir, "bodies")
     if len(bodies) != parameters["body_count"]:
@@ -391,6 +765,8 @@ def survey_grid(out_dir):
     # grid cells are centred: i = lo + (k + 1/2) (hi - lo) / N
     k1 = np.rint((bodies["I1"].to_numpy() - lo1) / (hi1 - lo1) * resolution - 0.5).astype(int)
     k2 = np.rint((bodies["I2"].to_numpy() - lo2) / (hi2 - lo2) * resolution - 0.5).astype(int)
+    if k1.min() < 0 or k2.min() < 0 or k1.max() >= resolution or k2.max() >= resolution:
+        raise InputError(f"{out_dir}: bodies outside the grid of the manifest")
     axis1 = lo1 + (np.arange(resolution) + 0.5) * (hi1 - lo1) / resolution
     axis2 = lo2 + (np.arange(resolution) + 0.5) * (hi2 - lo2) / resolution
     i1, i2 = np.meshgrid(axis1, axis2, indexing="xy")

@@ -1,5 +1,6 @@
 """Catalogs: schema, exact CSV round trip, provenance, atomic output, the CLI."""
 
+import errno
 import os
 import shlex
 import signal
@@ -67,9 +68,15 @@ def test_csv_round_trip_is_bit_exact(tmp_path):
 ])
 def test_read_catalog_checks_schema(tmp_path, mutate, message):
     path = tmp_path / "bad.csv"
-    write_csv_atomic(mutate(orbits.closed_orbits(FIG6, n_max=3)), path)
+    write_catalog(mutate(orbits.closed_orbits(FIG6, n_max=3)), path)
     with pytest.raises(InputError, match=message):
         read_catalog(path)
+    # without the header lines too (check=False reads hand-made catalogs)
+    write_csv_atomic(mutate(orbits.closed_orbits(FIG6, n_max=3)), path)
+    with pytest.raises(InputError, match="no row count and checksum"):
+        read_catalog(path)
+    with pytest.raises(InputError, match=message):
+        read_catalog(path, check=False)
 
 
 def test_read_catalog_missing_file(tmp_path):
@@ -105,11 +112,24 @@ def test_failed_write_keeps_the_old_file(tmp_path, monkeypatch):
     path.write_text("good old content\n")
     frame = orbits.closed_orbits(FIG6, n_max=3)
 
-    def explode(*args, **kwargs):
-        raise RuntimeError("disk full")
+    class Full:
+        """A file on a full disk: every write fails with ENOSPC."""
 
-    monkeypatch.setattr(pd.DataFrame, "to_csv", explode)
-    with pytest.raises(RuntimeError):
+        def __init__(self, name, *args, **kwargs):
+            self.name = name
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+        def write(self, text):
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), self.name)
+
+    module = sys.modules["orbits.catalog"]     # orbits.catalog is also the function
+    monkeypatch.setattr(module, "open", Full, raising=False)
+    with pytest.raises(InputError, match=f"cannot write {path}: No space left on device"):
         write_catalog(frame, path)
     assert path.read_text() == "good old content\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["keep.csv"]

@@ -13,8 +13,8 @@ import pytest
 import orbits
 from orbits import InputError
 from orbits.cli import main
-from orbits.survey import (BODY_COLUMNS, Survey, _write_table, compute_chunk, read_survey,
-                           survey_grid)
+from orbits.survey import (BODY_COLUMNS, Survey, _sha256, _write_table, compute_chunk,
+                           read_survey, survey_grid)
 
 
 def read_bytes(directory):
@@ -65,6 +65,11 @@ def test_report_lists_counterexamples(tmp_path):
     frame = pd.read_csv(part)
     frame.loc[3, "min_at_end"] = False         # pretend one body's minimum is inside
     _write_table(frame, part, "csv")
+    with pytest.raises(InputError, match="damaged.*part-00000.csv does not match"):
+        survey.report()                         # the ledger notices the change
+    # record the change in the ledger, as a run would have
+    survey._ledger["0"]["bodies"]["sha256"] = _sha256(part)
+    survey._write_manifest()
     report = survey.report()
     assert not report["conjecture_minimum_at_the_ends"]["held_on_every_body"]
     assert [row["body"] for row in report["conjecture_minimum_at_the_ends"]["counterexamples"]] == [3]
