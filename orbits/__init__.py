@@ -3,25 +3,74 @@
 Implements Mecholsky (2019), "Analytic formula for the Geometric Phase of
 an Asymmetric Top" (LaTeX source in ``shared/seed``), with the paper's
 errata corrected (see README, "Errata").
+
+The names below are loaded on first use (PEP 562 module ``__getattr__``):
+``import orbits`` itself imports neither numba, SciPy nor pandas, so the
+command line starts in a fraction of a second.
 """
 
+import importlib
+import sys
+import types
+
 from ._version import __version__
-from .bodies import PRESETS, Body, region_grid, region_sample
-from .checks import (closure_errors, montgomery, motion_phase,
-                     rotation_by_integration, verify)
 from .errors import (AngleError, InputError, NonPhysicalBodyError,
                      OrbitsError, SeparatrixError, SymmetricTopError)
-from .motion import Motion, MotionState, herpolhode, polhode
-from .search import (CATALOG_COLUMNS, UnresolvedOrbitsWarning, closed_orbits,
-                     minimum_phase, phase_levels)
-from .catalog import catalog, read_catalog, write_catalog
-from .phases import (PhaseLimits, critical_angle, phase_limits, phases,
-                     spin_phases, total_phase)
+
+# public name -> submodule that defines it
+_LAZY = {
+    "PRESETS": "bodies", "Body": "bodies", "region_grid": "bodies",
+    "region_sample": "bodies", "InertialDefectWarning": "bodies",
+    "closure_errors": "checks", "montgomery": "checks", "motion_phase": "checks",
+    "rotation_by_integration": "checks", "verify": "checks",
+    "Motion": "motion", "MotionState": "motion", "TumblingPeriods": "motion",
+    "herpolhode": "motion", "polhode": "motion",
+    "CATALOG_COLUMNS": "search", "UnresolvedOrbitsWarning": "search",
+    "closed_orbits": "search", "minimum_phase": "search", "phase_levels": "search",
+    "catalog": "catalog", "read_catalog": "catalog", "write_catalog": "catalog",
+    "PhaseLimits": "phases", "critical_angle": "phases", "phase_limits": "phases",
+    "phases": "phases", "spin_phases": "phases", "total_phase": "phases",
+    "spins_with_period_ratio": "tumbling", "spins_with_total_phase": "tumbling",
+    "set_num_threads": "threads", "get_num_threads": "threads",
+}
+
+
+class _Package(types.ModuleType):
+    """The package's module type: a function keeps its name against its module.
+
+    ``orbits.phases`` and ``orbits.catalog`` are functions defined in modules
+    of the same name.  Importing such a module makes the import system set
+    the package attribute to the module; this keeps the function (loaded
+    by :func:`__getattr__`) instead, as the eager imports used to.
+    """
+
+    def __setattr__(self, name, value):
+        if name in _LAZY and isinstance(value, types.ModuleType):
+            return
+        super().__setattr__(name, value)
+
+
+sys.modules[__name__].__class__ = _Package
+
+
+def __getattr__(name):
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'orbits' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value          # later look-ups skip this function
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = [
     "AngleError",
     "CATALOG_COLUMNS",
     "Body",
+    "InertialDefectWarning",
     "InputError",
     "Motion",
     "MotionState",
@@ -31,12 +80,14 @@ __all__ = [
     "PhaseLimits",
     "SeparatrixError",
     "SymmetricTopError",
+    "TumblingPeriods",
     "UnresolvedOrbitsWarning",
     "__version__",
     "catalog",
     "closed_orbits",
     "closure_errors",
     "critical_angle",
+    "get_num_threads",
     "herpolhode",
     "minimum_phase",
     "montgomery",
@@ -49,7 +100,10 @@ __all__ = [
     "region_grid",
     "region_sample",
     "rotation_by_integration",
+    "set_num_threads",
     "spin_phases",
+    "spins_with_period_ratio",
+    "spins_with_total_phase",
     "total_phase",
     "verify",
     "write_catalog",

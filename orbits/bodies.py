@@ -302,6 +302,243 @@ class Body:
     def __hash__(self):
         return hash(self._moments.tobytes())
 
+    # -- real bodies (kg m^2 in, kg m^2 out) ---------------------------
+    @classmethod
+    def box(cls, a, b, c, mass=1.0, *, name=None):
+        """Uniform solid rectangular box with edges a, b, c along x, y, z.
+
+        ``I_x = m (b^2 + c^2)/12``, ``I_y = m (a^2 + c^2)/12``,
+        ``I_z = m (a^2 + b^2)/12`` (any mechanics text, e.g. Goldstein,
+        Table of moments).  In SI units (m, kg) the moments are in kg m^2 and
+        every output of :class:`orbits.Motion` is physical.
+
+        Raises
+        ------
+        NonPhysicalBodyError
+            An edge or the mass not finite and positive.
+        SymmetricTopError
+            Two equal edges (a square cross-section is a symmetric top).
+        """
+        a, b, c = _positive_lengths("box edge", a=a, b=b, c=c)
+        mass = _positive_mass(mass)
+        a2, b2, c2 = a * a, b * b, c * c
+        return cls((mass * (b2 + c2) / 12.0, mass * (a2 + c2) / 12.0,
+                    mass * (a2 + b2) / 12.0), name=name)
+
+    @classmethod
+    def cylinder(cls, radius, length, mass=1.0, *, radius_y=None, name=None):
+        """Uniform solid cylinder along z, of circular or elliptic section.
+
+        With semi-axes ``a = radius`` (along x) and ``b = radius_y`` (along
+        y, default ``radius``) of the cross-section and length ``L``:
+        ``I_x = m (b^2/4 + L^2/12)``, ``I_y = m (a^2/4 + L^2/12)``,
+        ``I_z = m (a^2 + b^2)/4``; for ``a = b = R`` these are the textbook
+        ``m (3R^2 + L^2)/12`` (twice) and ``m R^2/2``.
+
+        Raises
+        ------
+        SymmetricTopError
+            Always for a circular section (two equal moments: a symmetric
+            top, which has no separatrix); pass ``radius_y`` for an
+            asymmetric, elliptic cylinder.
+        NonPhysicalBodyError
+            A length or the mass not finite and positive.
+        """
+        moments = cylinder_moments(radius, length, mass, radius_y=radius_y)
+        if radius_y is None or moments[0] == moments[1]:
+            raise SymmetricTopError(
+                f"a cylinder of circular section has moments "
+                f"({moments[0]:.17g}, {moments[1]:.17g}, {moments[2]:.17g}): "
+                "a symmetric top, which has no separatrix and no total-phase "
+                "formula; give radius_y (an elliptic section) for an asymmetric "
+                "body")
+        return cls(moments, name=name)
+
+    @classmethod
+    def from_point_masses(cls, masses, positions, *, name=None):
+        """Rigid set of point masses, about its centre of mass.
+
+        ``I = sum_k m_k (|r_k|^2 1 - r_k r_k^T)`` with ``r_k`` measured from
+        the centre of mass ``sum m_k x_k / sum m_k``; the principal axes
+        are kept in :attr:`frame`.  Masses in kg and positions in m give
+        kg m^2.
+
+        Parameters
+        ----------
+        masses : array_like, shape (n,)
+        positions : array_like, shape (n, 3)
+
+        Raises
+        ------
+        NonPhysicalBodyError
+            Shapes that do not match, masses not positive, non-finite
+            values, or collinear masses (a zero moment).
+        """
+        masses = np.asarray(masses, dtype=float)
+        positions = np.asarray(positions, dtype=float)
+        if masses.ndim != 1 or masses.size == 0 or positions.shape != (masses.size, 3):
+            raise NonPhysicalBodyError(
+                f"point masses need masses of shape (n,) and positions of shape "
+                f"(n, 3), got {masses.shape} and {positions.shape}")
+        if not (np.all(np.isfinite(masses)) and np.all(np.isfinite(positions))):
+            raise NonPhysicalBodyError("point masses and positions must be finite")
+        if np.any(masses <= 0.0):
+            raise NonPhysicalBodyError("point masses must all be positive")
+        relative = positions - masses @ positions / masses.sum()
+        squared = np.einsum("k,ki,ki->", masses, relative, relative)
+        tensor = squared * np.eye(3) - np.einsum("k,ki,kj->ij", masses, relative,
+                                                 relative)
+        values = np.linalg.eigvalsh(tensor)
+        if values[0] <= 1e-12 * values[2]:
+            raise NonPhysicalBodyError(
+                "the point masses lie on a line: the moment about that line is "
+                "zero, which is no rigid body of this library")
+        return cls.from_inertia_tensor(tensor, name=name)
+
+    @classmethod
+    def from_mesh(cls, path, *, density=1.0, name=None):
+        """Uniform solid bounded by a closed triangle mesh (STL, OBJ, PLY...).
+
+        Volume integrals over the mesh by trimesh (exact for the polyhedron:
+        Mirtich's divergence-theorem formulas), about the centre of mass;
+        the principal axes are kept in :attr:`frame`.  Lengths in m and
+        ``density`` in kg/m^3 give kg m^2.  Needs the optional extra
+        ``orbits[mesh]`` (trimesh).
+
+        Raises
+        ------
+        InputError
+            trimesh missing, the file unreadable, or the mesh not closed
+            (not watertight) or inside out.
+        NonPhysicalBodyError
+            ``density`` not finite and positive.
+        """
+        from .errors import InputError
+        density = _positive_mass(density, "density")
+        try:
+            import trimesh
+        except ImportError:
+            raise InputError("Body.from_mesh needs trimesh: pip install "
+                             "'orbits[mesh]'") from None
+        try:
+            mesh = trimesh.load(str(path), force="mesh")
+        except Exception as error:  # trimesh raises many kinds
+            raise InputError(f"cannot read mesh {path}: {error}") from None
+        if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+            raise InputError(f"{path} holds no triangle mesh")
+        if not mesh.is_watertight:
+            raise InputError(f"mesh {path} is not closed (watertight): it bounds "
+                             "no volume")
+        if not mesh.is_winding_consistent or mesh.volume <= 0.0:
+            raise InputError(f"mesh {path} is inside out or inconsistently "
+                             "wound (its volume is not positive)")
+        mesh.density = density
+        return cls.from_inertia_tensor(np.asarray(mesh.moment_inertia, dtype=float),
+                                       name=name)
+
+    @classmethod
+    def from_rotational_constants(cls, a, b, c, unit="cm-1", *, defect="error",
+                                  name=None):
+        """A molecule from its rotational constants A >= B >= C.
+
+        ``I_A = h / (8 pi^2 c A)`` for wavenumbers (``unit="cm-1"``, with
+        ``c`` in cm/s), ``I_A = h / (8 pi^2 A)`` for frequencies (``"MHz"``,
+        ``"GHz"``), and likewise for B and C (e.g. Gordy & Cook,
+        *Microwave Molecular Spectra*, eq. 2.8); CODATA constants from
+        :mod:`scipy.constants`.  The moments are in kg m^2.
+
+        Parameters
+        ----------
+        a, b, c : float
+            Rotational constants, any order.
+        unit : {"cm-1", "MHz", "GHz"}
+        defect : {"error", "flatten"}
+            Ground-state constants of planar molecules give
+            ``I_C > I_A + I_B`` by the inertial defect
+            ``Delta = I_C - I_A - I_B`` (vibration-rotation interaction;
+            water: 0.05 u A^2, 3 %).  ``"error"`` (default) raises;
+            ``"flatten"`` sets ``I_C = I_A + I_B`` (the flat edge of the
+            physical region) and warns with the defect.
+
+        Raises
+        ------
+        NonPhysicalBodyError
+            A constant not finite and positive, an unknown unit, or a
+            positive inertial defect with ``defect="error"``.
+
+        Warns
+        -----
+        InertialDefectWarning
+            With ``defect="flatten"`` when the defect was removed.
+        """
+        import warnings
+
+        from scipy import constants as codata
+        factors = {"cm-1": 100.0 * codata.c, "MHz": 1e6, "GHz": 1e9}
+        if unit not in factors:
+            raise NonPhysicalBodyError(
+                f"unknown unit {unit!r} for rotational constants; use one of "
+                f"{', '.join(factors)}")
+        if defect not in ("error", "flatten"):
+            raise NonPhysicalBodyError(
+                f"defect must be 'error' or 'flatten', got {defect!r}")
+        values = _positive_lengths("rotational constant", A=a, B=b, C=c)
+        hertz = np.sort(np.array(values)) * factors[unit]   # C <= B <= A
+        i_c, i_b, i_a = codata.h / (8.0 * math.pi**2 * hertz)
+        excess = i_c - (i_a + i_b)
+        if excess > _FLAT_SLACK * i_c:
+            amu_a2 = codata.physical_constants["atomic mass constant"][0] * 1e-20
+            text = (f"inertial defect Delta = I_C - I_A - I_B = "
+                    f"{excess / amu_a2:.6g} u A^2 ({excess / i_c:.3%} of I_C)")
+            if defect == "error":
+                raise NonPhysicalBodyError(
+                    f"rotational constants ({a:.10g}, {b:.10g}, {c:.10g}) {unit} violate "
+                    f"I_C <= I_A + I_B by the {text}; pass defect='flatten' "
+                    "(CLI: --defect flatten) to put the body on the flat edge "
+                    "I_C = I_A + I_B")
+            warnings.warn(f"{text} removed: I_C set to I_A + I_B (flat body)",
+                          InertialDefectWarning, stacklevel=2)
+            i_c = i_a + i_b
+        return cls((i_a, i_b, i_c), name=name)
+
+
+class InertialDefectWarning(UserWarning):
+    """Rotational constants whose inertial defect was removed (defect="flatten")."""
+
+
+def _positive_lengths(what, **values):
+    """The values, checked finite and positive (named in the error)."""
+    for label, value in values.items():
+        if not (isinstance(value, (int, float, np.floating, np.integer))
+                and math.isfinite(value) and value > 0.0):
+            raise NonPhysicalBodyError(
+                f"{what} {label} must be a finite positive number, got {value!r}")
+    return tuple(float(v) for v in values.values())
+
+
+def _positive_mass(value, label="mass"):
+    if not (isinstance(value, (int, float, np.floating, np.integer))
+            and math.isfinite(value) and value > 0.0):
+        raise NonPhysicalBodyError(
+            f"{label} must be a finite positive number, got {value!r}")
+    return float(value)
+
+
+def cylinder_moments(radius, length, mass=1.0, *, radius_y=None):
+    """Moments ``(I_x, I_y, I_z)`` of a uniform solid cylinder along z.
+
+    Cross-section semi-axes ``radius`` (x) and ``radius_y`` (y, default
+    ``radius``): ``I_x = m (b^2/4 + L^2/12)``, ``I_y = m (a^2/4 + L^2/12)``,
+    ``I_z = m (a^2 + b^2)/4``.  Not validated as a :class:`Body` (a circular
+    cylinder is a symmetric top).
+    """
+    a, length = _positive_lengths("cylinder", radius=radius, length=length)
+    b = a if radius_y is None else _positive_lengths("cylinder", radius_y=radius_y)[0]
+    mass = _positive_mass(mass)
+    axial = length * length / 12.0
+    return (mass * (b * b / 4.0 + axial), mass * (a * a / 4.0 + axial),
+            mass * (a * a + b * b) / 4.0)
+
 
 # The region of physical asymmetric bodies in the paper's I1-I2 plane
 # (|I| = 1, I1 < I2 < I3 <= I1 + I2), Fig. 2: bounded by the prolate curve

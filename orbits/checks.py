@@ -239,6 +239,29 @@ def verify(n_bodies=293, n_angles=22, *, tolerance=TOLERANCE, progress=None,
     if int(n_angles) != n_angles or n_angles < 1:
         raise InputError(f"angles must be a positive integer, got {n_angles}")
     bodies = region_sample(int(n_bodies))
+    return _verify_grid(bodies, n_angles, tolerance, progress, chunk)
+
+
+def verify_body(body, n_angles=22, *, tolerance=TOLERANCE, progress=None, chunk=2048):
+    """:func:`verify` for one body of the caller's (``orbits verify BODY``).
+
+    The three checks at ``theta_j = (j + 1/2) (pi/2) / n_angles`` (phi = 0)
+    for the body's moments normalised to ``|I| = 1`` (the phases do not
+    depend on the scale; the tolerances of the integrators are absolute).
+
+    Returns
+    -------
+    VerifyReport
+    """
+    if int(n_angles) != n_angles or n_angles < 1:
+        raise InputError(f"angles must be a positive integer, got {n_angles}")
+    unit = _as_body(body).normalized_moments
+    return _verify_grid(unit[None, :], n_angles, tolerance, progress, chunk)
+
+
+def _verify_grid(bodies, n_angles, tolerance, progress, chunk):
+    """The three checks for every body (rows of ``bodies``) times ``n_angles`` angles."""
+    n_bodies = bodies.shape[0]
     angles = (np.arange(n_angles) + 0.5) * (0.5 * np.pi / n_angles)
     moments = np.repeat(bodies, n_angles, axis=0)
     theta = np.tile(angles, int(n_bodies))

@@ -13,8 +13,6 @@ import math
 import re
 import sys
 
-import pandas as pd
-
 from ._version import __version__
 from .bodies import PRESETS, Body
 from .errors import InputError, OrbitsError
@@ -90,13 +88,107 @@ def add_body_options(parser, many=False):
                                 "and in the output) instead of stopping")
     group.add_argument("--name", help="name of the single body (catalog and figure "
                                       "labels); not with --bodies")
+    _add_real_body_options(group, exclusive)
     return group
+
+
+# Body selectors of add_body_options (argparse dest names), for commands
+# whose body is optional.
+BODY_SELECTORS = ("moments", "t_handle", "ellipsoid", "preset", "box", "cylinder",
+                  "point_masses", "mesh", "rotational_constants")
+
+
+def _add_real_body_options(group, exclusive):
+    """Real bodies in real units (kg, m, kg m^2) and their modifiers."""
+    exclusive.add_argument("--box", nargs=3, type=_finite, metavar=("A", "B", "C"),
+                           help="uniform solid box with edges A, B, C along x, y, z "
+                                "(with --mass; Body.box)")
+    exclusive.add_argument("--cylinder", nargs="+", type=_finite,
+                           metavar="R L [RY]",
+                           help="uniform solid cylinder along z: radius R (along x), "
+                                "length L, optional second semi-axis RY of an "
+                                "elliptic section (a circular one is a symmetric "
+                                "top); with --mass (Body.cylinder)")
+    exclusive.add_argument("--point-masses", metavar="FILE.csv",
+                           help="rigid point masses: a CSV with columns mass, x, y, "
+                                "z, about the centre of mass (Body.from_point_masses)")
+    exclusive.add_argument("--mesh", metavar="FILE",
+                           help="uniform solid bounded by a closed STL/OBJ mesh, "
+                                "with --density (Body.from_mesh; needs orbits[mesh])")
+    exclusive.add_argument("--rotational-constants", nargs=3, type=_finite,
+                           metavar=("A", "B", "C"),
+                           help="a molecule from its rotational constants, in --unit "
+                                "(Body.from_rotational_constants)")
+    group.add_argument("--mass", type=_finite, default=1.0,
+                       help="mass for --box and --cylinder (default 1)")
+    group.add_argument("--density", type=_finite, default=1.0,
+                       help="density for --mesh (default 1)")
+    group.add_argument("--unit", choices=["cm-1", "MHz", "GHz"], default="cm-1",
+                       help="unit of --rotational-constants (default cm-1)")
+    group.add_argument("--defect", choices=["error", "flatten"], default="error",
+                       help="a positive inertial defect of --rotational-constants: "
+                            "refuse (default) or put the body on the flat edge")
+
+
+def _point_masses_from_csv(path):
+    import numpy as np
+    import pandas as pd
+    try:
+        table = pd.read_csv(path, comment="#")
+    except (OSError, ValueError) as error:
+        raise InputError(f"cannot read point masses from {path}: {error}") from None
+    missing = {"mass", "x", "y", "z"} - set(table.columns)
+    if missing:
+        raise InputError(f"{path}: point-mass CSV needs columns mass, x, y, z; "
+                         f"missing {', '.join(sorted(missing))}")
+    try:
+        values = table[["mass", "x", "y", "z"]].to_numpy(dtype=float)
+    except ValueError:
+        raise InputError(f"{path}: mass, x, y, z must be numbers") from None
+    return values[:, 0], np.ascontiguousarray(values[:, 1:])
+
+
+def _real_body_from_args(args):
+    """The body of a real-body option, or None if none was given."""
+    name = getattr(args, "name", None)
+    if getattr(args, "box", None) is not None:
+        return Body.box(*args.box, args.mass,
+                        name=name or "box({:g}, {:g}, {:g})".format(*args.box))
+    if getattr(args, "cylinder", None) is not None:
+        if len(args.cylinder) not in (2, 3):
+            raise InputError("--cylinder takes R L or R L RY")
+        radius, length, *rest = args.cylinder
+        return Body.cylinder(radius, length, args.mass,
+                             radius_y=rest[0] if rest else None,
+                             name=name or "cylinder(" + ", ".join(
+                                 f"{v:g}" for v in args.cylinder) + ")")
+    if getattr(args, "point_masses", None) is not None:
+        masses, positions = _point_masses_from_csv(args.point_masses)
+        return Body.from_point_masses(masses, positions, name=name or args.point_masses)
+    if getattr(args, "mesh", None) is not None:
+        return Body.from_mesh(args.mesh, density=args.density, name=name or args.mesh)
+    if getattr(args, "rotational_constants", None) is not None:
+        import warnings
+
+        from .bodies import InertialDefectWarning
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", InertialDefectWarning)
+            body = Body.from_rotational_constants(
+                *args.rotational_constants, unit=args.unit, defect=args.defect,
+                name=name or "rotational-constants({:g}, {:g}, {:g})".format(
+                    *args.rotational_constants))
+        for warning in caught:
+            print(f"orbits: warning: {warning.message}", file=sys.stderr)
+        return body
+    return None
 
 
 def body_from_args(args):
     """The :class:`Body` selected by :func:`add_body_options` options."""
     try:
-        body = _body_from_args(args)
+        body = _real_body_from_args(args)
+        if body is None:
+            body = _named_body_from_args(args)
     except (OverflowError, FloatingPointError, ZeroDivisionError):
         raise InputError("the body's moments overflow a double: use smaller "
                          "lengths or moments") from None
@@ -108,7 +200,7 @@ def body_from_args(args):
     return body
 
 
-def _body_from_args(args):
+def _named_body_from_args(args):
     if args.moments is not None:
         return Body(args.moments, name="moments({:g}, {:g}, {:g})".format(*args.moments))
     if args.t_handle is not None:
@@ -122,14 +214,88 @@ def _body_from_args(args):
 
 # ---------------------------------------------------------------- phase
 def _cmd_phase(args):
-    from .phases import phases
     body = body_from_args(args)
-    table = phases(body, args.theta, args.phi, dtheta=args.dtheta)
-    if args.csv:
+    if args.omega is not None:
+        return _print_table(_omega_table(body, args), args.csv)
+    if args.total_phase is not None or args.period_ratio is not None:
+        from . import tumbling
+        if args.total_phase is not None:
+            table = tumbling.spins_with_total_phase(body, _angle(args.total_phase, args))
+        else:
+            table = tumbling.spins_with_period_ratio(body, args.period_ratio)
+        return _print_table(table, args.csv)
+    from .phases import phases
+    theta = None if args.theta is None else [_angle(v, args) for v in args.theta]
+    dtheta = None if args.dtheta is None else [_angle(v, args) for v in args.dtheta]
+    table = phases(body, theta, _angle(args.phi, args), dtheta=dtheta)
+    return _print_table(table, args.csv)
+
+
+# angular-velocity units -> rad/s
+OMEGA_UNITS = {"rad/s": 1.0, "deg/s": math.pi / 180.0, "rpm": 2.0 * math.pi / 60.0,
+               "Hz": 2.0 * math.pi}
+
+
+def _angle(value, args):
+    """An angle of the command line in radians (``--degrees`` converts)."""
+    return math.radians(value) if getattr(args, "degrees", False) else value
+
+
+def _omega_table(body, args):
+    """One row for a spin given as a vector: physical outputs and D = M^2/(2E).
+
+    omega is given along the caller's axes (the order of --moments, x y z of
+    --box, ...) in --units, turned to the principal frame with Body.frame.
+    With moments in kg m^2 the energy is in J, |L| in J s and the periods
+    in s.
+    """
+    import numpy as np
+    import pandas as pd
+
+    from .motion import Motion
+    omega = np.array(args.omega) * OMEGA_UNITS[args.units]
+    principal = body.frame @ omega
+    motion = Motion.from_omega(body, principal)
+    periods = motion.tumbling_periods()
+    total = motion.total_phase()
+    dynamic = 2.0 * motion.energy * motion.period / motion.momentum
+    i1, i2, i3 = body.moments
+    return pd.DataFrame({
+        "I1": [i1], "I2": [i2], "I3": [i3],
+        "w1": [principal[0]], "w2": [principal[1]], "w3": [principal[2]],
+        "branch": [motion.branch],
+        "D": [motion.momentum ** 2 / (2.0 * motion.energy)],
+        "energy": [motion.energy], "momentum": [motion.momentum],
+        "m": [motion.m], "period": [motion.period],
+        "precession_period": [periods.precession],
+        "rotation_period": [periods.rotation],
+        "period_ratio": [periods.ratio],
+        "dynamic_phase": [dynamic], "total_phase": [total],
+        "geometric_phase": [dynamic - total],
+    })
+
+
+def format_value(value):
+    """A table cell: floats at full precision, shortest round-trip form.
+
+    ``repr`` of a float is the shortest string that reads back to the same
+    double, in scientific notation for small and large magnitudes, so
+    ``1e-300`` prints as ``1e-300`` (not ``0.0``).
+    """
+    if isinstance(value, float) or type(value).__name__ in ("float64", "float32"):
+        return repr(float(value))
+    return str(value)
+
+
+def _print_table(table, csv):
+    if csv:
         table.to_csv(sys.stdout, index=False, float_format="%.17g")
-    else:
-        with pd.option_context("display.precision", 15):
-            print(table.T.to_string(header=False))
+        return 0
+    rows = table.T
+    width = max(len(str(name)) for name in rows.index)
+    for name, values in rows.iterrows():
+        cells = "  ".join(f"{format_value(v):>24}" for v in values)
+        print(f"{str(name):<{width}}  {cells}")
     return 0
 
 
@@ -147,8 +313,23 @@ def _add_phase(subparsers):
     angle.add_argument("--dtheta", nargs="+", type=_finite,
                        help="offset(s) theta - theta_crit from the separatrix "
                             "(well conditioned down to 1e-300)")
+    angle.add_argument("--omega", nargs=3, type=_finite, metavar=("W1", "W2", "W3"),
+                       help="the initial angular velocity as a vector along the "
+                            "body's own axes (the order of --moments, x y z of "
+                            "--box ...), in --units; prints physical E, |L|, "
+                            "periods and D = M^2/(2E)")
+    angle.add_argument("--total-phase", type=_finite, metavar="X",
+                       help="find every spin (phi = 0, both branches) whose total "
+                            "phase is X (radians, or degrees with --degrees)")
+    angle.add_argument("--period-ratio", type=_finite, metavar="R",
+                       help="find every spin whose tumbling period ratio "
+                            "P_psi/P_phi is R (Pravec et al. 2005 convention)")
     parser.add_argument("--phi", type=_finite, default=0.0,
                         help="azimuth of omega0 from the I1 axis (default 0)")
+    parser.add_argument("--units", choices=list(OMEGA_UNITS), default="rad/s",
+                        help="unit of --omega (default rad/s)")
+    parser.add_argument("--degrees", action="store_true",
+                        help="--theta, --dtheta, --phi and --total-phase in degrees")
     parser.add_argument("--csv", action="store_true",
                         help="print CSV rows instead of a table")
     parser.set_defaults(run=_cmd_phase)
@@ -285,8 +466,7 @@ def _cmd_figures(args):
 
     from . import figures
     selectors = [args.paper, bool(args.survey), any(
-        getattr(args, name) is not None for name in ("moments", "t_handle",
-                                                     "ellipsoid", "preset"))]
+        getattr(args, name) is not None for name in BODY_SELECTORS)]
     if sum(selectors) != 1:
         raise InputError("orbits figures: give exactly one of a body (--moments, "
                          "--t-handle, --ellipsoid, --preset), --paper or --survey DIR")
@@ -497,31 +677,41 @@ _VERIFY_BYTES_PER_CONDITION = 2000
 def _cmd_verify(args):
     import json
 
-    from .checks import verify
+    from .checks import verify, verify_body
     if not args.tolerance > 0:
         raise InputError(f"--tolerance must be a positive number of radians, "
                          f"got {args.tolerance:g}")
     if args.table:
         from .atomic import ensure_writable
         ensure_writable(args.table)
-    total = args.bodies * args.angles
+    one = any(getattr(args, name, None) is not None for name in BODY_SELECTORS)
+    body = body_from_args(args) if one else None
+    n_bodies = 1 if one else args.bodies
+    total = n_bodies * args.angles
     from .catalog import _bytes, memory_budget
     memory = total * _VERIFY_BYTES_PER_CONDITION
     if memory > memory_budget():
-        raise InputError(f"verify with {args.bodies} bodies x {args.angles} angles = "
+        raise InputError(f"verify with {n_bodies} bodies x {args.angles} angles = "
                          f"{total} initial conditions would need about {_bytes(memory)} "
                          f"of memory, more than the {_bytes(memory_budget())} allowed "
                          "(half of this machine's)")
     announce("verify", total * _VERIFY_SECONDS_PER_CONDITION, memory)
     with progress_bar(total, "verify", None if not args.no_progress else False) as bar:
-        report = verify(args.bodies, args.angles, tolerance=args.tolerance,
-                        progress=bar.update)
+        if one:
+            report = verify_body(body, args.angles, tolerance=args.tolerance,
+                                 progress=bar.update)
+        else:
+            report = verify(args.bodies, args.angles, tolerance=args.tolerance,
+                            progress=bar.update)
     summary = report.summary
+    if one:
+        summary["body"] = body.name or repr(body)
     if args.json:
         print(json.dumps(summary, indent=2))
     else:
+        what = (f"body {summary['body']}" if one else f"{args.bodies} bodies")
         print(f"orbits verify: {summary['initial_conditions']} initial conditions "
-              f"({args.bodies} bodies x {args.angles} angles), tolerance "
+              f"({what} x {args.angles} angles), tolerance "
               f"{args.tolerance:g} rad")
         print(f"{'check':<16} {'max |discrepancy| (rad)':>24}  result")
         for name, label in (("montgomery", "(b) Montgomery"),
@@ -553,6 +743,18 @@ def _add_verify(subparsers):
                     "The defaults give the paper's 6446 initial conditions.")
     parser.add_argument("--bodies", type=_positive_int, default=293,
                         help="number of bodies (default 293)")
+    group = parser.add_argument_group(
+        "your own body (optional)",
+        "Instead of the region sample, check one body given by any of the body "
+        "options of 'orbits phase' (e.g. --moments, --box ... --mass M, --mesh F)")
+    # the body options without --bodies (which is the count here)
+    sub = _Parser(add_help=False)
+    add_body_options(sub)
+    for action in sub._actions:
+        if action.dest in BODY_SELECTORS or action.dest in ("mass", "density", "unit",
+                                                             "defect", "name"):
+            action.required = False
+            group._add_action(action)
     parser.add_argument("--angles", type=_positive_int, default=22,
                         help="number of angles theta_j = (j + 1/2) pi / (2 K) "
                              "(default 22)")
@@ -581,7 +783,6 @@ def _cmd_bench(args):
 
 
 def _add_bench(subparsers):
-    from . import bench
     parser = subparsers.add_parser(
         "bench", help="time our kernels against SciPy in the same process",
         description="Times each task with our compiled kernels and with the "
@@ -589,7 +790,8 @@ def _add_bench(subparsers):
                     "warm-up, and prints the ratio.")
     parser.add_argument("--json", action="store_true", help="print JSON")
     parser.add_argument("--only", nargs="+", metavar="NAME",
-                        help=f"run only these ({', '.join(bench.BENCHMARKS)})")
+                        help="run only these benchmarks (names as in the table; a "
+                             "wrong name lists them)")
     parser.add_argument("--quick", action="store_true",
                         help="smaller problem sizes (a smoke test, not for the README)")
     parser.set_defaults(run=_cmd_bench)
@@ -602,6 +804,9 @@ def build_parser():
                     "force-free asymmetric top (Mecholsky 2019).")
     parser.add_argument("--version", action="version",
                         version=f"orbits {__version__}")
+    parser.add_argument("--threads", type=_positive_int, metavar="N",
+                        help="threads for large inputs (default: all of numba's; "
+                             "small inputs always run on one)")
     subparsers = parser.add_subparsers(dest="command", required=True,
                                        parser_class=_Parser)
     _add_phase(subparsers)
@@ -632,6 +837,31 @@ def _install_signal_handlers():
     return previous
 
 
+def announce_compilation(stream=None):
+    """On a terminal, say once that the first run compiles the kernels.
+
+    numba caches compiled kernels (``cache=True``) next to their source, in
+    ``orbits/core/__pycache__`` (or under ``NUMBA_CACHE_DIR``); when no index
+    file is there yet the first call compiles them, which takes seconds.
+    Returns True when the line was printed.
+    """
+    import os
+    from pathlib import Path
+    stream = sys.stderr if stream is None else stream
+    if not stream.isatty():
+        return False
+    core = Path(__file__).resolve().parent / "core"
+    places = [core / "__pycache__"]
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        places.append(Path(os.environ["NUMBA_CACHE_DIR"]))
+    if any(next(place.rglob("*.nbi"), None) is not None
+           for place in places if place.is_dir()):
+        return False
+    print("orbits: first run: compiling the numerical kernels (cached for "
+          "later runs)...", file=stream, flush=True)
+    return True
+
+
 def main(argv=None):
     """Entry point of the ``orbits`` console script; returns the exit code."""
     import signal
@@ -641,6 +871,10 @@ def main(argv=None):
     try:
         args = build_parser().parse_args(argv)
         args.argv = argv
+        if args.threads is not None:
+            from .threads import set_num_threads
+            set_num_threads(args.threads)
+        announce_compilation()
         return args.run(args)
     except KeyboardInterrupt:
         print("orbits: interrupted; no partial output was written", file=sys.stderr)

@@ -26,6 +26,7 @@ from .bodies import Body, as_moments
 from .core import motion as _kernels
 from .core import phase as _phase
 from .errors import AngleError, InputError, SeparatrixError
+from .threads import size_aware
 
 MotionState = namedtuple("MotionState",
                          ["t", "omega", "euler", "rotation", "omega_space"])
@@ -35,6 +36,15 @@ t : (n,) times; omega : (n, 3) body-frame angular velocity;
 euler : (n, 3) Euler angles (phi, theta, psi), radians, phi and psi
 unwrapped; rotation : (n, 3, 3) body -> space; omega_space : (n, 3) the
 angular velocity in the space frame (z along M).
+"""
+
+TumblingPeriods = namedtuple("TumblingPeriods", ["precession", "rotation", "ratio",
+                                                 "axis", "about_momentum"])
+TumblingPeriods.__doc__ = """Periods of a tumbling body; see :meth:`Motion.tumbling_periods`.
+
+precession : P_phi; rotation : P_psi (= T); ratio : P_psi / P_phi;
+axis : "short" (SAM) or "long" (LAM), the axis whose Euler angles these are;
+about_momentum : 2 pi T / Delta alpha, the mean rotation period about L.
 """
 
 
@@ -146,15 +156,17 @@ class Motion:
 
     # ------------------------------------------------------------------
     def _times(self, t):
-        times = np.ascontiguousarray(t, dtype=float)
+        # asarray, not ascontiguousarray: a scalar time must keep shape ()
+        times = np.asarray(t, dtype=float)
         if not np.all(np.isfinite(times)):
             raise InputError("times must be finite")
         return times
 
+    @size_aware
     def state(self, t):
         """Everything at the times ``t``: a :class:`MotionState`."""
         times = self._times(t)
-        flat = times.reshape(-1)
+        flat = np.ascontiguousarray(times.reshape(-1))
         n = flat.shape[0]
         omega = np.empty((n, 3))
         euler = np.empty((n, 3))
@@ -169,15 +181,15 @@ class Motion:
                            omega_space.reshape(shape + (3,)))
 
     def omega(self, t):
-        """Body-frame angular velocity, shape ``t.shape + (3,)``."""
+        """Body-frame angular velocity, shape ``t.shape + (3,)``: (3,) for a scalar t."""
         return self.state(t).omega
 
     def angular_momentum(self, t):
-        """Body-frame angular momentum ``I omega`` (the polhode)."""
+        """Body-frame angular momentum ``I omega`` (the polhode), shape ``t.shape + (3,)``."""
         return self.state(t).omega * self.body.moments
 
     def euler_angles(self, t):
-        """Euler angles ``(phi, theta, psi)``, z-x'-z'', radians."""
+        """Euler angles ``(phi, theta, psi)``, z-x'-z'', radians, shape ``t.shape + (3,)``."""
         return self.state(t).euler
 
     def rotation(self, t):
@@ -185,7 +197,11 @@ class Motion:
         return self.state(t).rotation
 
     def quaternion(self, t):
-        """Orientation as unit quaternions ``(w, x, y, z)``, continuous in t."""
+        """Orientation as unit quaternions ``(w, x, y, z)`` (scalar first), continuous in t.
+
+        Shape ``t.shape + (4,)``.  SciPy's order is scalar last: use
+        :meth:`rotation_object` to hand the orientation to SciPy.
+        """
         euler = self.state(t).euler
         phi, theta, psi = euler[..., 0], euler[..., 1], euler[..., 2]
         half = 0.5 * theta
@@ -195,11 +211,13 @@ class Motion:
                          np.sin(half) * np.sin(minus), np.cos(half) * np.sin(plus)],
                         axis=-1)
 
+    @size_aware
     def omega_space(self, t):
-        """Space-frame angular velocity (z along M): the herpolhode."""
+        """Space-frame angular velocity (z along M): the herpolhode, shape ``t.shape + (3,)``."""
         times = self._times(t)
         out = np.empty((times.size, 3))
-        _kernels.omega_space_on_grid(self._orbit, times.reshape(-1), out)
+        _kernels.omega_space_on_grid(self._orbit, np.ascontiguousarray(times.reshape(-1)),
+                                     out)
         return out.reshape(times.shape + (3,))
 
     def total_phase(self):
@@ -210,6 +228,76 @@ class Motion:
         :func:`orbits.total_phase`.
         """
         return float(_kernels.phase_after_period(self._orbit))
+
+    # -- tumbling periods, as observers of tumbling asteroids give them --
+    def tumbling_periods(self):
+        """Precession and rotation periods of the non-principal-axis literature.
+
+        Convention of Kaasalainen (2001, A&A 376, 302) and Pravec et al.
+        (2005, Icarus 173, 108): Euler angles ``(phi, theta, psi)`` with
+        the space z axis along L and the body z axis the short axis I3 on
+        SAM, the long axis I1 on LAM.  Then
+
+        * ``P_psi = T`` (eqn:TK): psi, the rotation about that axis, goes
+          once round per period of omega in the body (and the nutation
+          angle theta twice: ``P_theta = T/2``);
+        * ``P_phi = 2 pi T / Delta phi``, the mean precession period of that
+          axis about L, where ``Delta phi`` is its azimuth gained per period.
+          By eqn:fullphi and eqn:alphaproto, ``Delta phi = Delta alpha + 2 pi``
+          on SAM (phi of the I3 axis) and ``Delta phi = Delta alpha - 2 pi`` on
+          LAM (the I1 axis: tested against a quadrature of
+          ``dphi/dt = L (I2 w2^2 + I3 w3^2)/(I2^2 w2^2 + I3^2 w3^2)``).
+
+        Hence ``P_psi / P_phi = Delta alpha / 2 pi + 1`` (SAM) or ``- 1``
+        (LAM): the orbit closes (``Delta alpha = 2 pi p/q``) exactly when
+        the period ratio is rational, ``(p + q)/q`` or ``(p - q)/q``.  The
+        body's mean rotation about L has period ``2 pi T / Delta alpha``,
+        ``1/P_phi - 1/P_psi`` on SAM and ``1/P_phi + 1/P_psi`` on LAM
+        (Pravec et al. 2014's strongest lightcurve period P_1 for Apophis).
+
+        Returns
+        -------
+        TumblingPeriods
+            ``precession`` (P_phi), ``rotation`` (P_psi), ``ratio``
+            (P_psi/P_phi), ``axis`` (``"short"`` on SAM, ``"long"`` on LAM)
+            and ``about_momentum`` (``2 pi T / Delta alpha``), all in the
+            time unit of omega0.
+        """
+        total = self.total_phase()
+        turns = total / (2.0 * np.pi)
+        sam = self.branch == "SAM"
+        ratio = turns + 1.0 if sam else turns - 1.0
+        period = float(self.period)
+        return TumblingPeriods(precession=period / ratio, rotation=period,
+                               ratio=ratio, axis="short" if sam else "long",
+                               about_momentum=period / turns)
+
+    @property
+    def precession_period(self):
+        """P_phi of :meth:`tumbling_periods`."""
+        return self.tumbling_periods().precession
+
+    @property
+    def rotation_period(self):
+        """P_psi of :meth:`tumbling_periods` (equal to :attr:`period`)."""
+        return self.period
+
+    # -- orientation for SciPy ------------------------------------------
+    def rotation_object(self, t):
+        """The orientation as a :class:`scipy.spatial.transform.Rotation`.
+
+        Body -> space (z along L), as :meth:`rotation`.  SciPy's
+        quaternions are scalar-last ``(x, y, z, w)``; :meth:`quaternion`
+        here is scalar-first ``(w, x, y, z)``.  A scalar ``t`` gives a
+        single rotation, an array one rotation per time (flattened).
+        """
+        from scipy.spatial.transform import Rotation
+        matrices = self.rotation(t)
+        if matrices.ndim == 2:
+            return Rotation.from_matrix(matrices)
+        return Rotation.from_matrix(matrices.reshape(-1, 3, 3))
+
+    as_scipy = rotation_object
 
     def __repr__(self):
         return (f"Motion({self.body!r}, omega0={self.omega0.tolist()}, "

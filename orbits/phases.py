@@ -31,6 +31,7 @@ import pandas as pd
 from .bodies import as_moments
 from .core import phase as _kernels
 from .errors import AngleError, SeparatrixError
+from .threads import size_aware
 
 HALF_PI = 0.5 * np.pi
 
@@ -94,6 +95,7 @@ def _check_status(status, moments, angle, phi, shape, from_offset):
         "are infinite; pass a nonzero dtheta = theta - theta_crit instead")
 
 
+@size_aware
 def critical_angle(body_or_moments, phi=0.0):
     """Polar angle ``theta_c`` of omega0 on the separatrix ``M^2 = 2 E I2``.
 
@@ -128,6 +130,7 @@ def critical_angle(body_or_moments, phi=0.0):
     return float(out) if out.ndim == 0 else out
 
 
+@size_aware
 def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0):
     """Total phase ``Delta alpha`` (eqn:GeometricPhase), radians.
 
@@ -181,6 +184,7 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0):
     return out
 
 
+@size_aware
 def phases(body_or_moments, theta=None, phi=0.0, *, dtheta=None):
     """Closed-form phases and their ingredients, one row per initial spin.
 
@@ -274,6 +278,7 @@ def phase_limits(body_or_moments):
     return PhaseLimits(at_zero, at_half_pi)
 
 
+@size_aware
 def spin_phases(body_or_moments, omega):
     """Closed-form phases for arbitrary initial angular velocities.
 

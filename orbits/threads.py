@@ -1,0 +1,88 @@
+"""Thread control: serial below a size threshold, ``set_num_threads`` above.
+
+numba's parallel kernels split their loop over a pool of threads and wait
+for the slowest.  On a busy machine (another CPU-bound process on one of
+the cores) a small call then waits for a descheduled thread for a whole
+scheduler time slice: measured here, a 10-point call took 8 ms instead of
+6 us.  Calls on fewer than :data:`SERIAL_BELOW` elements therefore run on
+one thread; larger ones use :func:`set_num_threads` threads (default: all
+of numba's, i.e. ``NUMBA_NUM_THREADS``).
+"""
+
+import functools
+from contextlib import contextmanager
+
+import numpy as np
+
+# Below this many elements a call runs on one thread.  Chosen from the
+# measurement in the README ("Threads"): the herpolhode costs ~0.2 us and
+# the total phase ~0.05 us per element on one core, so 20000 elements are
+# 1-4 ms serial, the order of one time slice that a parallel call can lose
+# waiting for a busy core; above it two threads gain more than they risk.
+SERIAL_BELOW = 20_000
+
+_requested = None
+
+
+def _numba():
+    import numba
+    return numba
+
+
+def set_num_threads(count):
+    """Use ``count`` threads for large inputs (1 <= count <= NUMBA_NUM_THREADS).
+
+    Raises
+    ------
+    InputError
+        ``count`` not an integer in that range.
+    """
+    from .errors import InputError
+    numba = _numba()
+    top = numba.config.NUMBA_NUM_THREADS
+    if isinstance(count, bool) or not float(count).is_integer() or not 1 <= count <= top:
+        raise InputError(f"threads must be an integer from 1 to {top} "
+                         f"(NUMBA_NUM_THREADS), got {count!r}")
+    global _requested
+    _requested = int(count)
+    numba.set_num_threads(_requested)
+
+
+def get_num_threads():
+    """Threads used for large inputs."""
+    return _requested if _requested is not None else _numba().config.NUMBA_NUM_THREADS
+
+
+@contextmanager
+def threads_for(size):
+    """Run the enclosed kernels serially when ``size < SERIAL_BELOW``."""
+    numba = _numba()
+    wanted = 1 if size < SERIAL_BELOW else get_num_threads()
+    before = numba.get_num_threads()
+    if wanted == before:
+        yield
+        return
+    numba.set_num_threads(wanted)
+    try:
+        yield
+    finally:
+        numba.set_num_threads(before)
+
+
+def _size(value):
+    if isinstance(value, np.ndarray):
+        return value.size
+    if isinstance(value, (list, tuple)):
+        return len(value)
+    return 1
+
+
+def size_aware(function):
+    """Decorator: run ``function`` serially when its largest array argument is small."""
+    @functools.wraps(function)
+    def wrapper(*args, **kwargs):
+        size = max([_size(a) for a in args] + [_size(v) for v in kwargs.values()]
+                   + [1])
+        with threads_for(size):
+            return function(*args, **kwargs)
+    return wrapper

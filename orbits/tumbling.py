@@ -1,0 +1,140 @@
+"""Spins with a given total phase, or a given observed period ratio.
+
+:func:`spins_with_total_phase` finds every initial spin (``phi = 0``,
+``theta`` in (0, pi/2), both branches) whose total phase ``Delta alpha``
+(eqn:GeometricPhase) equals any given value, not only ``2 pi p/q``: it runs
+the closed-orbit search kernel (:mod:`orbits.core.search`) with that one
+level.  :func:`spins_with_period_ratio` turns an observed ratio
+``P_psi / P_phi`` of a tumbling body (see :meth:`orbits.Motion.tumbling_periods`)
+into the total phase on each branch and solves for the spin.
+"""
+
+import math
+import warnings
+
+import numpy as np
+
+from .bodies import as_moments
+from .errors import InputError
+
+TWO_PI = 2.0 * math.pi
+
+
+def _positive_finite(name, value):
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{name} must be a number, got {value!r}") from None
+    if not (math.isfinite(value) and value > 0.0):
+        raise InputError(f"{name} must be finite and positive, got {value!r}")
+    return value
+
+
+def _solve(moments, targets):
+    """Roots for per-branch targets ``{"SAM": X or None, "LAM": X or None}``."""
+    from .search import UnresolvedOrbitsWarning, find_roots
+    from .core import search as _kernels
+    found = []
+    unreached = 0
+    for branch, sign in (("SAM", 1), ("LAM", -1)):
+        target = targets.get(branch)
+        if target is None:
+            continue
+        branches, _, offsets, info = find_roots(moments, np.array([target]))
+        found.append(offsets[branches == sign])
+        slot = _kernels.INFO_UNREACHED_SAM if sign == 1 else _kernels.INFO_UNREACHED_LAM
+        unreached += int(info[slot])
+    if unreached:
+        warnings.warn(
+            f"{unreached} spin(s) with this total phase lie closer than "
+            "|dtheta| = 2.2e-308 to the separatrix and cannot be stored in "
+            "double precision; they are left out", UnresolvedOrbitsWarning,
+            stacklevel=3)
+    offsets = np.sort(np.concatenate(found)) if found else np.empty(0)
+    return offsets, info
+
+
+def _table(moments, offsets, targets):
+    from .phases import phases
+    table = phases(moments, dtheta=offsets)
+    goal = np.where(table["branch"].astype(str) == "SAM", targets.get("SAM") or np.nan,
+                    targets.get("LAM") or np.nan)
+    table["target"] = goal
+    table["residual"] = table["total_phase"].to_numpy() - goal
+    return table
+
+
+def _no_spin(moments, what):
+    from .search import minimum_phase
+    low, where = minimum_phase(moments)
+    return InputError(
+        f"no spin of this body has {what}: the total phase is at least "
+        f"{low:.17g} rad ({low / TWO_PI:.12g} turns, at dtheta = {where:.6g}) "
+        "and grows without bound towards the separatrix")
+
+
+def spins_with_total_phase(body_or_moments, total_phase):
+    """Every spin (``phi = 0``, both branches) whose total phase is ``total_phase``.
+
+    Parameters
+    ----------
+    body_or_moments : Body or array_like, shape (3,)
+    total_phase : float
+        ``Delta alpha`` in radians, any positive value (``2 pi p/q`` gives
+        the closed orbits of :func:`orbits.closed_orbits`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The rows of :func:`orbits.phases` at every root, sorted by
+        ``dtheta``, plus ``target`` and ``residual = total_phase - target``
+        (the search guarantees ``|residual| <= 1e-10 target``).
+
+    Raises
+    ------
+    InputError
+        ``total_phase`` not finite and positive, or below the smallest
+        total phase of the body (no spin has it: the message gives the
+        minimum).
+
+    Warns
+    -----
+    UnresolvedOrbitsWarning
+        Roots closer to the separatrix than the smallest normal double.
+    """
+    moments = as_moments(body_or_moments)
+    if moments.shape != (3,):
+        raise InputError("spins_with_total_phase takes one body")
+    target = _positive_finite("total_phase", total_phase)
+    offsets, _ = _solve(moments, {"SAM": target, "LAM": target})
+    if offsets.size == 0:
+        raise _no_spin(moments, f"total phase {target:.17g} rad")
+    return _table(moments, offsets, {"SAM": target, "LAM": target})
+
+
+def spins_with_period_ratio(body_or_moments, ratio):
+    """Every spin whose tumbling period ratio ``P_psi / P_phi`` is ``ratio``.
+
+    With :meth:`orbits.Motion.tumbling_periods`, the ratio is
+    ``Delta alpha / 2 pi + 1`` on SAM and ``Delta alpha / 2 pi - 1`` on LAM,
+    so the spin is found as :func:`spins_with_total_phase` of
+    ``2 pi (ratio - 1)`` on SAM and ``2 pi (ratio + 1)`` on LAM.  The time
+    scale (``|omega0|``) then follows from either period:
+    ``|omega0| = T(|omega0| = 1) / P_psi``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        As :func:`spins_with_total_phase`, with ``target`` the total phase
+        solved for on each row's branch.
+    """
+    moments = as_moments(body_or_moments)
+    if moments.shape != (3,):
+        raise InputError("spins_with_period_ratio takes one body")
+    ratio = _positive_finite("ratio", ratio)
+    targets = {"SAM": TWO_PI * (ratio - 1.0) if ratio > 1.0 else None,
+               "LAM": TWO_PI * (ratio + 1.0)}
+    offsets, _ = _solve(moments, targets)
+    if offsets.size == 0:
+        raise _no_spin(moments, f"period ratio P_psi/P_phi = {ratio:.17g}")
+    return _table(moments, offsets, targets)

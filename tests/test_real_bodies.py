@@ -1,0 +1,246 @@
+"""Real bodies: box, cylinder, point masses, meshes, rotational constants.
+
+Each constructor is checked against a textbook formula or an independent
+computation (numerical volume integration, a second unit system, a mesh).
+"""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+from scipy import constants as codata
+from scipy import integrate
+
+from orbits import Body
+from orbits.bodies import InertialDefectWarning, cylinder_moments
+from orbits.errors import InputError, NonPhysicalBodyError, SymmetricTopError
+
+
+# ---------------------------------------------------------------- box
+def test_box_matches_the_textbook_formula():
+    # a phone: 146 x 71 x 8 mm, 170 g; I = m (b^2 + c^2)/12 and cyclically
+    body = Body.box(0.146, 0.071, 0.008, 0.170)
+    m = 0.170
+    expected = sorted([m * (0.071**2 + 0.008**2) / 12, m * (0.146**2 + 0.008**2) / 12,
+                       m * (0.146**2 + 0.071**2) / 12])
+    np.testing.assert_allclose(body.moments, expected, rtol=1e-15)
+
+
+def test_box_against_numerical_volume_integral():
+    a, b, c, m = 3.0, 2.0, 0.5, 7.0
+    density = m / (a * b * c)
+    # I_z = rho * int (x^2 + y^2) dV: an independent tplquad
+    i_z, _ = integrate.tplquad(lambda z, y, x: density * (x * x + y * y),
+                               -a / 2, a / 2, -b / 2, b / 2, -c / 2, c / 2,
+                               epsabs=1e-13, epsrel=1e-13)
+    assert Body.box(a, b, c, m).moments[2] == pytest.approx(i_z, rel=1e-11)
+
+
+@pytest.mark.parametrize("args", [(1, 1, 2, 1.0)])
+def test_box_with_a_square_section_is_a_symmetric_top(args):
+    with pytest.raises(SymmetricTopError):
+        Body.box(*args)
+
+
+@pytest.mark.parametrize("args", [(0, 1, 2, 1), (1, 2, 3, -1), (1, np.nan, 2, 1),
+                                  (1, 2, math.inf, 1)])
+def test_box_rejects_bad_lengths_and_masses(args):
+    with pytest.raises(NonPhysicalBodyError):
+        Body.box(*args)
+
+
+# ---------------------------------------------------------------- cylinder
+def test_circular_cylinder_moments_are_the_textbook_ones():
+    r, length, m = 0.02, 0.3, 1.5
+    i_x, i_y, i_z = cylinder_moments(r, length, m)
+    assert i_x == i_y == pytest.approx(m * (3 * r * r + length**2) / 12, rel=1e-15)
+    assert i_z == pytest.approx(m * r * r / 2, rel=1e-15)
+    with pytest.raises(SymmetricTopError, match="radius_y"):
+        Body.cylinder(r, length, m)
+
+
+def test_elliptic_cylinder_against_numerical_integration():
+    a, b, length, m = 0.5, 0.2, 1.3, 2.0
+    density = m / (math.pi * a * b * length)
+
+    def integral(f):
+        # over the elliptic section (x = a s cos t, y = b s sin t, jacobian a b s)
+        # and the length
+        value, _ = integrate.tplquad(
+            lambda z, s, t: density * f(a * s * math.cos(t), b * s * math.sin(t), z)
+            * a * b * s, 0.0, 2 * math.pi, 0.0, 1.0, -length / 2, length / 2,
+            epsabs=1e-13, epsrel=1e-12)
+        return value
+
+    expected = sorted([integral(lambda x, y, z: y * y + z * z),
+                       integral(lambda x, y, z: x * x + z * z),
+                       integral(lambda x, y, z: x * x + y * y)])
+    np.testing.assert_allclose(Body.cylinder(a, length, m, radius_y=b).moments,
+                               expected, rtol=1e-10)
+
+
+# ---------------------------------------------------------------- point masses
+def test_point_masses_on_a_rectangle():
+    # four masses m at (+-a/2, +-b/2, 0): I_x = m b^2, I_y = m a^2, I_z = m (a^2+b^2)
+    a, b, m = 3.0, 1.0, 0.25
+    corners = np.array([[sx * a / 2, sy * b / 2, 0.0] for sx in (-1, 1) for sy in (-1, 1)])
+    body = Body.from_point_masses([m] * 4, corners + [10.0, -4.0, 2.0])
+    np.testing.assert_allclose(body.moments, [m * b * b, m * a * a, m * (a * a + b * b)],
+                               rtol=1e-13)
+    assert body.is_flat
+
+
+def test_point_masses_are_taken_about_the_centre_of_mass_in_any_frame():
+    rng = np.random.default_rng(11)
+    masses = rng.uniform(0.5, 2.0, 7)
+    points = rng.normal(size=(7, 3))
+    body = Body.from_point_masses(masses, points)
+    # an independent route: parallel-axis theorem from the origin
+    tensor_origin = sum(m * (p @ p * np.eye(3) - np.outer(p, p))
+                        for m, p in zip(masses, points))
+    centre = masses @ points / masses.sum()
+    tensor_cm = tensor_origin - masses.sum() * (centre @ centre * np.eye(3)
+                                                - np.outer(centre, centre))
+    np.testing.assert_allclose(body.moments, np.linalg.eigvalsh(tensor_cm), rtol=1e-12)
+    # moved and turned rigidly: same moments
+    turn, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    moved = Body.from_point_masses(masses, points @ turn.T + [5.0, 6.0, -7.0])
+    np.testing.assert_allclose(moved.moments, body.moments, rtol=1e-12)
+    # the frame maps the caller's axes to the principal axes
+    rotated = body.frame @ tensor_cm @ body.frame.T
+    np.testing.assert_allclose(rotated, np.diag(body.moments), atol=1e-12 * body.moments[2])
+
+
+@pytest.mark.parametrize("masses, points", [
+    ([1.0, 1.0], [[0, 0, 0], [1, 0, 0]]),                 # collinear
+    ([1.0, -1.0, 1.0], [[0, 0, 0], [1, 0, 0], [0, 1, 0]]),  # negative mass
+    ([1.0, 1.0], [[0, 0, 0]]),                            # shapes
+    ([1.0, np.nan, 1.0], [[0, 0, 0], [1, 0, 0], [0, 1, 0]]),
+])
+def test_point_masses_rejected(masses, points):
+    with pytest.raises(NonPhysicalBodyError):
+        Body.from_point_masses(masses, points)
+
+
+# ---------------------------------------------------------------- mesh
+trimesh = pytest.importorskip("trimesh", reason="the optional extra orbits[mesh]")
+
+
+def test_box_mesh_matches_body_box(tmp_path):
+    a, b, c, density = 0.4, 0.25, 0.1, 2700.0
+    mesh = trimesh.creation.box(extents=(a, b, c))
+    # turned and moved: the constructor works about the centre of mass
+    mesh.apply_transform(trimesh.transformations.random_rotation_matrix(
+        np.random.default_rng(3).uniform(size=3)))
+    mesh.apply_translation([1.0, 2.0, 3.0])
+    path = tmp_path / "box.stl"
+    mesh.export(path)
+    body = Body.from_mesh(path, density=density)
+    # STL stores float32 vertices: the reference is good to ~1e-7
+    np.testing.assert_allclose(body.moments, Body.box(a, b, c, density * a * b * c).moments,
+                               rtol=2e-6)
+
+
+def test_ellipsoid_mesh_converges_to_body_from_semi_axes(tmp_path):
+    a, b, c, density = 3.0, 2.0, 1.0, 1.0
+    errors = []
+    for subdivisions in (3, 5):
+        mesh = trimesh.creation.icosphere(subdivisions=subdivisions)
+        mesh.apply_scale((a, b, c))
+        path = tmp_path / f"ellipsoid{subdivisions}.obj"
+        mesh.export(path)
+        body = Body.from_mesh(path, density=density)
+        exact = Body.from_semi_axes(a, b, c).moments * (4.0 / 3.0 * math.pi * a * b * c)
+        errors.append(np.max(np.abs(body.moments / exact - 1.0)))
+    # the inscribed polyhedron converges like h^2: 4^2 = 16 fold per 2 subdivisions
+    assert errors[1] < 2e-3
+    assert errors[0] / errors[1] > 10.0
+
+
+def test_open_mesh_is_refused(tmp_path):
+    mesh = trimesh.creation.box(extents=(1.0, 2.0, 3.0))
+    mesh.update_faces(np.arange(len(mesh.faces) - 1))
+    path = tmp_path / "open.stl"
+    mesh.export(path)
+    with pytest.raises(InputError, match="not closed"):
+        Body.from_mesh(path, density=1.0)
+
+
+def test_missing_mesh_file_is_an_input_error(tmp_path):
+    with pytest.raises(InputError):
+        Body.from_mesh(tmp_path / "nothing.stl")
+
+
+# ---------------------------------------------------------------- molecules
+# Ground-state rotational constants, MHz.
+# H2O: De Lucia, Helminger, Cook & Gordy, Phys. Rev. A 6, 1324 (1972):
+#   A0 = 835840.3, B0 = 435351.7, C0 = 278138.7
+WATER_MHZ = (835840.3, 435351.7, 278138.7)
+# H2CO: Johns & McKellar, J. Mol. Spectrosc. 48, 354 (1973) / CDMS entry 030501:
+#   A0 = 281970.5, B0 = 38833.99, C0 = 34004.24
+FORMALDEHYDE_MHZ = (281970.5, 38833.99, 34004.24)
+# Gordy & Cook, Microwave Molecular Spectra (1984), eq. 2.8:
+#   I [u A^2] = 505379.0 / B [MHz]
+GORDY_COOK = 505379.0
+AMU_A2 = codata.physical_constants["atomic mass constant"][0] * 1e-20
+
+
+@pytest.mark.parametrize("constants", [WATER_MHZ, FORMALDEHYDE_MHZ])
+def test_rotational_constants_textbook_conversion(constants):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InertialDefectWarning)
+        body = Body.from_rotational_constants(*constants, unit="MHz", defect="flatten")
+    i_a, i_b = body.moments[:2] / AMU_A2
+    # the textbook factor is given to 7 digits
+    assert i_a == pytest.approx(GORDY_COOK / constants[0], rel=2e-7)
+    assert i_b == pytest.approx(GORDY_COOK / constants[1], rel=2e-7)
+    assert body.is_flat
+
+
+def test_units_agree():
+    ghz = [v / 1e3 for v in FORMALDEHYDE_MHZ]
+    cm = [v * 1e6 / (100.0 * codata.c) for v in FORMALDEHYDE_MHZ]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InertialDefectWarning)
+        bodies = [Body.from_rotational_constants(*values, unit=unit, defect="flatten")
+                  for values, unit in ((FORMALDEHYDE_MHZ, "MHz"), (ghz, "GHz"),
+                                       (cm, "cm-1"))]
+    for body in bodies[1:]:
+        np.testing.assert_allclose(body.moments, bodies[0].moments, rtol=1e-14)
+
+
+def test_water_defect_is_an_error_that_names_the_option():
+    with pytest.raises(NonPhysicalBodyError) as caught:
+        Body.from_rotational_constants(*WATER_MHZ, unit="MHz")
+    message = str(caught.value)
+    i_a, i_b, i_c = (GORDY_COOK / v for v in WATER_MHZ)
+    defect = i_c - i_a - i_b                     # 0.0515 u A^2, 2.8 % of I_C
+    import re
+    stated = float(re.search(r"Delta = I_C - I_A - I_B = ([0-9.]+) u A\^2", message).group(1))
+    assert stated == pytest.approx(defect, rel=1e-5)
+    assert "defect='flatten'" in message and "2.83" in message
+
+
+def test_water_flatten_warns_with_the_defect():
+    with pytest.warns(InertialDefectWarning, match=r"0\.0515"):
+        body = Body.from_rotational_constants(*WATER_MHZ, unit="MHz", defect="flatten")
+    assert body.is_flat
+    assert body.moments[2] == body.moments[0] + body.moments[1]
+
+
+def test_rotational_constants_bad_input():
+    with pytest.raises(NonPhysicalBodyError, match="unknown unit"):
+        Body.from_rotational_constants(1.0, 2.0, 3.0, unit="Hz")
+    with pytest.raises(NonPhysicalBodyError):
+        Body.from_rotational_constants(1.0, -2.0, 3.0)
+    with pytest.raises(NonPhysicalBodyError, match="defect"):
+        Body.from_rotational_constants(3.0, 2.0, 1.5, defect="ignore")
+
+
+def test_non_planar_molecule_needs_no_flattening():
+    # an asymmetric box-shaped "molecule": constants of Body.box moments
+    body = Body.box(3.0, 2.0, 1.0, 1e-25)
+    hertz = codata.h / (8 * math.pi**2 * body.moments)
+    again = Body.from_rotational_constants(*hertz / 1e9, unit="GHz")
+    np.testing.assert_allclose(again.moments, body.moments, rtol=1e-14)

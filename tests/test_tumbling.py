@@ -1,0 +1,163 @@
+"""Tumbling periods (P_phi, P_psi), spins of a given total phase, and Apophis."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy import integrate
+
+import orbits
+from orbits import Body, Motion
+from orbits.errors import InputError
+from orbits.tumbling import spins_with_period_ratio, spins_with_total_phase
+
+FIG6 = Body.preset("fig6")
+
+
+def _azimuth_gain_by_quadrature(motion, axis):
+    """Azimuth about L gained in one period by the body axis ``axis`` (0 or 2).
+
+    dphi/dt = L (I_i w_i^2 + I_j w_j^2) / (I_i^2 w_i^2 + I_j^2 w_j^2) for the
+    Euler angles with body z along ``axis`` (i, j the other two): uses only
+    omega(t) (Jacobi functions), not the Pi of the closed form.
+    """
+    inertia = motion.body.moments
+    others = [k for k in range(3) if k != axis]
+
+    def rate(t):
+        w = motion.omega(t)
+        num = sum(inertia[k] * w[k] ** 2 for k in others)
+        den = sum((inertia[k] * w[k]) ** 2 for k in others)
+        return motion.momentum * num / den
+
+    # split at quarter periods, where the integrand's shape changes
+    edges = np.linspace(0.0, motion.period, 9)
+    return sum(integrate.quad(rate, a, b, epsabs=0.0, epsrel=1e-13, limit=200)[0]
+               for a, b in zip(edges[:-1], edges[1:]))
+
+
+@pytest.mark.parametrize("theta", [0.2, 0.6, 1.0, 1.3, 1.5])
+def test_precession_period_is_the_azimuth_gain_of_the_literature_axis(theta):
+    motion = Motion.from_spin(FIG6, theta)
+    periods = motion.tumbling_periods()
+    axis = 2 if motion.branch == "SAM" else 0
+    assert periods.axis == ("short" if axis == 2 else "long")
+    gain = _azimuth_gain_by_quadrature(motion, axis)
+    assert periods.rotation == motion.period
+    assert periods.precession == pytest.approx(2 * math.pi * motion.period / gain,
+                                               rel=1e-11)
+    assert periods.ratio == pytest.approx(gain / (2 * math.pi), rel=1e-11)
+
+
+def test_rotation_about_momentum_from_the_two_periods():
+    for theta in (0.3, 1.4):
+        p = Motion.from_spin(FIG6, theta).tumbling_periods()
+        sign = 1.0 if p.axis == "short" else -1.0
+        assert 1.0 / p.about_momentum == pytest.approx(
+            1.0 / p.precession - sign / p.rotation, rel=1e-13)
+
+
+def test_a_closed_orbit_has_an_exactly_rational_period_ratio():
+    table = orbits.closed_orbits(FIG6, n_max=6, q_max=3)
+    assert len(table) > 10
+    for row in table.itertuples():
+        ratio = Motion.from_spin(FIG6, dtheta=row.dtheta).tumbling_periods().ratio
+        whole = row.n + row.q if row.branch == "SAM" else row.n - row.q
+        # ratio = (p +- q)/q exactly, to the root's residual
+        assert ratio * row.q == pytest.approx(whole, abs=1e-9 * whole)
+    # and a spin between two closed orbits has a ratio that is not p/q, q <= 3
+    motion = Motion.from_spin(FIG6, 0.1234)
+    ratio = motion.tumbling_periods().ratio
+    assert min(abs(ratio * q - round(ratio * q)) for q in (1, 2, 3)) > 1e-3
+
+
+def test_periods_scale_with_the_spin_and_carry_its_unit():
+    slow = Motion.from_omega(FIG6, [0.1, 0.0, 0.3]).tumbling_periods()
+    fast = Motion.from_omega(FIG6, [1.0, 0.0, 3.0]).tumbling_periods()
+    assert slow.precession == pytest.approx(10 * fast.precession, rel=1e-13)
+    assert slow.ratio == pytest.approx(fast.ratio, rel=1e-13)
+
+
+# (99942) Apophis, Pravec et al. (2014), "The tumbling spin state of (99942)
+# Apophis", Icarus 233, 48-60 (uncertainties 3 sigma):
+#   SAM, P_phi = 27.38 +- 0.07 h, P_psi = 263 +- 6 h, P_1 = 30.56 +- 0.01 h,
+#   I_a/I_c = 0.61 (+0.11 -0.08), I_b/I_c = 0.965 (+0.009 -0.015),
+#   E/E0 = 1.024 +- 0.013 with E0 = L^2 / (2 I_c) the basic spin state energy.
+APOPHIS = Body((0.61, 0.965, 1.0), name="Apophis")
+P_PHI, P_PSI, P_1, E_OVER_E0 = 27.38, 263.0, 30.56, 1.024
+
+
+def test_apophis_spin_state_from_its_periods():
+    spins = spins_with_period_ratio(APOPHIS, P_PSI / P_PHI)
+    assert set(spins["branch"].astype(str)) == {"SAM", "LAM"}
+    sam = spins[spins["branch"] == "SAM"].iloc[0]
+    motion = Motion.from_spin(APOPHIS, dtheta=sam["dtheta"])
+    unit = motion.period / P_PSI                # model time units per hour
+    periods = motion.tumbling_periods()
+    assert periods.rotation / unit == pytest.approx(P_PSI, abs=6.0)
+    assert periods.precession / unit == pytest.approx(P_PHI, abs=0.07)
+    # independent of the two inputs: the lightcurve period and the energy
+    assert periods.about_momentum / unit == pytest.approx(P_1, abs=0.01)
+    e_over_e0 = 2.0 * motion.energy * APOPHIS.moments[2] / motion.momentum**2
+    assert e_over_e0 == pytest.approx(E_OVER_E0, abs=0.013)
+    # the LAM solution with the same ratio is not Apophis: its P_1 is off
+    lam = spins[spins["branch"] == "LAM"].iloc[0]
+    lam_periods = Motion.from_spin(APOPHIS, dtheta=lam["dtheta"]).tumbling_periods()
+    lam_unit = lam_periods.rotation / P_PSI
+    assert abs(lam_periods.about_momentum / lam_unit - P_1) > 1.0
+
+
+# ---------------------------------------------------------------- total phase
+def test_spins_with_total_phase_match_closed_orbits():
+    table = orbits.closed_orbits(FIG6, n_max=4)
+    for n in (2, 3, 4):
+        spins = spins_with_total_phase(FIG6, 2 * math.pi * n)
+        expected = np.sort(table.loc[table["n"] == n, "dtheta"].to_numpy())
+        np.testing.assert_array_equal(spins["dtheta"].to_numpy(), expected)
+
+
+@pytest.mark.parametrize("value", [20.0, 10.0 * math.e, 123.456])
+def test_any_total_phase_is_hit_on_both_branches(value):
+    spins = spins_with_total_phase(FIG6, value)
+    assert {"SAM", "LAM"} <= set(spins["branch"].astype(str))
+    # recomputed independently by the closed form of total_phase
+    again = orbits.total_phase(FIG6, dtheta=spins["dtheta"].to_numpy())
+    np.testing.assert_allclose(again, value, rtol=1e-12)
+
+
+def test_total_phase_below_the_minimum_is_an_error_with_the_minimum():
+    low, _ = orbits.minimum_phase(FIG6)
+    with pytest.raises(InputError, match="at least"):
+        spins_with_total_phase(FIG6, 0.5 * low)
+    for bad in (0.0, -1.0, math.nan, math.inf):
+        with pytest.raises(InputError):
+            spins_with_total_phase(FIG6, bad)
+
+
+# ---------------------------------------------------------------- SciPy hand-off
+def test_rotation_object_is_the_rotation_with_scalar_last_quaternions():
+    motion = Motion.from_spin(FIG6, 0.7)
+    t = np.linspace(0.0, 3.0, 7)
+    rotation = motion.rotation_object(t)
+    np.testing.assert_allclose(rotation.as_matrix(), motion.rotation(t), atol=1e-14)
+    ours = motion.quaternion(t)                       # (w, x, y, z)
+    theirs = rotation.as_quat()                        # (x, y, z, w)
+    # same rotation up to the sign of the quaternion
+    dots = np.abs(np.sum(ours[:, [1, 2, 3, 0]] * theirs, axis=1))
+    np.testing.assert_allclose(dots, 1.0, atol=1e-14)
+    single = motion.as_scipy(0.5)
+    assert single.single
+    np.testing.assert_allclose(single.apply([0.0, 0.0, 1.0]),
+                               motion.rotation(0.5) @ [0.0, 0.0, 1.0], atol=1e-15)
+
+
+def test_scalar_time_shapes():
+    motion = Motion.from_spin(FIG6, 0.7)
+    assert motion.omega(1.0).shape == (3,)
+    assert motion.omega_space(1.0).shape == (3,)
+    assert motion.euler_angles(1.0).shape == (3,)
+    assert motion.rotation(1.0).shape == (3, 3)
+    assert motion.quaternion(1.0).shape == (4,)
+    assert motion.omega([1.0]).shape == (1, 3)
+    assert motion.omega(np.zeros((2, 5))).shape == (2, 5, 3)
+    np.testing.assert_array_equal(motion.omega(1.0), motion.omega([1.0])[0])
