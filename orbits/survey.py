@@ -4,8 +4,8 @@ A survey covers the region of physical asymmetric bodies in the paper's
 I1-I2 plane (``|I| = 1``), or an explicit list, and writes a directory::
 
     DIR/manifest.json          parameters; a rerun must match them
-    DIR/bodies/part-NNNNN.csv  one row per body (or .parquet)
-    DIR/orbits/part-NNNNN.csv  the closed orbits, catalog schema
+    DIR/bodies/part-NNNNN.parquet  one row per body (or .csv)
+    DIR/orbits/part-NNNNN.parquet  the closed orbits, catalog schema
     DIR/report.json            summary and the minimum-at-the-ends test
 
 The bodies are cut into chunks; each finished chunk is written atomically
@@ -152,7 +152,7 @@ class Survey:
     :meth:`from_bodies`; :meth:`run` computes the missing chunks.
     """
 
-    def __init__(self, out_dir, moments, source, n_max, q_max=1, fmt="csv",
+    def __init__(self, out_dir, moments, source, n_max, q_max=1, fmt="parquet",
                  chunk=DEFAULT_CHUNK):
         if fmt not in FORMATS:
             raise InputError(f"format must be one of {', '.join(FORMATS)}, got {fmt!r}")
