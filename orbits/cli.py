@@ -643,8 +643,9 @@ def _add_survey(subparsers):
                         help="largest multiple n (or p/q) of 2 pi searched per body")
     parser.add_argument("--q-max", type=_positive_int, default=1,
                         help="also p/q orbits with q up to Q (default 1)")
-    parser.add_argument("--format", choices=["csv", "parquet"], default="csv",
-                        help="table format (default csv; parquet for large surveys)")
+    parser.add_argument("--format", choices=["csv", "parquet"], default="parquet",
+                        help="table format (default parquet: typed, exact, compact; "
+                             "csv is exact too)")
     parser.add_argument("--chunk", type=_positive_int, default=20_000,
                         help="bodies per chunk (default 20000)")
     parser.add_argument("--scheduler", metavar="tcp://HOST:PORT",

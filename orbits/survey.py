@@ -4,8 +4,8 @@ A survey covers the region of physical asymmetric bodies in the paper's
 I1-I2 plane (``|I| = 1``), or an explicit list, and writes a directory::
 
     DIR/manifest.json          parameters (a rerun must match them) and ledger
-    DIR/bodies/part-NNNNN.csv  one row per body (or .parquet)
-    DIR/orbits/part-NNNNN.csv  the closed orbits, catalog schema
+    DIR/bodies/part-NNNNN.parquet  one row per body (or .csv)
+    DIR/orbits/part-NNNNN.parquet  the closed orbits, catalog schema
     DIR/report.json            summary and the minimum-at-the-ends test
 
 The bodies are cut into chunks; each finished chunk is written atomically
@@ -232,7 +232,7 @@ class Survey:
     writes a directory (an exclusive ``fcntl`` lock on ``DIR/.lock``).
     """
 
-    def __init__(self, out_dir, moments, source, n_max, q_max=1, fmt="csv",
+    def __init__(self, out_dir, moments, source, n_max, q_max=1, fmt="parquet",
                  chunk=DEFAULT_CHUNK, names=None, skipped=()):
         if fmt not in FORMATS:
             raise InputError(f"format must be one of {', '.join(FORMATS)}, got {fmt!r}")

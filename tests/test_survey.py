@@ -59,7 +59,7 @@ def test_grid_survey_report(tmp_path):
 
 
 def test_report_lists_counterexamples(tmp_path):
-    survey = Survey.grid(tmp_path / "s", 12, 3, chunk=50)
+    survey = Survey.grid(tmp_path / "s", 12, 3, chunk=50, fmt="csv")
     survey.run()
     part = tmp_path / "s" / "bodies" / "part-00000.csv"
     frame = pd.read_csv(part)
