@@ -110,7 +110,7 @@ def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
     if len(match) > 1:
         branches = ", ".join(sorted(set(match["branch"])))
         raise InputError(f"{len(match)} orbits have Delta alpha = 2 pi {multiple} "
-                         f"({branches}); choose one with branch=")
+                         f"({branches}); choose one with branch='SAM' or 'LAM' (--branch)")
     return match.iloc[0]
 
 
@@ -314,7 +314,8 @@ class PoinsotAnimation:
         (three Line3D, the body axes in the space frame), ``ellipsoid``
         (Line3D wire frame), ``solid`` (Poly3DCollection), ``omega``,
         ``momentum`` (Line3D), ``contact`` (Line3D marker), ``herpolhode``
-        (Line3D), ``plane`` (Poly3DCollection), ``polhode`` and
+        (Line3D), ``plane`` (Poly3DCollection) and ``plane_edge`` (its
+        outline, Line3D), ``polhode`` and
         ``body_contact`` (Line3D, body panel).
     solid_kind : str
     solid_scale : float
@@ -380,6 +381,9 @@ class PoinsotAnimation:
         artists["plane"] = Poly3DCollection([plane], facecolor=COLOURS["plane"],
                                             alpha=0.12, edgecolor="none")
         space.add_collection3d(artists["plane"])
+        outline = np.concatenate([plane, plane[:1]])
+        artists["plane_edge"], = space.plot(*outline.T, color=COLOURS["plane"],
+                                            linewidth=0.6, alpha=0.6)
         artists["herpolhode"], = space.plot([], [], [], color=COLOURS["herpolhode"],
                                             linewidth=1.4, zorder=4)
         start = self._rho_space[0]
@@ -527,9 +531,14 @@ class PoinsotAnimation:
     def _write_gif(self, target):
         from PIL import Image
         frames = [Image.fromarray(self.render(k)) for k in range(len(self.times))]
-        # one fixed palette for all frames (deterministic, no dithering noise)
-        palette = frames[0].quantize(colors=255, method=Image.Quantize.MEDIANCUT,
-                                     dither=Image.Dither.NONE)
+        # one fixed palette for all frames, from a montage of frames spread over
+        # the animation (the traced curves are absent from frame 0); no dithering
+        picks = sorted({int(round(j)) for j in np.linspace(0, len(frames) - 1, 6)})
+        montage = Image.new("RGB", (frames[0].width, frames[0].height * len(picks)))
+        for slot, k in enumerate(picks):
+            montage.paste(frames[k], (0, slot * frames[0].height))
+        palette = montage.quantize(colors=255, method=Image.Quantize.MEDIANCUT,
+                                   dither=Image.Dither.NONE)
         indexed = [f.quantize(palette=palette, dither=Image.Dither.NONE) for f in frames]
         buffer = io.BytesIO()
         indexed[0].save(buffer, format="GIF", save_all=True, append_images=indexed[1:],
