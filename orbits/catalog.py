@@ -323,6 +323,10 @@ def read_catalog(path, *, check=True):
     for name in ("n", "q"):
         if not pd.api.types.is_integer_dtype(frame[name]) or (frame[name] < 1).any():
             raise InputError(f"{path}: column {name} must hold integers >= 1")
+    # closes_after is a fraction such as "1/2"; an all-integer column reads as int
+    frame["closes_after"] = frame["closes_after"].astype(str)
+    if not frame["closes_after"].str.fullmatch(r"[1-9][0-9]*(/2)?").all():
+        raise InputError(f"{path}: closes_after must be a whole or half number of periods")
     numeric = frame[expected[1:5] + expected[8:] + extra]
     for name in numeric.columns:
         if numeric[name].dtype.kind != "f":

@@ -22,7 +22,7 @@ from .phases import phases
 CATALOG_COLUMNS = ("body", "I1", "I2", "I3", "theta_crit", "branch", "n", "q",
                    "theta", "dtheta", "total_phase", "dynamic_phase",
                    "geometric_phase", "period", "energy", "momentum", "m",
-                   "residual")
+                   "residual", "closes_after")
 # every root must satisfy |Delta alpha - 2 pi p/q| <= RESIDUAL_TOLERANCE * 2 pi p/q
 RESIDUAL_TOLERANCE = 1e-10
 
@@ -144,6 +144,40 @@ def closed_orbits(body, n_max=10, q_max=1):
     return frame
 
 
+def closes_after(p, q):
+    """Periods after which the herpolhode of a ``2 pi p/q`` orbit closes, as a fraction.
+
+    Over half a period the motion repeats up to symmetries (derivation in
+    docs/conventions.md, "Half-period closure"): the body-frame angular
+    velocity is mirrored, ``omega(t + T/2) = D omega(t)`` with
+    ``D = diag(-1, -1, 1)`` on SAM and ``diag(1, -1, -1)`` on LAM, and the
+    orientation is ``R(t + T/2) = Rot(z, Delta alpha/2 + pi) R(t) D``, so
+    the herpolhode turns by ``beta = pi (p + q)/q`` about M every half
+    period.  It closes after the least h half periods with
+    ``h (p + q) / (2 q)`` whole: ``q/2`` periods when p and q are both odd
+    (``p + q`` even; ``q = 1``: the odd multiples close after ``T/2``), else
+    ``q``.  The body itself is back at its start only after q periods.
+
+    Parameters
+    ----------
+    p, q : int or array_like of int
+        The orbit's ``Delta alpha = 2 pi p/q``, ``gcd(p, q) = 1``.
+
+    Returns
+    -------
+    str or ndarray of str
+        ``"1/2"``, ``"1"``, ``"3/2"``, ... (a :class:`fractions.Fraction`
+        as text).
+    """
+    p_arr = np.asarray(p, dtype=np.int64)
+    q_arr = np.asarray(q, dtype=np.int64)
+    both_odd = (p_arr % 2 == 1) & (q_arr % 2 == 1)
+    text = np.array([str(Fraction(int(qq), 2 if odd else 1))
+                     for qq, odd in zip(q_arr.ravel(), both_odd.ravel())],
+                    dtype=object).reshape(q_arr.shape)
+    return str(text[()]) if text.ndim == 0 else text
+
+
 def catalog_rows(body, moments, level, offset, p, q, levels):
     """Catalog rows (:data:`CATALOG_COLUMNS`) for roots of the search.
 
@@ -185,6 +219,7 @@ def catalog_rows(body, moments, level, offset, p, q, levels):
         "energy": table["energy"], "momentum": table["momentum"],
         "m": table["m"],
         "residual": residual,
+        "closes_after": closes_after(p[level], q[level]),
     }, columns=list(CATALOG_COLUMNS))
 
 

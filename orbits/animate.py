@@ -1,0 +1,696 @@
+"""Poinsot animations: the body tumbling, its inertia ellipsoid rolling on the plane.
+
+Poinsot's construction (Landau & Lifshitz, Mechanics, Sec. 37; Goldstein,
+Sec. 5.6).  With ``I`` the body's inertia tensor (principal moments as
+given, e.g. in kg m^2 = J s^2), ``omega`` the angular velocity (rad/s),
+``E = omega.I.omega / 2`` (J) and ``M = |I omega|`` (J s):
+
+* the **inertia ellipsoid** ``x.I.x = 1`` (body frame; ``x`` in units of
+  ``(J s^2)^(-1/2)``, semi-axes ``1/sqrt(I_k)``) moves with the body;
+* the point ``rho = omega / sqrt(2E)`` (same units) lies on it, since
+  ``rho.I.rho = omega.I.omega / 2E = 1``; the ellipsoid's normal there is
+  ``I rho``, parallel to the fixed angular momentum;
+* so the ellipsoid touches the **invariable plane** ``x.M_hat = sqrt(2E)/M``
+  (perpendicular to M, at the fixed distance
+  ``rho.M_hat = omega.I.omega / (sqrt(2E) M) = sqrt(2E)/M``) at ``rho``;
+* ``rho`` is on the instantaneous rotation axis, so the contact point is at
+  rest: the ellipsoid **rolls without slipping**.  ``rho`` traces the
+  **polhode** on the ellipsoid (body frame) and the **herpolhode** on the
+  plane (space frame, ``omega_space / sqrt(2E)``).
+
+The space frame is :class:`orbits.Motion`'s: z along M, so the plane is
+``z = sqrt(2E)/M``.  The solid (T-handle, box, mesh or the equivalent
+ellipsoid) is drawn inside the inertia ellipsoid, scaled from its length
+units by the factor stated in the panel title.
+
+Public API
+----------
+:func:`poinsot_animation`
+    Build (and optionally write) the animation of any body and spin, of a
+    :class:`~orbits.Motion`, or of a catalog row.
+:func:`orbit_row`
+    The catalog row of a body's closed orbit by its ``n`` or ``p/q``.
+:func:`flip_motion`
+    A spin near the intermediate axis (the Dzhanibekov / tennis-racket flip).
+:class:`PoinsotAnimation`
+    The figure, the frames' drawn data and ``save``.
+"""
+
+import io
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .atomic import atomic_path, ensure_writable
+from .bodies import Body
+from .errors import InputError
+from .motion import Motion, _as_body
+
+FORMATS = ("gif", "mp4")
+# colours of the drawing (one place, so that the two panels agree)
+COLOURS = {"solid": "tab:green", "ellipsoid": "0.45", "plane": "tab:blue",
+           "omega": "tab:red", "momentum": "black", "herpolhode": "tab:purple",
+           "polhode": "tab:orange", "axes": ("tab:red", "tab:green", "tab:blue")}
+
+
+# ----------------------------------------------------------------- inputs
+def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
+    """The catalog row of one closed orbit of ``body``.
+
+    Parameters
+    ----------
+    body : Body or array_like, shape (3,)
+    n : int, optional
+        The multiple of an integer orbit ``Delta alpha = 2 pi n`` (same as
+        ``p`` with ``q = 1``).
+    p, q : int, optional
+        The orbit ``Delta alpha = 2 pi p/q`` (in lowest terms).
+    branch : {"SAM", "LAM"}, optional
+        Needed when both branches have the orbit (they usually do).
+    orbits : DataFrame, optional
+        A catalog to pick from (:func:`orbits.closed_orbits` or
+        :func:`orbits.read_catalog`); computed if omitted.
+
+    Returns
+    -------
+    pandas.Series
+        The row, with the columns of :data:`orbits.CATALOG_COLUMNS`.
+
+    Raises
+    ------
+    InputError
+        Neither or both of ``n`` and ``p``; no such orbit; two orbits match
+        and no ``branch`` was given.
+    """
+    from .search import closed_orbits
+    if (n is None) == (p is None):
+        raise InputError("give exactly one of n and p")
+    label_p = "n" if n is not None else "p"
+    if n is not None:
+        p, q = n, 1
+    for label, value in ((label_p, p), ("q", q)):
+        if isinstance(value, bool) or int(value) != value or value < 1:
+            raise InputError(f"{label} must be an integer >= 1, got {value!r}")
+    p, q = int(p), int(q)
+    if math.gcd(p, q) != 1:
+        raise InputError(f"p/q = {p}/{q} is not in lowest terms")
+    if branch is not None and branch not in ("SAM", "LAM"):
+        raise InputError(f"branch must be SAM or LAM, got {branch!r}")
+    if orbits is None:
+        orbits = closed_orbits(_as_body(body), n_max=max(1, math.ceil(p / q)), q_max=q)
+    match = orbits[(orbits["n"] == p) & (orbits["q"] == q)]
+    if branch is not None:
+        match = match[match["branch"] == branch]
+    multiple = f"{p}" if q == 1 else f"{p}/{q}"
+    if len(match) == 0:
+        where = f" on {branch}" if branch else ""
+        raise InputError(f"the body has no closed orbit Delta alpha = 2 pi {multiple}{where}")
+    if len(match) > 1:
+        branches = ", ".join(sorted(set(match["branch"])))
+        raise InputError(f"{len(match)} orbits have Delta alpha = 2 pi {multiple} "
+                         f"({branches}); choose one with branch='SAM' or 'LAM' (--branch)")
+    return match.iloc[0]
+
+
+def flip_motion(body=None, *, offset=0.05, speed=1.0):
+    """A spin close to the intermediate axis: the Dzhanibekov / tennis-racket flip.
+
+    ``omega0 = speed (sin t cos p, sin t sin p, cos t)`` with
+    ``t = pi/2 - offset`` and ``p = pi/2 - offset``: almost along I2, tipped
+    by ``offset`` towards I1 and I3.  The motion lies close to the
+    separatrix; once per half period the body turns over (the I2 axis
+    reverses), the longer the wait the smaller ``offset``
+    (``T ~ log(1/offset)``).
+
+    Parameters
+    ----------
+    body : Body, optional
+        Default: the paper's T-handle (8, 4, 1), whose I2 axis is its shaft.
+    offset : float
+        Radians, ``0 < offset < pi/4``.
+
+    Returns
+    -------
+    Motion
+    """
+    if not (np.isfinite(offset) and 0.0 < offset < 0.25 * np.pi):
+        raise InputError(f"offset must be in (0, pi/4), got {offset!r}")
+    body = Body.preset("t-handle") if body is None else _as_body(body)
+    angle = 0.5 * np.pi - offset
+    return Motion.from_spin(body, angle, phi=angle, speed=speed)
+
+
+# ----------------------------------------------------------------- solids
+def solid_faces(body, solid="auto"):
+    """The faces of the solid to draw, in the principal frame, about the centre of mass.
+
+    Parameters
+    ----------
+    body : Body
+    solid : "auto", "ellipsoid", or a tuple
+        ``("t-handle", l1, l2, w)``, ``("box", a, b, c)`` (full side
+        lengths along the caller's x, y, z) or ``("mesh", vertices,
+        faces)`` (caller's axes, centred at the centre of mass).  ``"auto"``
+        uses ``body.shape`` when the body carries one (same tuples), the
+        T-handle when the moments are those of :meth:`Body.t_handle` (8, 4,
+        1) (the ``t-handle`` preset), and else the equivalent ellipsoid
+        (:meth:`Body.equivalent_ellipsoid`).
+
+    Returns
+    -------
+    kind : str
+    faces : list of ndarray, each (k, 3)
+        Polygons in the sorted principal frame (length units of the body).
+    """
+    body = _as_body(body)
+    spec = solid
+    if isinstance(spec, str) and spec == "auto":
+        spec = getattr(body, "shape", None)
+        if spec is None and np.array_equal(body.moments,
+                                           Body.t_handle(8.0, 4.0, 1.0).moments):
+            spec = ("t-handle", 8.0, 4.0, 1.0)
+        if spec is None:
+            spec = "ellipsoid"
+    if isinstance(spec, dict):
+        spec = (spec.get("kind"),) + tuple(v for k, v in spec.items() if k != "kind")
+    if isinstance(spec, str):
+        spec = (spec,)
+    kind = spec[0] if spec else None
+    if kind == "ellipsoid":
+        semi = np.array(body.equivalent_ellipsoid())
+        # semi-axes (a, b, c) lie along the principal axes I1, I2, I3
+        return "ellipsoid", _ellipsoid_faces(np.maximum(semi, 1e-3 * semi.max()))
+    if kind == "t-handle":
+        l1, l2, w = (float(v) for v in spec[1:4])
+        faces = _t_handle_faces(l1, l2, w)
+        frame = Body.t_handle(l1, l2, w).frame
+    elif kind == "box":
+        a, b, c = (float(v) for v in spec[1:4])
+        faces = _box_faces((-a / 2, -b / 2, -c / 2), (a / 2, b / 2, c / 2))
+        frame = Body((b * b + c * c, a * a + c * c, a * a + b * b)).frame
+    elif kind == "mesh":
+        vertices = np.asarray(spec[1], dtype=float)
+        faces = [vertices[np.asarray(f)] for f in spec[2]]
+        frame = body.frame
+    else:
+        raise InputError(f"unknown solid {solid!r}; use 'auto', 'ellipsoid', "
+                         "('t-handle', l1, l2, w), ('box', a, b, c) or "
+                         "('mesh', vertices, faces)")
+    # caller's axes -> sorted principal axes: v_principal = frame @ v
+    return kind, [face @ frame.T for face in faces]
+
+
+def _box_faces(lo, hi):
+    (x0, y0, z0), (x1, y1, z1) = lo, hi
+    corners = np.array([[x0, y0, z0], [x1, y0, z0], [x1, y1, z0], [x0, y1, z0],
+                        [x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]])
+    faces = [[0, 1, 2, 3], [4, 5, 6, 7], [0, 1, 5, 4], [2, 3, 7, 6], [1, 2, 6, 5],
+             [0, 3, 7, 4]]
+    return [corners[f] for f in faces]
+
+
+def t_handle_boxes(l1, l2, w):
+    """The T-handle's two bars as (lo, hi) corners about its centre of mass.
+
+    Cross piece along x, shaft along y from the cross piece's edge, square
+    section w (the geometry of eqn:IsforT).
+    """
+    com_y = (l2 / (l1 + l2)) * 0.5 * (w + l2)
+    return [((-l1 / 2, -w / 2 - com_y, -w / 2), (l1 / 2, w / 2 - com_y, w / 2)),
+            ((-w / 2, w / 2 - com_y, -w / 2), (w / 2, w / 2 + l2 - com_y, w / 2))]
+
+
+def _t_handle_faces(l1, l2, w):
+    faces = []
+    for lo, hi in t_handle_boxes(l1, l2, w):
+        faces += _box_faces(lo, hi)
+    return faces
+
+
+def _ellipsoid_faces(semi, longitudes=16, latitudes=8):
+    u = np.linspace(0.0, 2.0 * np.pi, longitudes + 1)
+    v = np.linspace(0.0, np.pi, latitudes + 1)
+    points = np.stack([np.outer(np.cos(u), np.sin(v)) * semi[0],
+                       np.outer(np.sin(u), np.sin(v)) * semi[1],
+                       np.outer(np.ones_like(u), np.cos(v)) * semi[2]], axis=-1)
+    return [np.array([points[i, j], points[i + 1, j], points[i + 1, j + 1], points[i, j + 1]])
+            for i in range(longitudes) for j in range(latitudes)]
+
+
+def inertia_ellipsoid_lines(moments, meridians=8, parallels=5, samples=49):
+    """Wire-frame curves of the inertia ellipsoid ``x.I.x = 1`` (body frame).
+
+    Returns a list of (samples, 3) arrays: meridians through the I3 poles
+    and parallels of constant x3 (every point satisfies ``x.I.x = 1``).
+    """
+    semi = 1.0 / np.sqrt(np.asarray(moments, dtype=float))
+    s = np.linspace(0.0, 2.0 * np.pi, samples)
+    curves = []
+    for k in range(meridians):
+        azimuth = np.pi * k / meridians
+        curves.append(np.stack([semi[0] * np.cos(azimuth) * np.sin(s),
+                                semi[1] * np.sin(azimuth) * np.sin(s),
+                                semi[2] * np.cos(s)], axis=-1))
+    for k in range(1, parallels + 1):
+        polar = np.pi * k / (parallels + 1)
+        curves.append(np.stack([semi[0] * np.sin(polar) * np.cos(s),
+                                semi[1] * np.sin(polar) * np.sin(s),
+                                np.full(samples, semi[2] * np.cos(polar))], axis=-1))
+    return curves
+
+
+# ----------------------------------------------------------------- the scene
+@dataclass
+class FrameData:
+    """What frame ``k`` draws, in the units of the module docstring.
+
+    Attributes
+    ----------
+    t : float
+        Time of the frame.
+    rotation : ndarray (3, 3)
+        The orientation drawn (body -> space): its columns are the drawn
+        body axes.
+    contact : ndarray (3,)
+        The contact point of ellipsoid and plane, space frame.
+    contact_body : ndarray (3,)
+        The same point in the body frame (end of the polhode drawn).
+    herpolhode : ndarray (k, 3)
+        The herpolhode traced up to ``t`` (space frame; ends at ``contact``).
+    polhode : ndarray (k, 3)
+        The polhode traced up to ``t`` (body frame).
+    plane_height : float
+        ``sqrt(2E)/M``: the plane is ``z = plane_height``.
+    """
+
+    t: float
+    rotation: np.ndarray
+    contact: np.ndarray
+    contact_body: np.ndarray
+    herpolhode: np.ndarray
+    polhode: np.ndarray
+    plane_height: float
+
+
+class PoinsotAnimation:
+    """A Poinsot animation: a figure with a space-frame and a body-frame panel.
+
+    Built by :func:`poinsot_animation`.  ``frame(k)`` draws frame k and
+    returns its :class:`FrameData`; ``save(path)`` writes a GIF or MP4.
+
+    Attributes
+    ----------
+    motion : Motion
+    times : ndarray (frames,)
+        Frame times, from 0 to the animation's duration, both included (so
+        the last frame of a closed orbit drawn over q periods is its first).
+    fps : int
+    figure : matplotlib.figure.Figure
+    space_axes, body_axes : Axes3D
+    artists : dict
+        The drawn artists (updated in place by :meth:`frame`): ``axes``
+        (three Line3D, the body axes in the space frame), ``ellipsoid``
+        (Line3D wire frame), ``solid`` (Poly3DCollection), ``omega``,
+        ``momentum`` (Line3D), ``contact`` (Line3D marker), ``herpolhode``
+        (Line3D), ``plane`` (Poly3DCollection) and ``plane_edge`` (its
+        outline, Line3D), ``polhode`` and
+        ``body_contact`` (Line3D, body panel).
+    solid_kind : str
+    solid_scale : float
+        Length units of the solid -> ellipsoid units (display only).
+    """
+
+    def __init__(self, motion, times, *, fps=20, solid="auto", title=None,
+                 size=(9.0, 4.6), dpi=80, pyplot=False, subsamples=8):
+        self.motion = motion
+        self.times = np.asarray(times, dtype=float)
+        self.fps = int(fps)
+        self.dpi = dpi
+        body = motion.body
+        moments = body.moments
+        self._energy = motion.energy
+        two_e = 2.0 * motion.energy
+        self.plane_height = math.sqrt(two_e) / motion.momentum
+        # a dense grid for the traced curves: `subsamples` steps per frame
+        count = max(1, (len(self.times) - 1) * subsamples)
+        self._dense = np.linspace(self.times[0], self.times[-1], count + 1)
+        self._subsamples = subsamples
+        state = motion.state(self._dense)
+        self._rho_space = state.omega_space / math.sqrt(two_e)
+        self._rho_body = state.omega / math.sqrt(two_e)
+        frame_state = motion.state(self.times)
+        self._rotations = frame_state.rotation
+        self._frame_rho_space = frame_state.omega_space / math.sqrt(two_e)
+        self._frame_rho_body = frame_state.omega / math.sqrt(two_e)
+        self._wire = inertia_ellipsoid_lines(moments)
+        self.solid_kind, faces = solid_faces(body, solid)
+        semi = 1.0 / np.sqrt(moments)
+        extent = np.max(np.abs(np.concatenate(faces)), axis=0)
+        # the solid fits inside the inertia ellipsoid (both long along I1)
+        self.solid_scale = 0.8 / float(np.max(extent / semi))
+        self._faces = [face * self.solid_scale for face in faces]
+        self._build_figure(title, size, pyplot)
+        self._animation = None
+
+    # -- drawing --------------------------------------------------------
+    def _build_figure(self, title, size, pyplot):
+        from matplotlib.figure import Figure
+        from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+        if pyplot:
+            import matplotlib.pyplot as plt
+            figure = plt.figure(figsize=size, dpi=self.dpi)
+        else:
+            from matplotlib.backends.backend_agg import FigureCanvasAgg
+            figure = Figure(figsize=size, dpi=self.dpi)
+            FigureCanvasAgg(figure)
+        self.figure = figure
+        space = figure.add_subplot(1, 2, 1, projection="3d", computed_zorder=False)
+        body_ax = figure.add_subplot(1, 2, 2, projection="3d", computed_zorder=False)
+        figure.subplots_adjust(left=0.0, right=1.0, bottom=0.02, top=0.86, wspace=0.02)
+        self.space_axes, self.body_axes = space, body_ax
+        h = self.plane_height
+        semi = 1.0 / np.sqrt(self.motion.body.moments)
+        reach = 1.05 * float(semi.max())
+        radius = float(np.max(np.hypot(self._rho_space[:, 0], self._rho_space[:, 1])))
+        half = max(reach, 1.15 * radius)
+        artists = {}
+        plane = np.array([[-half, -half, h], [half, -half, h], [half, half, h],
+                          [-half, half, h]])
+        artists["plane"] = Poly3DCollection([plane], facecolor=COLOURS["plane"],
+                                            alpha=0.12, edgecolor="none")
+        space.add_collection3d(artists["plane"])
+        outline = np.concatenate([plane, plane[:1]])
+        artists["plane_edge"], = space.plot(*outline.T, color=COLOURS["plane"],
+                                            linewidth=0.6, alpha=0.6)
+        artists["herpolhode"], = space.plot([], [], [], color=COLOURS["herpolhode"],
+                                            linewidth=1.4, zorder=4)
+        start = self._rho_space[0]
+        space.plot([start[0]], [start[1]], [start[2]], "o", color=COLOURS["herpolhode"],
+                   markersize=4, zorder=5)
+        artists["ellipsoid"] = [space.plot([], [], [], color=COLOURS["ellipsoid"],
+                                           linewidth=0.5, alpha=0.6, zorder=2)[0]
+                                for _ in self._wire]
+        artists["solid"] = Poly3DCollection([], facecolor=COLOURS["solid"],
+                                            edgecolor="darkgreen", linewidths=0.4,
+                                            alpha=0.55, zorder=3)
+        space.add_collection3d(artists["solid"])
+        artists["axes"] = [space.plot([], [], [], color=c, linewidth=1.0, zorder=4)[0]
+                           for c in COLOURS["axes"]]
+        artists["momentum"], = space.plot([0.0, 0.0], [0.0, 0.0], [0.0, 1.25 * h],
+                                          color=COLOURS["momentum"], linewidth=2.0, zorder=6)
+        space.text(0.0, 0.0, 1.3 * h, "L", color=COLOURS["momentum"], zorder=7)
+        artists["omega"], = space.plot([], [], [], color=COLOURS["omega"], linewidth=2.0,
+                                       zorder=6)
+        artists["contact"], = space.plot([], [], [], "o", color=COLOURS["omega"],
+                                         markersize=5, zorder=7)
+        _cube(space, half, (-half, half))
+        space.view_init(elev=18, azim=-60)
+        # body panel: the fixed inertia ellipsoid, the solid, the polhode
+        for curve in self._wire:
+            body_ax.plot(*curve.T, color=COLOURS["ellipsoid"], linewidth=0.5, alpha=0.5)
+        body_ax.add_collection3d(Poly3DCollection(self._faces, facecolor=COLOURS["solid"],
+                                                  edgecolor="darkgreen", linewidths=0.3,
+                                                  alpha=0.25))
+        for k, colour in enumerate(COLOURS["axes"]):
+            tip = np.zeros(3)
+            tip[k] = 1.15 * semi[k]
+            body_ax.plot(*np.stack([-tip, tip]).T, color=colour, linewidth=0.8)
+            body_ax.text(*(1.2 * tip), f"$I_{k + 1}$", color=colour, fontsize="small")
+        artists["polhode"], = body_ax.plot([], [], [], color=COLOURS["polhode"],
+                                           linewidth=1.6)
+        artists["body_contact"], = body_ax.plot([], [], [], "o", color=COLOURS["omega"],
+                                                markersize=5)
+        _cube(body_ax, reach, (-reach, reach))
+        body_ax.view_init(elev=22, azim=-50)
+        self.artists = artists
+        body = self.motion.body
+        name = body.name or "body"
+        heading = title or (f"{name}: Poinsot construction, {self.motion.branch}, "
+                            f"T = {self.motion.period:.4g}")
+        self._title = figure.suptitle(heading, fontsize="medium")
+        space.set_title("space frame (L fixed, along z): inertia ellipsoid rolling\n"
+                        "on the invariable plane; herpolhode (purple), "
+                        r"$\omega$ (red)", fontsize="x-small")
+        body_ax.set_title(f"body frame: polhode on the inertia ellipsoid\n"
+                          f"{self.solid_kind} drawn x{self.solid_scale:.3g}",
+                          fontsize="x-small")
+        self._clock = figure.text(0.02, 0.03, "", fontsize="small")
+
+    def frame(self, k):
+        """Draw frame ``k`` and return its :class:`FrameData`."""
+        k = int(k)
+        if not 0 <= k < len(self.times):
+            raise InputError(f"frame {k} out of range 0..{len(self.times) - 1}")
+        rotation = self._rotations[k]
+        artists = self.artists
+        for line, curve in zip(artists["ellipsoid"], self._wire):
+            points = curve @ rotation.T
+            line.set_data_3d(points[:, 0], points[:, 1], points[:, 2])
+        artists["solid"].set_verts([face @ rotation.T for face in self._faces])
+        semi = 1.0 / np.sqrt(self.motion.body.moments)
+        for j, line in enumerate(artists["axes"]):
+            tip = 1.15 * semi[j] * rotation[:, j]
+            line.set_data_3d([-tip[0], tip[0]], [-tip[1], tip[1]], [-tip[2], tip[2]])
+        contact = self._frame_rho_space[k]
+        contact_body = self._frame_rho_body[k]
+        artists["omega"].set_data_3d([0.0, contact[0]], [0.0, contact[1]],
+                                     [0.0, contact[2]])
+        artists["contact"].set_data_3d([contact[0]], [contact[1]], [contact[2]])
+        end = k * self._subsamples + 1
+        # the dense grid holds the frame times exactly at multiples of subsamples;
+        # the traced curves end at the frame's own contact point
+        herpolhode = np.concatenate([self._rho_space[:end - 1], contact[None]])
+        polhode = np.concatenate([self._rho_body[:end - 1], contact_body[None]])
+        artists["herpolhode"].set_data_3d(*herpolhode.T)
+        artists["polhode"].set_data_3d(*polhode.T)
+        artists["body_contact"].set_data_3d([contact_body[0]], [contact_body[1]],
+                                            [contact_body[2]])
+        fraction = self.times[k] / self.motion.period
+        self._clock.set_text(f"t = {self.times[k]:.3f} = {fraction:.3f} T")
+        return FrameData(float(self.times[k]), rotation, contact, contact_body,
+                         herpolhode, polhode, self.plane_height)
+
+    @property
+    def animation(self):
+        """A :class:`matplotlib.animation.FuncAnimation` of the frames.
+
+        For notebooks (``to_jshtml``) and sphinx-gallery (build the
+        animation with ``pyplot=True`` and keep this object in a variable).
+        """
+        if self._animation is None:
+            from matplotlib.animation import FuncAnimation
+            self._animation = FuncAnimation(self.figure, lambda k: self.frame(k),
+                                            frames=len(self.times),
+                                            interval=1000.0 / self.fps, blit=False)
+        return self._animation
+
+    def render(self, k):
+        """Frame ``k`` as an RGB array (height, width, 3), uint8."""
+        self.frame(k)
+        canvas = self.figure.canvas
+        canvas.draw()
+        return np.asarray(canvas.buffer_rgba())[..., :3].copy()
+
+    def save(self, path, *, fmt=None):
+        """Write the animation to ``path`` atomically and deterministically.
+
+        Parameters
+        ----------
+        path : path
+            ``.gif`` (Pillow, always available) or ``.mp4`` (needs
+            imageio-ffmpeg, the optional extra ``animation``).
+        fmt : {"gif", "mp4"}, optional
+            Default: from the suffix.
+
+        Returns
+        -------
+        Path
+
+        Raises
+        ------
+        InputError
+            Unknown format, unwritable path, or MP4 without an ffmpeg writer.
+        """
+        path = Path(path)
+        fmt = (fmt or path.suffix.lstrip(".")).lower()
+        if fmt not in FORMATS:
+            raise InputError(f"unknown animation format {fmt!r}; use {', '.join(FORMATS)}")
+        if fmt == "mp4" and not mp4_available():
+            raise InputError("MP4 needs an ffmpeg writer: pip install 'orbits[animation]' "
+                             "(imageio-ffmpeg), or write a .gif")
+        ensure_writable(path)
+        with atomic_path(path) as temporary:
+            if fmt == "gif":
+                self._write_gif(temporary)
+            else:
+                self._write_mp4(temporary)
+        return path
+
+    def _write_gif(self, target):
+        from PIL import Image
+        frames = [Image.fromarray(self.render(k)) for k in range(len(self.times))]
+        # one fixed palette for all frames, from a montage of frames spread over
+        # the animation (the traced curves are absent from frame 0); no dithering
+        picks = sorted({int(round(j)) for j in np.linspace(0, len(frames) - 1, 6)})
+        montage = Image.new("RGB", (frames[0].width, frames[0].height * len(picks)))
+        for slot, k in enumerate(picks):
+            montage.paste(frames[k], (0, slot * frames[0].height))
+        palette = montage.quantize(colors=255, method=Image.Quantize.MEDIANCUT,
+                                   dither=Image.Dither.NONE)
+        indexed = [f.quantize(palette=palette, dither=Image.Dither.NONE) for f in frames]
+        buffer = io.BytesIO()
+        indexed[0].save(buffer, format="GIF", save_all=True, append_images=indexed[1:],
+                        duration=int(round(1000.0 / self.fps)), loop=0, optimize=False)
+        Path(target).write_bytes(buffer.getvalue())
+
+    def _write_mp4(self, target):
+        import imageio_ffmpeg
+        first = self.render(0)
+        height, width = first.shape[:2]
+        # libx264 needs even sizes; pad by repeating the last row/column
+        pad_h, pad_w = height % 2, width % 2
+        writer = imageio_ffmpeg.write_frames(
+            str(target), (width + pad_w, height + pad_h), fps=self.fps, codec="libx264",
+            pix_fmt_out="yuv420p", macro_block_size=1, quality=None,
+            output_params=["-f", "mp4", "-crf", "20", "-threads", "1",
+                           "-fflags", "+bitexact", "-flags:v", "+bitexact",
+                           "-map_metadata", "-1"],
+            ffmpeg_log_level="error")
+        writer.send(None)
+        for k in range(len(self.times)):
+            image = first if k == 0 else self.render(k)
+            if pad_h or pad_w:
+                image = np.pad(image, ((0, pad_h), (0, pad_w), (0, 0)), mode="edge")
+            writer.send(np.ascontiguousarray(image))
+        writer.close()
+
+
+def _cube(ax, half, zrange):
+    ax.set_xlim(-half, half)
+    ax.set_ylim(-half, half)
+    ax.set_zlim(*zrange)
+    ax.set_box_aspect((1, 1, (zrange[1] - zrange[0]) / (2 * half)), zoom=1.45)
+    ax.set_axis_off()
+
+
+def mp4_available():
+    """True when an ffmpeg writer (imageio-ffmpeg) is installed."""
+    import importlib.util
+    return importlib.util.find_spec("imageio_ffmpeg") is not None
+
+
+# ----------------------------------------------------------------- the entry point
+def poinsot_animation(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0,
+                      periods=None, frames=120, fps=20, out=None, solid="auto",
+                      title=None, dpi=80, pyplot=False):
+    """The Poinsot animation of a body's torque-free motion.
+
+    Parameters
+    ----------
+    source : Body, array_like (3,), Motion, or a catalog row
+        A body (with ``theta``/``dtheta``/``phi``/``speed`` for the spin,
+        as :meth:`Motion.from_spin`), a ready :class:`~orbits.Motion`, or a
+        catalog row (pandas Series / itertuples row with ``I1``, ``I2``,
+        ``I3``, ``dtheta``, ``q`` and ``closes_after`` or ``n``; e.g. from
+        :func:`orbit_row`).  A row is animated over its unit-norm moments,
+        ``|omega0| = 1``, as in the catalog.
+    theta, dtheta, phi, speed : float
+        The initial spin when ``source`` is a body.
+    periods : float, optional
+        Duration in periods T.  Default: ``q`` for a catalog row (the body
+        is back at its start, so the last frame equals the first), else 1.
+    frames : int
+        Number of frames (>= 2), evenly spaced in time, both ends included.
+    fps : int
+        Frames per second of the written file.
+    out : path, optional
+        Write the animation there (``.gif``, or ``.mp4`` with an ffmpeg
+        writer); atomic and deterministic (the same call gives the same
+        bytes).
+    solid : "auto", "ellipsoid" or tuple
+        The solid drawn; see :func:`solid_faces`.
+    title : str, optional
+    dpi : float
+        Pixel density of the frames (figure 9 x 4.6 in).
+    pyplot : bool
+        Create the figure through ``matplotlib.pyplot`` (for notebooks and
+        sphinx-gallery's animation scraper); default headless Agg.
+
+    Returns
+    -------
+    PoinsotAnimation
+        ``.figure``, ``.times``, ``.frame(k)`` (the drawn data of frame k),
+        ``.animation`` (FuncAnimation), ``.save(path)``.
+
+    Raises
+    ------
+    InputError
+        Bad ``frames``, ``fps``, ``periods`` or output path.
+    AngleError, SeparatrixError
+        Bad spin, as :meth:`Motion.from_spin`.
+
+    Examples
+    --------
+    >>> from orbits import Body
+    >>> from orbits.animate import orbit_row, poinsot_animation, flip_motion
+    >>> body = Body.preset("fig6")
+    >>> anim = poinsot_animation(orbit_row(body, n=5, branch="SAM"), out="n5.gif")
+    >>> flip = poinsot_animation(flip_motion(), out="flip.gif")   # Dzhanibekov
+    """
+    if isinstance(frames, bool) or int(frames) != frames or frames < 2:
+        raise InputError(f"frames must be an integer >= 2, got {frames!r}")
+    if isinstance(fps, bool) or int(fps) != fps or not 1 <= fps <= 100:
+        raise InputError(f"fps must be an integer in 1..100, got {fps!r}")
+    motion, default_periods, label = _motion_from(source, theta, dtheta, phi, speed)
+    periods = default_periods if periods is None else periods
+    if not (np.isfinite(periods) and periods > 0):
+        raise InputError(f"periods must be positive, got {periods!r}")
+    times = np.linspace(0.0, float(periods) * motion.period, int(frames))
+    if out is not None:
+        path = Path(out)
+        fmt = path.suffix.lstrip(".").lower()
+        if fmt not in FORMATS:
+            raise InputError(f"unknown animation format {path.suffix!r}; use .gif or .mp4")
+        ensure_writable(path)
+    animation = PoinsotAnimation(motion, times, fps=fps, solid=solid,
+                                 title=title or label, dpi=dpi, pyplot=pyplot)
+    if out is not None:
+        animation.save(out)
+    return animation
+
+
+def _motion_from(source, theta, dtheta, phi, speed):
+    """(Motion, default periods, title) from a body, a Motion or a catalog row."""
+    if isinstance(source, Motion):
+        return source, 1.0, None
+    row = _as_row(source)
+    if row is not None:
+        body = Body((row["I1"], row["I2"], row["I3"]), name=row.get("body"))
+        motion = Motion.from_spin(body, dtheta=float(row["dtheta"]))
+        p, q = int(row["n"]), int(row["q"])
+        multiple = f"{p}" if q == 1 else f"{p}/{q}"
+        name = row.get("body") or "body"
+        label = (rf"{name}: closed orbit $\Delta\alpha = 2\pi\cdot{multiple}$, "
+                 rf"{row['branch']}, $\theta-\theta_c$ = {float(row['dtheta']):.3e}; "
+                 f"back at its start after {q} T")
+        return motion, float(q), label
+    body = _as_body(source)
+    if theta is None and dtheta is None:
+        raise InputError("give the spin: theta or dtheta (or pass a Motion or a catalog row)")
+    return Motion.from_spin(body, theta, dtheta=dtheta, phi=phi, speed=speed), 1.0, None
+
+
+def _as_row(source):
+    keys = ("I1", "I2", "I3", "dtheta", "n", "q")
+    if hasattr(source, "_asdict"):                 # DataFrame.itertuples()
+        source = source._asdict()
+    if hasattr(source, "keys") and all(k in source.keys() for k in keys):
+        return {k: source[k] for k in source.keys()}
+    return None
+
+
+__all__ = ["FrameData", "PoinsotAnimation", "flip_motion", "inertia_ellipsoid_lines",
+           "mp4_available", "orbit_row", "poinsot_animation", "solid_faces",
+           "t_handle_boxes"]

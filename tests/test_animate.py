@@ -1,0 +1,243 @@
+"""Poinsot animations: the drawn data are the exact motion (no pixels compared)."""
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from PIL import Image  # noqa: E402
+
+import orbits  # noqa: E402
+from orbits import Body, Motion, animate  # noqa: E402
+from orbits.cli import main  # noqa: E402
+from orbits.errors import InputError  # noqa: E402
+
+FIG6 = Body.preset("fig6")
+T_HANDLE = Body.preset("t-handle")
+# rounding in the exact motion ~1e-15; the bounds below leave 100x and more
+TIGHT = 1e-12
+
+
+@pytest.fixture(scope="module")
+def orbit_anim():
+    row = animate.orbit_row(FIG6, p=7, q=2, branch="SAM")
+    return row, animate.poinsot_animation(row, frames=11, dpi=30)
+
+
+def invariants(motion):
+    """E and M from omega0 and the moments directly (not from the Motion's slots)."""
+    w, moments = motion.omega0, motion.body.moments
+    return 0.5 * w @ (moments * w), np.linalg.norm(moments * w)
+
+
+def drawn_rotation(anim):
+    """The orientation as drawn: the body-axis segments' directions."""
+    columns = []
+    for line in anim.artists["axes"]:
+        x, y, z = (np.asarray(v) for v in line.get_data_3d())
+        segment = np.array([x[1] - x[0], y[1] - y[0], z[1] - z[0]])
+        columns.append(segment / np.linalg.norm(segment))
+    return np.stack(columns, axis=1)
+
+
+def test_orientation_drawn_is_motion_rotation(orbit_anim):
+    row, anim = orbit_anim
+    motion = Motion.from_spin(Body((row["I1"], row["I2"], row["I3"])), dtheta=row["dtheta"])
+    assert anim.times[-1] == pytest.approx(2 * motion.period, rel=1e-15)
+    expected = motion.rotation(anim.times)
+    moments = motion.body.moments
+    for k in range(len(anim.times)):
+        data = anim.frame(k)
+        np.testing.assert_allclose(drawn_rotation(anim), expected[k], rtol=0, atol=TIGHT)
+        np.testing.assert_array_equal(data.rotation, expected[k])
+        # every wire-frame point of the drawn ellipsoid satisfies x.(R I R^T).x = 1
+        inertia = expected[k] @ np.diag(moments) @ expected[k].T
+        for line in anim.artists["ellipsoid"]:
+            points = np.stack([np.asarray(v) for v in line.get_data_3d()], axis=-1)
+            np.testing.assert_allclose(np.einsum("ni,ij,nj->n", points, inertia, points),
+                                       1.0, rtol=TIGHT)
+
+
+def test_closed_orbit_returns_to_its_start(orbit_anim):
+    _, anim = orbit_anim
+    first, last = anim.frame(0), anim.frame(len(anim.times) - 1)
+    # p/q = 7/2 drawn over q = 2 periods: the body is back where it started
+    np.testing.assert_allclose(last.rotation, first.rotation, atol=1e-10)
+    np.testing.assert_allclose(last.contact, first.contact, atol=1e-10)
+    # ... while halfway it is not (the orbit is not 2 pi n)
+    middle = anim.frame(len(anim.times) // 2)
+    assert np.abs(middle.rotation - first.rotation).max() > 0.1
+
+
+@pytest.mark.parametrize("scale, speed", [(1.0, 1.0), (1000.0, 3.0)])
+def test_ellipsoid_touches_the_plane_at_omega_over_sqrt_2e(scale, speed):
+    """Units: I in J s^2, omega in rad/s, x in (J s^2)^(-1/2); the contact point is omega/sqrt(2E)."""
+    body = Body(scale * FIG6.moments)
+    motion = Motion.from_spin(body, 0.7, phi=0.3, speed=speed)
+    anim = animate.poinsot_animation(motion, frames=7, periods=0.8, dpi=30)
+    energy, momentum = invariants(motion)
+    height = np.sqrt(2 * energy) / momentum
+    # the drawn plane is z = sqrt(2E)/M
+    np.testing.assert_allclose(anim.artists["plane_edge"].get_data_3d()[2], height, rtol=TIGHT)
+    assert anim.plane_height == pytest.approx(height, rel=TIGHT)
+    omega_space = motion.omega_space(anim.times)
+    moments = body.moments
+    for k in range(len(anim.times)):
+        data = anim.frame(k)
+        x, y, z = (np.asarray(v)[0] for v in anim.artists["contact"].get_data_3d())
+        contact = np.array([x, y, z])
+        np.testing.assert_allclose(contact, omega_space[k] / np.sqrt(2 * energy),
+                                   rtol=0, atol=TIGHT * np.abs(contact).max())
+        # on the plane, and on the drawn ellipsoid
+        assert contact[2] == pytest.approx(height, rel=TIGHT)
+        rotation = drawn_rotation(anim)
+        inertia = rotation @ np.diag(moments) @ rotation.T
+        assert contact @ inertia @ contact == pytest.approx(1.0, rel=1e-11)
+        # the ellipsoid's normal there is along L (z): it touches, not cuts
+        normal = inertia @ contact
+        assert np.hypot(normal[0], normal[1]) <= 1e-11 * abs(normal[2])
+        # and its highest point is the plane: support height sqrt(z.I^-1.z)
+        inverse = rotation @ np.diag(1.0 / moments) @ rotation.T
+        assert np.sqrt(inverse[2, 2]) == pytest.approx(height, rel=1e-11)
+        for line in anim.artists["ellipsoid"]:
+            assert np.max(line.get_data_3d()[2]) <= height * (1 + 1e-12)
+        # the body-frame contact point is on x.I.x = 1 (the polhode)
+        assert data.contact_body @ (moments * data.contact_body) == pytest.approx(1.0,
+                                                                                  rel=TIGHT)
+
+
+def test_contact_point_lies_on_the_herpolhode(orbit_anim):
+    row, anim = orbit_anim
+    motion = anim.motion
+    energy, _ = invariants(motion)
+    for k in (1, 4, 10):
+        data = anim.frame(k)
+        traced = np.stack([np.asarray(v) for v in anim.artists["herpolhode"].get_data_3d()],
+                          axis=-1)
+        np.testing.assert_array_equal(traced[-1], data.contact)
+        np.testing.assert_allclose(traced[:, 2], anim.plane_height, rtol=TIGHT)
+        # the traced points are the herpolhode omega_space(t)/sqrt(2E) on [0, t_k]
+        times = np.linspace(0.0, anim.times[k], len(traced))
+        np.testing.assert_allclose(traced, motion.omega_space(times) / np.sqrt(2 * energy),
+                                   rtol=0, atol=1e-12)
+        polhode = np.stack([np.asarray(v) for v in anim.artists["polhode"].get_data_3d()],
+                           axis=-1)
+        np.testing.assert_allclose(np.einsum("ni,i,ni->n", polhode, motion.body.moments,
+                                             polhode), 1.0, rtol=TIGHT)
+
+
+def test_t_handle_solid_has_the_body_moments():
+    kind, faces = animate.solid_faces(T_HANDLE)
+    assert kind == "t-handle" and len(faces) == 12
+    tensor = np.zeros((3, 3))
+    mass = 0.0
+    for box in range(2):
+        corners = np.concatenate(faces[6 * box:6 * box + 6])
+        lo, hi = corners.min(axis=0), corners.max(axis=0)
+        volume = np.prod(hi - lo)
+        centre = 0.5 * (lo + hi)
+        a, b, c = hi - lo
+        tensor += volume / 12 * np.diag([b * b + c * c, a * a + c * c, a * a + b * b])
+        tensor += volume * (centre @ centre * np.eye(3) - np.outer(centre, centre))
+        mass += volume
+    # principal frame: the drawn solid's tensor is diag(I1, I2, I3) of the body
+    np.testing.assert_allclose(tensor / mass, np.diag(T_HANDLE.moments), atol=1e-12)
+    assert animate.solid_faces(FIG6)[0] == "ellipsoid"
+    assert animate.solid_faces(T_HANDLE, "ellipsoid")[0] == "ellipsoid"
+    kind, faces = animate.solid_faces(FIG6, ("box", 3.0, 2.0, 1.0))
+    extent = np.ptp(np.concatenate(faces), axis=0)
+    # the longest side lies along I1 (smallest moment)
+    np.testing.assert_allclose(extent, [3.0, 2.0, 1.0], rtol=1e-15)
+
+
+def test_flip_turns_the_intermediate_axis_over():
+    motion = animate.flip_motion()
+    assert motion.body == T_HANDLE
+    t = np.linspace(0.0, motion.period, 801)
+    axis_along_l = motion.rotation(t)[:, 2, 1]         # z component of the I2 axis
+    assert axis_along_l.min() < -0.95 and axis_along_l.max() > 0.95
+    with pytest.raises(InputError):
+        animate.flip_motion(offset=1.0)
+
+
+def test_output_is_deterministic_and_atomic(tmp_path, monkeypatch):
+    row = animate.orbit_row(FIG6, n=3, branch="LAM")
+    first = animate.poinsot_animation(row, frames=5, dpi=30, out=tmp_path / "a.gif")
+    animate.poinsot_animation(row, frames=5, dpi=30, out=tmp_path / "b.gif")
+    assert (tmp_path / "a.gif").read_bytes() == (tmp_path / "b.gif").read_bytes()
+    with Image.open(tmp_path / "a.gif") as image:
+        assert image.n_frames == 5
+    # a failure while rendering leaves neither the target nor a temporary file
+    calls = []
+
+    def broken(k):
+        calls.append(k)
+        if k == 3:
+            raise RuntimeError("disk full")
+        return animate.PoinsotAnimation.render(first, k)
+
+    monkeypatch.setattr(first, "render", broken)
+    with pytest.raises(RuntimeError):
+        first.save(tmp_path / "c.gif")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.gif", "b.gif"]
+
+
+@pytest.mark.skipif(not animate.mp4_available(), reason="imageio-ffmpeg not installed")
+def test_mp4(tmp_path):
+    motion = Motion.from_spin(FIG6, 0.5)
+    for name in ("a.mp4", "b.mp4"):
+        animate.poinsot_animation(motion, frames=4, dpi=30, out=tmp_path / name)
+    data = (tmp_path / "a.mp4").read_bytes()
+    assert data[4:8] == b"ftyp" and data == (tmp_path / "b.mp4").read_bytes()
+
+
+def test_orbit_row_selection():
+    row = animate.orbit_row(FIG6, n=5, branch="SAM")
+    assert (row["n"], row["q"], row["branch"], row["closes_after"]) == (5, 1, "SAM", "1/2")
+    with pytest.raises(InputError, match="choose one"):
+        animate.orbit_row(FIG6, n=5)
+    with pytest.raises(InputError, match="lowest terms"):
+        animate.orbit_row(FIG6, p=4, q=2, branch="SAM")
+    with pytest.raises(InputError, match="exactly one"):
+        animate.orbit_row(FIG6)
+    with pytest.raises(InputError, match="no closed orbit"):
+        animate.orbit_row(FIG6, n=1, branch="SAM")
+    table = orbits.closed_orbits(FIG6, n_max=3)
+    assert animate.orbit_row(FIG6, n=2, branch="LAM", orbits=table)["dtheta"] > 0
+
+
+class TestCli:
+    @pytest.mark.parametrize("argv", [
+        ["--preset", "fig6", "--n", "5", "--branch", "SAM"],
+        ["--preset", "fig6", "--p", "7", "--q", "2", "--branch", "LAM"],
+        ["--preset", "t-handle", "--flip"],
+        ["--t-handle", "8", "4", "1", "--theta", "0.3"],
+        ["--moments", "2", "3", "4", "--dtheta", "-0.01", "--phi", "0.2"],
+    ])
+    def test_writes(self, tmp_path, capsys, argv):
+        out = tmp_path / "x.gif"
+        assert main(["animate", *argv, "--frames", "3", "--dpi", "20",
+                     "--out", str(out)]) == 0
+        with Image.open(out) as image:
+            assert image.n_frames == 3
+        assert "written to" in capsys.readouterr().err
+
+    @pytest.mark.parametrize("argv, fragment", [
+        (["--preset", "fig6", "--out", "a.gif"], "exactly one spin"),
+        (["--preset", "fig6", "--n", "2", "--theta", "1", "--out", "a.gif"], "exactly one"),
+        (["--preset", "fig6", "--n", "5", "--out", "a.gif"], "--branch"),
+        (["--preset", "fig6", "--q", "2", "--theta", "1", "--out", "a.gif"], "--q needs --p"),
+        (["--preset", "fig6", "--theta", "0.5", "--out", "a.png"], "use .gif or .mp4"),
+        (["--preset", "fig6", "--flip", "2", "--out", "a.gif"], "(0, pi/4)"),
+        (["--preset", "fig6", "--theta", "0.5", "--frames", "1", "--out", "a.gif"],
+         "frames must be"),
+        (["--preset", "fig6", "--theta", "0.5", "--out", "/nonexistent/a.gif"],
+         "does not exist"),
+    ])
+    def test_bad_input(self, tmp_path, capsys, monkeypatch, argv, fragment):
+        monkeypatch.chdir(tmp_path)
+        code = main(["animate", *argv])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert code == 2 and len(err) == 1 and fragment in err[0], err
+        assert list(tmp_path.iterdir()) == []
