@@ -298,7 +298,7 @@ def read_catalog(path, *, check=True):
             raise InputError(f"{path} is damaged: the data section does not match its "
                              "SHA-256 (changed, truncated or extended)")
     dtypes = {name: float for name in CATALOG_COLUMNS + (VERIFIED_COLUMN,)}
-    dtypes.update(body=str, branch=str, n="int64", q="int64")
+    dtypes.update(body=str, branch=str, n="int64", q="int64", closes_after=str)
     try:
         frame = pd.read_csv(io.BytesIO(data), dtype=dtypes, keep_default_na=False,
                             **csv_float_options())
@@ -327,7 +327,8 @@ def read_catalog(path, *, check=True):
     frame["closes_after"] = frame["closes_after"].astype(str)
     if not frame["closes_after"].str.fullmatch(r"[1-9][0-9]*(/2)?").all():
         raise InputError(f"{path}: closes_after must be a whole or half number of periods")
-    numeric = frame[expected[1:5] + expected[8:] + extra]
+    textual = {"body", "branch", "n", "q", "closes_after"}
+    numeric = frame[[name for name in expected + extra if name not in textual]]
     for name in numeric.columns:
         if numeric[name].dtype.kind != "f":
             raise InputError(f"{path}: column {name} must hold numbers")
