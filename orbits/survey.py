@@ -682,12 +682,26 @@ def _have_pyarrow():
     return find_spec("pyarrow") is not None
 
 
+def _csv_dtypes():
+    from .search import CATALOG_COLUMNS
+    types = {name: np.float64 for name in BODY_COLUMNS + CATALOG_COLUMNS}
+    types.update({name: np.int64 for name in ("body", "orbits", "n_smallest", "n_largest",
+                                              "unresolved", "n", "q")})
+    types.update(name=str, branch=str, closes_after=str, min_at_end=object)
+    return types
+
+
+_CSV_DTYPES = _csv_dtypes()
+
+
 def _read_part(path):
     from .atomic import csv_float_options
     from .catalog import unneutralize
     if path.suffix == ".parquet":
         return pd.read_parquet(path)
-    frame = pd.read_csv(path, dtype={"name": str}, keep_default_na=False,
+    # Types by schema, not by inference: a part whose float column holds only
+    # "-0" or "0" would otherwise come back as integers (losing the sign).
+    frame = pd.read_csv(path, dtype=_CSV_DTYPES, keep_default_na=False,
                         **csv_float_options())
     if "name" in frame.columns:
         frame["name"] = frame["name"].map(unneutralize).astype(frame["name"].dtype)

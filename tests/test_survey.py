@@ -13,7 +13,7 @@ import pytest
 import orbits
 from orbits import InputError
 from orbits.cli import main
-from orbits.survey import (BODY_COLUMNS, Survey, _sha256, _write_table, compute_chunk,
+from orbits.survey import (BODY_COLUMNS, load_manifest, Survey, _sha256, _write_table, compute_chunk,
                            read_survey, survey_grid)
 
 
@@ -98,25 +98,32 @@ def test_other_parameters_are_refused(tmp_path):
         Survey.grid(tmp_path / "other", 20, 4).run()
 
 
+def _ledger_size(directory):
+    # finished chunks are those in the manifest's ledger (written atomically
+    # after each part); a part file alone may be a chunk killed mid-way
+    try:
+        return len(load_manifest(directory)["parts"])
+    except Exception:
+        return 0
+
+
 def test_resume_after_a_kill(tmp_path):
+    # resolution 300: about 90 chunks, so the kill lands mid-run on any machine
     reference = tmp_path / "reference"
-    Survey.grid(reference, 120, 10, chunk=400).run()
+    Survey.grid(reference, 300, 6, chunk=400).run()
     target = tmp_path / "killed"
-    argv = [sys.executable, "-m", "orbits.cli", "survey", "--resolution", "120",
-            "--n-max", "10", "--chunk", "400", "--out", str(target)]
+    argv = [sys.executable, "-m", "orbits.cli", "survey", "--resolution", "300",
+            "--n-max", "6", "--chunk", "400", "--out", str(target)]
     proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.time() + 120
-    while time.time() < deadline:
-        done = list((target / "bodies").glob("part-*")) if (target / "bodies").exists() else []
-        if len(done) >= 3:
-            break
-        time.sleep(0.01)
+    while time.time() < deadline and _ledger_size(target) < 3 and proc.poll() is None:
+        time.sleep(0.005)
     proc.send_signal(signal.SIGKILL)
     proc.wait()
-    finished = sorted(p.name for p in (target / "bodies").glob("part-*"))
-    total = Survey.grid(target, 120, 10, chunk=400).chunks
-    assert 3 <= len(finished) < total, "the kill came too late to test a resume"
-    # a second run computes only the missing chunks
+    finished = _ledger_size(target)
+    total = Survey.grid(target, 300, 6, chunk=400).chunks
+    assert 3 <= finished < total, "the kill came too late to test a resume"
+    # a second run computes only the chunks missing from the ledger
     calls = []
     import orbits.survey as module
     original = module.compute_chunk
@@ -127,10 +134,10 @@ def test_resume_after_a_kill(tmp_path):
 
     module.compute_chunk = counting
     try:
-        Survey.grid(target, 120, 10, chunk=400).run()
+        Survey.grid(target, 300, 6, chunk=400).run()
     finally:
         module.compute_chunk = original
-    assert len(calls) == total - len(finished)
+    assert len(calls) == total - finished
     assert read_bytes(target) == read_bytes(reference)      # nothing lost or doubled
     assert not list(target.rglob("*.part"))
 
