@@ -14,7 +14,7 @@ import sys
 import types
 
 from ._version import __version__
-from .errors import (AngleError, InputError, NonPhysicalBodyError,
+from .errors import (AngleError, ArgumentTypeError, InputError, NonPhysicalBodyError,
                      OrbitsError, SeparatrixError, SymmetricTopError)
 
 # public name -> submodule that defines it
@@ -68,6 +68,7 @@ def __dir__():
 
 __all__ = [
     "AngleError",
+    "ArgumentTypeError",
     "CATALOG_COLUMNS",
     "Body",
     "InertialDefectWarning",

@@ -15,29 +15,80 @@ import math
 
 import numpy as np
 
+from ._args import real_array
 from .errors import NonPhysicalBodyError, SymmetricTopError
 
 # Relative slack for I3 <= I1 + I2: a flat body built in floating point
-# may exceed the bound by a few rounding errors.
+# (e.g. I3 = fl(I1 + I2)) may exceed the bound by a few rounding errors.
+# Within it the body is moved exactly onto the flat edge (see
+# :func:`canonical_moments`); beyond it, it is rejected.
 _FLAT_SLACK = 8.0 * np.finfo(float).eps
 
 
-def validate_moments(moments):
-    """Check an array of sorted moments, shape (..., 3); raise on bad rows.
+def _two_sum(a, b):
+    """``s = fl(a + b)`` and the exact error ``a + b - s`` (Knuth's TwoSum)."""
+    s = a + b
+    bb = s - a
+    return s, (a - (s - bb)) + (b - bb)
+
+
+def flat_excess(unit):
+    """``I3 - I1 - I2`` of sorted moments, with its sign decided exactly.
+
+    ``unit`` has shape (n, 3), sorted, largest entry below 1 (no overflow).
+    ``s + e = I1 + I2`` exactly (TwoSum); ``I3 - s`` is exact by Sterbenz's
+    lemma whenever ``s/2 <= I3 <= 2 s`` (always for a candidate body), so
+    the one rounding left, in ``(I3 - s) - e``, keeps the sign: the result
+    is 0 exactly on the flat edge, negative strictly inside.
+    """
+    s, e = _two_sum(unit[:, 0], unit[:, 1])
+    return (unit[:, 2] - s) - e
+
+
+def _exact_difference(a, b):
+    """``a - b`` and whether it is exact."""
+    d, e = _two_sum(a, -b)
+    return d, e == 0.0
+
+
+def canonical_moments(moments):
+    """Validate sorted moments and bring them to the scale-free canonical form.
 
     Parameters
     ----------
-    moments : ndarray
-        Sorted ascending along the last axis.
+    moments : ndarray, shape (..., 3)
+        Sorted ascending along the last axis, any positive scale.
+
+    Returns
+    -------
+    unit : ndarray, shape (..., 3)
+        The moments times ``2**-exponent`` (an exact scaling), so that the
+        largest lies in [1/2, 1); a body within the flat-edge slack is moved
+        exactly onto the edge ``I3 = I1 + I2`` (one moment changed by at
+        most ``8 eps I3``).
+    exponent : ndarray of int, shape (...)
+        ``moments ~= unit * 2**exponent``.
 
     Raises
     ------
     NonPhysicalBodyError
-        A moment is NaN, infinite or not positive, or ``I3 > I1 + I2``.
+        A moment not finite or not positive; ``I3 > I1 + I2`` by more than
+        ``8 eps I3``; or within that slack with no double-precision body on
+        the flat edge that differs from it in one moment by the excess.
     SymmetricTopError
-        Two moments are equal.
+        Two equal moments (after any move onto the flat edge).
+
+    Notes
+    -----
+    Every kernel receives ``unit``, so Delta alpha, theta_crit, the roots of
+    the search and whole catalogs are bit-identical for moments scaled by a
+    power of two, and free of overflow and underflow for any scale of
+    doubles.  The flat edge is decided exactly (:func:`flat_excess`): on it
+    ``min Delta alpha = 2 pi``, reached only in the limit theta -> 0, so no
+    body beyond rounding of the edge can report an n = 1 orbit.
     """
-    flat = moments.reshape(-1, 3)
+    shape = moments.shape[:-1]
+    flat = np.array(moments, dtype=float).reshape(-1, 3)
     bad = ~np.all(np.isfinite(flat), axis=1)
     if bad.any():
         raise NonPhysicalBodyError(
@@ -46,18 +97,73 @@ def validate_moments(moments):
     if bad.any():
         raise NonPhysicalBodyError(
             f"moments {_row(flat, bad)} must all be positive")
-    excess = flat[:, 2] - (flat[:, 0] + flat[:, 1])
-    bad = excess > _FLAT_SLACK * flat[:, 2]
+    _, exponent = np.frexp(flat[:, 2])
+    exponent = exponent.astype(np.int64)
+    with np.errstate(under="ignore"):
+        unit = np.ldexp(flat, -exponent[:, None])
+    excess = flat_excess(unit)
+    bad = excess > _FLAT_SLACK * unit[:, 2]
     if bad.any():
         raise NonPhysicalBodyError(
             f"moments {_row(flat, bad)} violate the triangle inequality "
-            "I3 <= I1 + I2 that every rigid body satisfies")
-    bad = (flat[:, 0] == flat[:, 1]) | (flat[:, 1] == flat[:, 2])
+            "I3 <= I1 + I2 that every rigid body satisfies (by more than the "
+            "rounding slack 8 eps I3)")
+    near = np.flatnonzero(excess > 0.0)
+    if near.size:
+        unit[near] = _snap_flat(unit[near], flat[near])
+    bad = (unit[:, 0] == unit[:, 1]) | (unit[:, 1] == unit[:, 2])
     if bad.any():
         raise SymmetricTopError(
             f"moments {_row(flat, bad)} describe a symmetric top (two equal "
             "moments): it has no separatrix and its elliptic modulus "
             "degenerates, so the total-phase formula needs I1 < I2 < I3")
+    return unit.reshape(shape + (3,)), exponent.reshape(shape)
+
+
+def _snap_flat(unit, given):
+    """Move bodies just beyond the flat edge exactly onto it (rows of ``unit``).
+
+    Tried in turn, each exact in doubles and keeping ``I1 < I2 < I3``:
+    ``I3 <- I1 + I2``, ``I1 <- I3 - I2``, ``I2 <- I3 - I1``.  The moment
+    changed moves by the excess ``I3 - I1 - I2 <= 8 eps I3``.
+    """
+    out = unit.copy()
+    i1, i2, i3 = unit[:, 0], unit[:, 1], unit[:, 2]
+    new3, exact3 = _two_sum(i1, i2)
+    ok3 = (exact3 == 0.0) & (new3 > i2)
+    new1, ok1 = _exact_difference(i3, i2)
+    ok1 &= (new1 > 0.0) & (new1 < i2)
+    new2, ok2 = _exact_difference(i3, i1)
+    ok2 &= (new2 > i1) & (new2 < i3)
+    done = np.zeros(len(unit), dtype=bool)
+    for column, new, ok in ((2, new3, ok3), (0, new1, ok1), (1, new2, ok2)):
+        use = ok & ~done
+        out[use, column] = new[use]
+        done |= use
+    if not done.all():
+        raise NonPhysicalBodyError(
+            f"moments {_row(given, ~done)} exceed the flat edge I3 = I1 + I2 by "
+            "less than the rounding slack 8 eps I3, but no body on the edge "
+            "differs from them in one moment by that excess; give moments with "
+            "I3 <= I1 + I2")
+    return out
+
+
+def validate_moments(moments):
+    """Check an array of sorted moments, shape (..., 3); raise on bad rows.
+
+    See :func:`canonical_moments`, which this calls (bodies within the
+    flat-edge slack pass).
+
+    Raises
+    ------
+    NonPhysicalBodyError
+        A moment is NaN, infinite or not positive, or ``I3 > I1 + I2``
+        beyond the slack.
+    SymmetricTopError
+        Two moments are equal.
+    """
+    canonical_moments(moments)
 
 
 def _row(flat, bad):
@@ -66,17 +172,52 @@ def _row(flat, bad):
     return "(" + ", ".join(f"{v:.17g}" for v in flat[index]) + ")" + where
 
 
-def as_moments(body_or_moments):
-    """Sorted, validated moments of shape (..., 3) from a Body or array."""
-    if isinstance(body_or_moments, Body):
-        return body_or_moments.moments
-    moments = np.asarray(body_or_moments, dtype=float)
+def _moment_array(body_or_moments):
+    """Sorted moments, shape (..., 3), from an array-like (type-checked)."""
+    moments = real_array("moments", body_or_moments, NonPhysicalBodyError)
     if moments.ndim == 0 or moments.shape[-1] != 3:
         raise NonPhysicalBodyError(
             f"moments must have shape (..., 3), got {moments.shape}")
-    moments = np.sort(moments, axis=-1)
-    validate_moments(moments)
-    return moments
+    return np.sort(moments, axis=-1)
+
+
+def _rescaled(unit, exponent, given):
+    """``unit * 2**exponent``; refuses a flat-edge move lost to underflow."""
+    with np.errstate(under="ignore", over="ignore"):
+        out = np.ldexp(unit, np.asarray(exponent)[..., None])
+        back = np.ldexp(out, -np.asarray(exponent)[..., None])
+    if not np.array_equal(back, unit):
+        flat = np.asarray(given).reshape(-1, 3)
+        wrong = ~np.all(back.reshape(-1, 3) == unit.reshape(-1, 3), axis=1)
+        raise NonPhysicalBodyError(
+            f"moments {_row(flat, wrong)} lie within rounding of the flat edge; "
+            "the body on the edge is not representable at this scale "
+            "(subnormal moments): give the moments in larger units")
+    return out
+
+
+def as_moments(body_or_moments):
+    """Sorted, validated moments of shape (..., 3) at the caller's scale.
+
+    A body within the flat-edge slack comes back exactly on the edge
+    (see :func:`canonical_moments`).
+    """
+    if isinstance(body_or_moments, Body):
+        return body_or_moments.moments
+    moments = _moment_array(body_or_moments)
+    unit, exponent = canonical_moments(moments)
+    return _rescaled(unit, exponent, moments)
+
+
+def unit_moments(body_or_moments):
+    """Canonical moments ``unit`` and ``exponent`` (see :func:`canonical_moments`).
+
+    What every kernel receives: exact power-of-two normalisation, largest
+    moment in [1/2, 1), bodies within the slack on the flat edge.
+    """
+    if isinstance(body_or_moments, Body):
+        return body_or_moments.unit_moments, body_or_moments.exponent
+    return canonical_moments(_moment_array(body_or_moments))
 
 
 class Body:
@@ -107,14 +248,14 @@ class Body:
     """
 
     def __init__(self, moments, *, name=None, frame=None):
-        given = np.asarray(moments, dtype=float)
+        given = real_array("moments", moments, NonPhysicalBodyError)
         if given.shape != (3,):
             raise NonPhysicalBodyError(
                 f"a body needs exactly 3 principal moments, got shape "
                 f"{given.shape}")
         order = np.argsort(given, kind="stable")
-        sorted_moments = given[order]
-        validate_moments(sorted_moments)
+        unit, exponent = canonical_moments(given[order])
+        sorted_moments = _rescaled(unit, exponent, given[order])
         if frame is None:
             frame = np.zeros((3, 3))
             frame[np.arange(3), order] = 1.0
@@ -126,6 +267,9 @@ class Body:
                 frame[2] *= -1.0
         self._moments = sorted_moments
         self._moments.setflags(write=False)
+        self._unit = unit
+        self._unit.setflags(write=False)
+        self._exponent = int(exponent)
         self._permutation = tuple(int(i) for i in order)
         self._frame = frame
         self._frame.setflags(write=False)
@@ -251,9 +395,22 @@ class Body:
         return self._moments
 
     @property
+    def unit_moments(self):
+        """Moments times ``2**-exponent`` (exact), the largest in [1/2, 1).
+
+        The scale-free form every kernel receives (:func:`canonical_moments`).
+        """
+        return self._unit
+
+    @property
+    def exponent(self):
+        """``moments = unit_moments * 2**exponent``."""
+        return self._exponent
+
+    @property
     def normalized_moments(self):
         """Moments scaled to ``|I| = 1`` (the paper's convention)."""
-        return self._moments / np.linalg.norm(self._moments)
+        return self._unit / np.linalg.norm(self._unit)     # no overflow at any scale
 
     @property
     def permutation(self):
@@ -267,9 +424,12 @@ class Body:
 
     @property
     def is_flat(self):
-        """True when ``I3 = I1 + I2`` to rounding (a lamina)."""
-        i1, i2, i3 = self._moments
-        return abs(i3 - i1 - i2) <= _FLAT_SLACK * i3
+        """True when ``I3 = I1 + I2`` exactly (a lamina).
+
+        Moments given within the rounding slack of the edge were moved onto
+        it (:func:`canonical_moments`), so this is an exact test.
+        """
+        return bool(flat_excess(self._unit.reshape(1, 3))[0] == 0.0)
 
     def equivalent_ellipsoid(self):
         """Semi-axes (a, b, c) of the unit-mass solid ellipsoid with these moments.

@@ -42,3 +42,11 @@ class SeparatrixError(OrbitsError):
 
 class InputError(OrbitsError):
     """Any other invalid argument (counts, file contents, options)."""
+
+
+class ArgumentTypeError(InputError, TypeError):
+    """An argument of the wrong type (a string, complex or ``None`` where a
+    real number is needed); the message names the argument.
+
+    Derives from :class:`TypeError` too, so ``except TypeError`` catches it.
+    """

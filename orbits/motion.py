@@ -20,9 +20,12 @@ Units: the body's moments as given and omega as given (rad per unit time);
 
 from collections import namedtuple
 
+import math
+
 import numpy as np
 
-from .bodies import Body, as_moments
+from ._args import integer, real_array, real_scalar
+from .bodies import Body
 from .core import motion as _kernels
 from .core import phase as _phase
 from .errors import AngleError, InputError, SeparatrixError
@@ -51,10 +54,21 @@ about_momentum : 2 pi T / Delta alpha, the mean rotation period about L.
 def _as_body(body_or_moments):
     if isinstance(body_or_moments, Body):
         return body_or_moments
-    moments = as_moments(body_or_moments)
-    if moments.shape != (3,):
+    moments = real_array("moments", body_or_moments)
+    if moments.ndim == 2 and moments.shape[-1] == 3 and moments.shape[0] != 1:
         raise InputError("the motion is computed for one body at a time")
-    return Body(moments)
+    return Body(moments.reshape(-1) if moments.shape == (1, 3) else moments)
+
+
+def _scaled(value, power, what):
+    """``value * 2**power`` (exact), refused if it over- or underflows."""
+    with np.errstate(over="ignore", under="ignore"):
+        out = np.ldexp(value, power)
+        back = np.ldexp(out, -power)
+    if not np.all(np.isfinite(out)) or not np.array_equal(back, value):
+        raise InputError(f"the {what} of this motion does not fit a double at this "
+                         "scale of the moments and omega0; rescale them")
+    return out
 
 
 class Motion:
@@ -83,26 +97,35 @@ class Motion:
 
     def __init__(self, body, omega0, _gap=None):
         body = _as_body(body)
-        omega0 = np.asarray(omega0, dtype=float)
+        omega0 = real_array("omega0", omega0, AngleError)
         if omega0.shape != (3,) or not np.all(np.isfinite(omega0)):
             raise AngleError("omega0 must be a finite 3-vector")
         if not np.any(omega0):
             raise AngleError("omega0 must be nonzero")
-        i1, i2, i3 = body.moments
+        # Exact power-of-two scalings: the kernels see the unit moments of
+        # the body and omega0 / 2**speed, with max |component| in [1/2, 1);
+        # Euler's equations are homogeneous, so omega(t) = 2**speed u(2**speed t)
+        # and E, M, T follow by exact rescaling (no overflow at any scale).
+        speed = int(np.frexp(np.max(np.abs(omega0)))[1])
+        unit_omega = np.ldexp(omega0, -speed)
+        i1, i2, i3 = body.unit_moments
         if _gap is None:
-            _gap = _phase.vector_gap(i1, i2, i3, *omega0)
+            _gap = _phase.vector_gap(i1, i2, i3, *unit_omega)
         orbit = np.zeros(_kernels.ORBIT_SIZE)
-        branch = _kernels.orbit_setup(i1, i2, i3, *omega0, *_gap, orbit)
+        branch = _kernels.orbit_setup(i1, i2, i3, *unit_omega, *_gap, orbit)
         if branch == _phase.BRANCH_SEPARATRIX:
             raise SeparatrixError(
                 "omega0 lies on the separatrix M^2 = 2 E I2 (infinite period)")
         self.body = body
         self.omega0 = omega0
         self._orbit = orbit
+        self._speed = speed
         self.branch = "SAM" if branch == _phase.BRANCH_SAM else "LAM"
-        self.energy = 0.5 * orbit[_kernels.SLOT_TWO_E]
-        self.momentum = orbit[_kernels.SLOT_MOMENTUM]
-        self.period = orbit[_kernels.SLOT_PERIOD]
+        self.energy = float(_scaled(0.5 * orbit[_kernels.SLOT_TWO_E],
+                                    body.exponent + 2 * speed, "energy"))
+        self.momentum = float(_scaled(orbit[_kernels.SLOT_MOMENTUM],
+                                      body.exponent + speed, "angular momentum"))
+        self.period = float(_scaled(orbit[_kernels.SLOT_PERIOD], -speed, "period"))
         self.m = orbit[_kernels.SLOT_M]
         self.one_minus_m = orbit[_kernels.SLOT_KC] ** 2
 
@@ -133,16 +156,20 @@ class Motion:
             As :func:`orbits.total_phase`; ``speed`` must be positive.
         """
         body = _as_body(body)
+        speed = real_scalar("speed", speed, AngleError)
         if not (np.isfinite(speed) and speed > 0.0):
             raise AngleError(f"speed must be positive, got {speed}")
         if (theta is None) == (dtheta is None):
             raise AngleError("give exactly one of theta and dtheta")
+        phi = real_scalar("phi", phi, AngleError)
         if not np.isfinite(phi):
             raise AngleError(f"phi must be finite, got {phi}")
         from_offset = dtheta is not None
+        angle = real_scalar("dtheta" if from_offset else "theta",
+                            dtheta if from_offset else theta, AngleError)
         status, theta_, _, _, w1, w2, w3, scale, offset, closing = \
-            _phase.spin_from_angle(_phase.body_constants(*body.moments, float(phi)),
-                                   float(dtheta if from_offset else theta), from_offset)
+            _phase.spin_from_angle(_phase.body_constants(*body.unit_moments, phi),
+                                   angle, from_offset)
         if status == _phase.STATUS_NOT_FINITE:
             raise AngleError(f"{'dtheta' if from_offset else 'theta'} must be finite")
         if status == _phase.STATUS_OUT_OF_RANGE:
@@ -150,23 +177,31 @@ class Motion:
         if status == _phase.STATUS_SEPARATRIX:
             raise SeparatrixError("the spin lies on the separatrix; pass a "
                                   "nonzero dtheta")
-        omega = speed * np.array([w1, w2, w3])
-        # the gap scales with speed^2 like omega's squares
-        return cls(body, omega, (scale * speed * speed, offset, closing))
+        with np.errstate(over="ignore"):
+            omega = speed * np.array([w1, w2, w3])
+        if not np.all(np.isfinite(omega)):
+            raise AngleError(f"speed {speed!r} is too large for a double omega0")
+        # the kernel sees omega / 2**k (see __init__); the gap scales like
+        # omega's squares
+        unit_speed = math.ldexp(speed, -int(np.frexp(np.max(np.abs(omega)))[1]))
+        return cls(body, omega, (scale * unit_speed * unit_speed, offset, closing))
 
     # ------------------------------------------------------------------
     def _times(self, t):
-        # asarray, not ascontiguousarray: a scalar time must keep shape ()
-        times = np.asarray(t, dtype=float)
+        """Times as an array (shape kept: a scalar stays shape ()) and in kernel units."""
+        times = real_array("t", t)
         if not np.all(np.isfinite(times)):
             raise InputError("times must be finite")
-        return times
+        with np.errstate(over="ignore", under="ignore"):
+            scaled = np.ldexp(times, self._speed)
+        if not np.all(np.isfinite(scaled)):
+            raise InputError("times too large for this |omega0| (t |omega0| overflows)")
+        return times, np.ascontiguousarray(scaled.reshape(-1))
 
     @size_aware
     def state(self, t):
         """Everything at the times ``t``: a :class:`MotionState`."""
-        times = self._times(t)
-        flat = np.ascontiguousarray(times.reshape(-1))
+        times, flat = self._times(t)
         n = flat.shape[0]
         omega = np.empty((n, 3))
         euler = np.empty((n, 3))
@@ -175,6 +210,8 @@ class Motion:
         _kernels.motion_on_grid(self._orbit, flat, omega, euler, rotation,
                                 omega_space)
         shape = times.shape
+        omega = _scaled(omega, self._speed, "angular velocity")
+        omega_space = _scaled(omega_space, self._speed, "angular velocity")
         return MotionState(times, omega.reshape(shape + (3,)),
                            euler.reshape(shape + (3,)),
                            rotation.reshape(shape + (3, 3)),
@@ -186,7 +223,8 @@ class Motion:
 
     def angular_momentum(self, t):
         """Body-frame angular momentum ``I omega`` (the polhode), shape ``t.shape + (3,)``."""
-        return self.state(t).omega * self.body.moments
+        unit = np.ldexp(self.state(t).omega, -self._speed) * self.body.unit_moments
+        return _scaled(unit, self._speed + self.body.exponent, "angular momentum")
 
     def euler_angles(self, t):
         """Euler angles ``(phi, theta, psi)``, z-x'-z'', radians, shape ``t.shape + (3,)``."""
@@ -214,11 +252,10 @@ class Motion:
     @size_aware
     def omega_space(self, t):
         """Space-frame angular velocity (z along M): the herpolhode, shape ``t.shape + (3,)``."""
-        times = self._times(t)
+        times, flat = self._times(t)
         out = np.empty((times.size, 3))
-        _kernels.omega_space_on_grid(self._orbit, np.ascontiguousarray(times.reshape(-1)),
-                                     out)
-        return out.reshape(times.shape + (3,))
+        _kernels.omega_space_on_grid(self._orbit, flat, out)
+        return _scaled(out, self._speed, "angular velocity").reshape(times.shape + (3,))
 
     def total_phase(self):
         """``Delta alpha`` from the Euler angle phi after one period.
@@ -304,12 +341,19 @@ class Motion:
                 f"branch={self.branch!r}, period={self.period:.6g})")
 
 
+# largest curve returned by herpolhode/polhode (about 0.5 GB of state)
+MAX_POINTS = 10_000_000
+
+
 def _grid(motion, periods, points):
+    periods = real_scalar("periods", periods)
     if not (np.isfinite(periods) and periods > 0):
         raise InputError(f"periods must be positive, got {periods}")
-    if int(points) != points or points < 2:
-        raise InputError(f"points must be an integer >= 2, got {points}")
-    return np.linspace(0.0, periods * motion.period, int(points))
+    points = integer("points", points, minimum=2, maximum=MAX_POINTS)
+    end = periods * motion.period
+    if not np.isfinite(end):
+        raise InputError(f"periods = {periods!r} periods overflow the time axis")
+    return np.linspace(0.0, end, points)
 
 
 def _paper_motion(body_or_moments, theta, dtheta, phi):

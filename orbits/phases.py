@@ -28,9 +28,10 @@ from collections import namedtuple
 import numpy as np
 import pandas as pd
 
-from .bodies import as_moments
+from ._args import broadcast, real_array
+from .bodies import unit_moments
 from .core import phase as _kernels
-from .errors import AngleError, SeparatrixError
+from .errors import AngleError, InputError, SeparatrixError
 from .threads import size_aware
 
 HALF_PI = 0.5 * np.pi
@@ -44,7 +45,7 @@ theta_half_pi : eqn:alphamin2, ``2 pi sqrt(I2 I3 / ((I2-I1)(I3-I1)))``
 
 
 def _float_array(name, value):
-    array = np.asarray(value, dtype=float)
+    array = real_array(name, value, AngleError)
     if not np.all(np.isfinite(array)):
         raise AngleError(f"{name} must be finite, got {_first_bad(array)}")
     return array
@@ -60,9 +61,11 @@ def _spin_inputs(moments, theta, dtheta, phi):
     if (theta is None) == (dtheta is None):
         raise AngleError("give exactly one of theta and dtheta")
     from_offset = dtheta is not None
-    angle = np.asarray(dtheta if from_offset else theta, dtype=float)
+    name = "dtheta" if from_offset else "theta"
+    angle = real_array(name, dtheta if from_offset else theta, AngleError)
     phi = _float_array("phi", phi)
-    shape = np.broadcast_shapes(moments.shape[:-1], angle.shape, phi.shape)
+    shape = broadcast([("moments", moments.shape[:-1]), (name, angle.shape),
+                       ("phi", phi.shape)])
     return from_offset, angle, phi, shape
 
 
@@ -121,9 +124,9 @@ def critical_angle(body_or_moments, phi=0.0):
     AngleError
         ``phi`` not finite.
     """
-    moments = as_moments(body_or_moments)
+    moments, _ = unit_moments(body_or_moments)
     phi = _float_array("phi", phi)
-    shape = np.broadcast_shapes(moments.shape[:-1], phi.shape)
+    shape = broadcast([("moments", moments.shape[:-1]), ("phi", phi.shape)])
     out = np.empty(shape)
     _kernels.critical_angle_many(*(_flat(moments[..., k], shape) for k in range(3)),
                                  _flat(phi, shape), out.reshape(-1))
@@ -166,7 +169,7 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0):
     SeparatrixError
         ``theta`` exactly on the separatrix (``dtheta == 0``).
     """
-    moments = as_moments(body_or_moments)
+    moments, _ = unit_moments(body_or_moments)
     from_offset, angle, phi, shape = _spin_inputs(moments, theta, dtheta, phi)
     out = np.empty(shape)
     status = np.empty(shape, dtype=np.int8)
@@ -181,7 +184,18 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0):
             *(_flat(moments[..., k], shape) for k in range(3)), _flat(phi, shape),
             _flat(angle, shape), from_offset, out.reshape(-1), status.reshape(-1))
     _check_status(status, moments, angle, phi, shape, from_offset)
-    return out
+    return at_least_two_pi(out)
+
+
+def at_least_two_pi(total):
+    """``max(Delta alpha, 2 pi)``, in place.
+
+    ``Delta alpha > 2 pi`` for every spin of every physical body, with
+    ``2 pi`` only the limit theta -> 0 on the flat edge ``I3 = I1 + I2``
+    (eqn:alphamin1 with ``I3 - I2 = I1``); there rounding can land a few
+    ulp below, which would read as an orbit closing after one turn.
+    """
+    return np.maximum(total, 2.0 * np.pi, out=total)
 
 
 @size_aware
@@ -220,7 +234,7 @@ def phases(body_or_moments, theta=None, phi=0.0, *, dtheta=None):
     ------
     As :func:`total_phase`.
     """
-    moments = as_moments(body_or_moments)
+    moments, _ = unit_moments(body_or_moments)
     from_offset, angle, phi, shape = _spin_inputs(moments, theta, dtheta, phi)
     i1, i2, i3 = (_flat(moments[..., k], shape) for k in range(3))
     parts = np.empty((i1.shape[0], len(_kernels.PARTS_COLUMNS)))
@@ -249,7 +263,7 @@ def _parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total):
         "m": m_param,
         "period": period,
         "dynamic_phase": dynamic,
-        "total_phase": total,
+        "total_phase": at_least_two_pi(total),
         "geometric_phase": dynamic - total,
     }
 
@@ -269,7 +283,7 @@ def phase_limits(body_or_moments):
         Both exceed 2 pi for every physical body: the triangle
         inequalities give ``I3 - I2 <= I1`` and ``I3 - I1 <= I2``.
     """
-    moments = as_moments(body_or_moments)
+    moments, _ = unit_moments(body_or_moments)
     i1, i2, i3 = moments[..., 0], moments[..., 1], moments[..., 2]
     at_zero = 2.0 * np.pi * np.sqrt(i1 * i2 / ((i3 - i2) * (i3 - i1)))
     at_half_pi = 2.0 * np.pi * np.sqrt(i2 * i3 / ((i2 - i1) * (i3 - i1)))
@@ -314,21 +328,25 @@ def spin_phases(body_or_moments, omega):
     near it this path is ill-conditioned (as the ``theta`` path of
     :func:`total_phase`); use ``dtheta`` there.
     """
-    moments = as_moments(body_or_moments)
-    omega = np.asarray(omega, dtype=float)
+    moments, _ = unit_moments(body_or_moments)
+    omega = real_array("omega", omega, AngleError)
     if omega.ndim == 0 or omega.shape[-1] != 3:
         raise AngleError(f"omega must have shape (..., 3), got {omega.shape}")
     if not np.all(np.isfinite(omega)):
         raise AngleError(f"omega must be finite, got {_first_bad(omega)}")
-    shape = np.broadcast_shapes(moments.shape[:-1], omega.shape[:-1])
+    shape = broadcast([("moments", moments.shape[:-1]), ("omega", omega.shape[:-1])])
     cols = [np.ascontiguousarray(np.broadcast_to(a[..., k], shape),
                                  dtype=float).ravel()
             for a in (moments, omega) for k in range(3)]
     i1, i2, i3, w1, w2, w3 = cols
     if np.any((w1 == 0.0) & (w2 == 0.0) & (w3 == 0.0)):
         raise AngleError("omega must be nonzero")
+    # |omega| scaled by an exact power of two into [1/2, 1): the phases do not
+    # depend on it, and no square under- or overflows (omega = 1e-200 is fine)
+    _, speed = np.frexp(np.maximum(np.maximum(np.abs(w1), np.abs(w2)), np.abs(w3)))
+    u1, u2, u3 = (np.ldexp(w, -speed) for w in (w1, w2, w3))
     parts = np.empty((i1.shape[0], 7))
-    _kernels.parts_from_vector_array(i1, i2, i3, w1, w2, w3, parts)
+    _kernels.parts_from_vector_array(i1, i2, i3, u1, u2, u3, parts)
     two_e, m_sq, m_param, branch, period, dynamic, total = parts.T
     if np.any(branch == 0):
         k = int(np.flatnonzero(branch == 0)[0])
@@ -336,7 +354,19 @@ def spin_phases(body_or_moments, omega):
             f"omega = ({w1[k]:.17g}, {w2[k]:.17g}, {w3[k]:.17g}) lies on the "
             "separatrix M^2 = 2 E I2 (infinite period and phase)")
     norm = np.sqrt(i1 * i1 + i2 * i2 + i3 * i3)
-    return pd.DataFrame({
-        "w1": w1, "w2": w2, "w3": w3,
-        **_parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total),
-    })
+    columns = _parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total)
+    # E ~ |omega|^2, M ~ |omega|, T ~ 1/|omega|: Euler's equations are
+    # homogeneous, and the scaling by 2**speed is exact unless it over- or
+    # underflows, which is refused rather than rounded to 0 or inf
+    for label, power in (("energy", 2), ("momentum", 1), ("period", -1)):
+        with np.errstate(over="ignore", under="ignore"):
+            value = np.ldexp(columns[label], power * speed)
+        wrong = ~np.isfinite(value) | (value < np.finfo(float).tiny)
+        if wrong.any():
+            k = int(np.flatnonzero(wrong)[0])
+            raise InputError(
+                f"omega = ({w1[k]:.17g}, {w2[k]:.17g}, {w3[k]:.17g}): its {label} "
+                "does not fit a normal double (|omega| too large or too small); "
+                "the phases do not depend on |omega|: pass a unit spin")
+        columns[label] = value
+    return pd.DataFrame({"w1": w1, "w2": w2, "w3": w3, **columns})

@@ -14,7 +14,8 @@ from fractions import Fraction
 import numpy as np
 import pandas as pd
 
-from .bodies import Body, as_moments
+from ._args import integer
+from .bodies import Body, unit_moments
 from .core import search as _kernels
 from .errors import InputError
 from .phases import phases
@@ -53,15 +54,36 @@ def phase_levels(n_max, q_max=1):
 
 
 def _count(name, value):
-    if isinstance(value, bool) or not float(value).is_integer() or value < 1:
-        raise InputError(f"{name} must be an integer >= 1, got {value!r}")
-    return int(value)
+    return integer(name, value, minimum=1)
 
 
 def _label(body, moments):
     if isinstance(body, Body) and body.name:
         return str(body.name)
     return "I=({:.9g}, {:.9g}, {:.9g})".format(*moments)
+
+
+TWO_PI = 2.0 * np.pi
+
+
+def searched(p, q):
+    """Mask of the levels ``2 pi p/q`` that can have roots: ``p > q``.
+
+    ``Delta alpha > 2 pi`` for every spin of every physical body (the limits
+    eqn:alphamin1 and eqn:alphamin2 are >= 2 pi by the triangle
+    inequalities, and the minimum lies at an end), with equality only in the
+    limit theta -> 0 on the flat edge ``I3 = I1 + I2``.  So ``p/q <= 1`` has
+    no closed orbit, and is not searched: near theta = 0 on a flat body
+    rounding alone could put the computed phase a few ulp below 2 pi.
+    """
+    return np.asarray(p) > np.asarray(q)
+
+
+def find_roots_at(moments, p, q, values):
+    """:func:`find_roots` over the searchable levels; level indices into ``values``."""
+    keep = np.flatnonzero(searched(p, q))
+    branch, level, offset, info = find_roots(moments, np.ascontiguousarray(values[keep]))
+    return branch, keep[level], offset, info
 
 
 def find_roots(moments, levels):
@@ -120,12 +142,15 @@ def closed_orbits(body, n_max=10, q_max=1):
     theta get all their roots.  Every root is checked:
     ``|Delta alpha - 2 pi p/q| <= 1e-10 * 2 pi p/q``.
     """
-    p, q, values = phase_levels(n_max, q_max)
-    moments = as_moments(body)
+    from .catalog import check_search_bounds
+    n_max, q_max = _count("n_max", n_max), _count("q_max", q_max)
+    check_search_bounds(n_max, q_max, 1, "this search")
+    moments, _ = unit_moments(body)
     if moments.shape != (3,):
         raise InputError("closed_orbits takes one body; use orbits.catalog.catalog "
                          "for many")
-    _, level, offset, info = find_roots(moments, values)
+    p, q, values = phase_levels(n_max, q_max)
+    _, level, offset, info = find_roots_at(moments, p, q, values)
     unreached = int(info[_kernels.INFO_UNREACHED_SAM] + info[_kernels.INFO_UNREACHED_LAM])
     if unreached:
         warnings.warn(
@@ -138,8 +163,10 @@ def closed_orbits(body, n_max=10, q_max=1):
                          p, q, values)
     frame.attrs["unresolved"] = unreached
     frame.attrs["minimum_phase"] = {
-        "SAM": (float(info[_kernels.INFO_MIN_SAM]), float(info[_kernels.INFO_MIN_AT_SAM])),
-        "LAM": (float(info[_kernels.INFO_MIN_LAM]), float(info[_kernels.INFO_MIN_AT_LAM])),
+        "SAM": (_at_least_two_pi(info[_kernels.INFO_MIN_SAM]),
+                float(info[_kernels.INFO_MIN_AT_SAM])),
+        "LAM": (_at_least_two_pi(info[_kernels.INFO_MIN_LAM]),
+                float(info[_kernels.INFO_MIN_AT_LAM])),
     }
     return frame
 
@@ -234,9 +261,20 @@ def minimum_phase(body):
         theta = pi/2: the paper's conjecture is that it is always one of
         these ends).
     """
-    moments = as_moments(body)
+    moments, _ = unit_moments(body)
+    if moments.shape != (3,):
+        raise InputError("minimum_phase takes one body")
     _, _, _, info = find_roots(moments, np.empty(0))
     sam = (info[_kernels.INFO_MIN_SAM], info[_kernels.INFO_MIN_AT_SAM])
     lam = (info[_kernels.INFO_MIN_LAM], info[_kernels.INFO_MIN_AT_LAM])
     best = min(sam, lam)
-    return float(best[0]), float(best[1])
+    return _at_least_two_pi(best[0]), float(best[1])
+
+
+def _at_least_two_pi(value):
+    """``max(value, 2 pi)``: the minimum is >= 2 pi for every physical body.
+
+    On the flat edge it is 2 pi (at theta -> 0), which rounding can miss by
+    a few ulp from below; the true value is never below.
+    """
+    return float(max(float(value), TWO_PI))

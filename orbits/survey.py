@@ -28,13 +28,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ._args import integer, path_argument, real_array
 from ._version import __version__
 from .atomic import FLOAT_FORMAT, atomic_path, write_text_atomic
-from .bodies import as_moments, region_grid
+from .bodies import as_moments, region_grid, unit_moments
 from .core import search as _kernels
-from .errors import InputError
+from .errors import ArgumentTypeError, InputError
 from .phases import phase_limits
-from .search import catalog_rows, phase_levels
+from .search import catalog_rows, phase_levels, searched
 
 FORMATS = ("csv", "parquet")
 DEFAULT_CHUNK = 20_000
@@ -67,9 +68,12 @@ def compute_chunk(moments, n_max, q_max=1, first_id=0):
         catalog schema (:data:`orbits.CATALOG_COLUMNS`) with ``body`` the
         body's id.
     """
-    moments = np.ascontiguousarray(as_moments(moments), dtype=float)
+    moments = np.ascontiguousarray(unit_moments(moments)[0], dtype=float).reshape(-1, 3)
     count = moments.shape[0]
-    p, q, levels = phase_levels(n_max, q_max)
+    p, q, all_levels = phase_levels(n_max, q_max)
+    # levels 2 pi p/q <= 2 pi have no roots (orbits.search.searched)
+    keep = np.flatnonzero(searched(p, q))
+    p, q, levels = p[keep], q[keep], np.ascontiguousarray(all_levels[keep])
     capacity = 2 * levels.size + 8
     info = np.empty((count, _kernels.INFO_SIZE))
     branch = np.empty((count, capacity), dtype=np.int8)
@@ -112,7 +116,8 @@ def _body_rows(moments, ids, info, orbits, body_of_row):
     sam_min = info[:, _kernels.INFO_MIN_SAM]
     lam_min = info[:, _kernels.INFO_MIN_LAM]
     use_sam = sam_min <= lam_min
-    minimum = np.where(use_sam, sam_min, lam_min)
+    # >= 2 pi for every body (orbits.search._at_least_two_pi)
+    minimum = np.maximum(np.where(use_sam, sam_min, lam_min), 2.0 * np.pi)
     where = np.where(use_sam, info[:, _kernels.INFO_MIN_AT_SAM],
                      info[:, _kernels.INFO_MIN_AT_LAM])
     end_value = np.minimum(limits.theta_zero, limits.theta_half_pi)
@@ -201,8 +206,7 @@ def check_survey_bounds(bodies, n_max, q_max, chunk):
 def check_resolution(resolution):
     """Refuse a grid whose construction alone would exceed the machine."""
     from .catalog import _bytes, memory_budget
-    if isinstance(resolution, bool) or int(resolution) != resolution or resolution < 2:
-        raise InputError(f"resolution must be an integer >= 2, got {resolution!r}")
+    resolution = integer("resolution", resolution, minimum=2)
     memory = float(resolution) ** 2 * _BYTES_PER_GRID_POINT
     if memory > memory_budget():
         raise InputError(f"--resolution {resolution} would need about {_bytes(memory)} "
@@ -239,10 +243,11 @@ class Survey:
         if fmt == "parquet":
             _require_pyarrow()
         for name, value in (("n_max", n_max), ("q_max", q_max), ("chunk", chunk)):
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
-                    or value < 1:
+            if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+                raise ArgumentTypeError(f"{name} must be an integer >= 1, got {value!r}")
+            if value < 1:
                 raise InputError(f"{name} must be an integer >= 1, got {value!r}")
-        self.out_dir = Path(out_dir)
+        self.out_dir = Path(path_argument("out_dir", out_dir))
         self.moments = np.ascontiguousarray(as_moments(moments), dtype=float).reshape(-1, 3)
         if self.moments.shape[0] == 0:
             raise InputError("a survey needs at least one body")
@@ -280,8 +285,14 @@ class Survey:
         Names of :class:`~orbits.Body` objects are kept (a ``name`` column
         in the bodies table) unless ``names`` is given.
         """
+        if isinstance(bodies, (str, bytes)) or not hasattr(bodies, "__iter__"):
+            raise ArgumentTypeError(f"bodies must be an iterable of Body objects or "
+                                    f"moments, got {type(bodies).__name__}")
         bodies = list(bodies)
-        moments = np.array([getattr(b, "moments", b) for b in bodies], dtype=float)
+        if not bodies:
+            raise InputError("a survey needs at least one body")
+        moments = real_array("bodies", [getattr(b, "moments", b) for b in bodies],
+                             InputError)
         if "names" not in kwargs and bodies and all(
                 getattr(b, "name", None) is not None for b in bodies):
             kwargs["names"] = [b.name for b in bodies]

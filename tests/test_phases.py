@@ -168,9 +168,29 @@ class TestErrata:
 # --------------------------------------------------------------------------
 # Accuracy against the committed mpmath reference (make_phase_reference.py)
 # --------------------------------------------------------------------------
+def _beyond_flat_edge(frame):
+    """Rows whose double moments have I3 > I1 + I2 in exact arithmetic."""
+    from fractions import Fraction
+
+    def beyond(row):
+        a, b, c = sorted(Fraction(v) for v in (row.m1, row.m2, row.m3))
+        return c > a + b
+    return frame.apply(beyond, axis=1).to_numpy(dtype=bool)
+
+
 @pytest.fixture(scope="module")
 def reference():
-    return pd.read_csv(REFERENCE, comment="#")
+    """The committed table without the rows of no rigid body.
+
+    217 "exactly_flat" rows were built as I3 = fl(I1 + I2) and rounding put
+    them just beyond the flat edge; the library moves such bodies exactly
+    onto it (orbits.bodies.canonical_moments), so their mpmath values, for
+    the unmoved doubles, are not references for it.
+    """
+    table = pd.read_csv(REFERENCE, comment="#")
+    beyond = _beyond_flat_edge(table)
+    assert beyond.sum() == 217 and set(table.loc[beyond, "kind"]) == {"exactly_flat"}
+    return table[~beyond].reset_index(drop=True)
 
 
 def test_reference_covers_the_body_space(reference):

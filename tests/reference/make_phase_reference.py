@@ -75,7 +75,8 @@ def random_body(rng):
             moments = [i1, 1.0, 1.0 + i1 * rng.uniform(0.05, 0.95)]
         moments = np.array(moments) * 10.0 ** rng.uniform(-3, 3)
         s = np.sort(moments)
-        if s[0] < s[1] < s[2] and s[2] <= s[0] + s[1]:
+        # the flat edge decided exactly (rounding can put fl(I1 + I2) beyond it)
+        if s[0] < s[1] < s[2] and math.fsum([s[2], -s[0], -s[1]]) <= 0.0:
             rng.shuffle(moments)
             return kind, moments
 

@@ -1,0 +1,111 @@
+"""Argument checks shared by the public functions.
+
+Every public function turns its numeric arguments into arrays here, so a
+wrong type (a string, a complex number, ``None``, a ragged list) becomes an
+:class:`~orbits.errors.ArgumentTypeError` that names the argument, instead
+of a TypeError or ValueError from inside NumPy or numba.
+"""
+
+import numbers
+import os
+
+import numpy as np
+
+from .errors import ArgumentTypeError, InputError
+
+
+def _describe(value):
+    text = repr(value)
+    if len(text) > 60:
+        text = text[:57] + "..."
+    return f"{text} ({type(value).__name__})"
+
+
+def real_array(name, value, error=InputError):
+    """``value`` as a float64 array, or an error naming ``name``.
+
+    Accepts real numbers and (nested) sequences or arrays of them.  Booleans,
+    strings, bytes, complex numbers, ``None`` and other objects raise
+    :class:`ArgumentTypeError`; a ragged sequence raises ``error``.  Values
+    are not checked for finiteness here (callers say what is allowed).
+    """
+    if isinstance(value, (str, bytes)) or value is None:
+        raise ArgumentTypeError(f"{name} must be real numbers, got {_describe(value)}")
+    try:
+        array = np.asarray(value)
+    except (ValueError, TypeError):
+        raise error(f"{name} must be a rectangular array of real numbers, got "
+                    f"{_describe(value)}") from None
+    kind = array.dtype.kind
+    if kind == "O":
+        flat = array.ravel()
+        if not all(isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_))
+                   for v in flat):
+            bad = next(v for v in flat if not isinstance(v, numbers.Real)
+                       or isinstance(v, (bool, np.bool_)))
+            raise ArgumentTypeError(f"{name} must be real numbers, got {_describe(bad)}")
+        try:
+            with np.errstate(over="ignore"):
+                return np.array([float(v) for v in flat], dtype=float).reshape(array.shape)
+        except (OverflowError, ValueError, TypeError):
+            raise error(f"{name} holds a number that is not a double") from None
+    if kind not in "iuf":
+        what = {"b": "booleans", "c": "complex numbers", "U": "text", "S": "bytes",
+                "M": "dates", "m": "time spans", "V": "records"}.get(kind, kind)
+        raise ArgumentTypeError(f"{name} must be real numbers, got {what}: "
+                                f"{_describe(value)}")
+    with np.errstate(over="ignore"):
+        return array.astype(float, copy=False)
+
+
+def real_scalar(name, value, error=InputError):
+    """One real number as a Python float (not checked for finiteness)."""
+    array = real_array(name, value, error)
+    if array.shape != ():
+        if array.size == 1:
+            return float(array.reshape(()))
+        raise error(f"{name} must be one number, got shape {array.shape}")
+    return float(array)
+
+
+def integer(name, value, minimum=1, maximum=None):
+    """A whole number ``>= minimum`` (and ``<= maximum``) as a Python int.
+
+    Integral floats (``3.0``) are accepted; text, booleans and fractions
+    are not.
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise ArgumentTypeError(f"{name} must be an integer >= {minimum}, got "
+                                f"{_describe(value)}")
+    if isinstance(value, numbers.Integral):
+        number = int(value)
+    else:
+        real = float(value)
+        if not real.is_integer():
+            raise InputError(f"{name} must be an integer >= {minimum}, got {value!r}")
+        number = int(real)
+    if number < minimum:
+        raise InputError(f"{name} must be an integer >= {minimum}, got {value!r}")
+    if maximum is not None and number > maximum:
+        raise InputError(f"{name} must be an integer <= {maximum}, got {value!r}")
+    return number
+
+
+def path_argument(name, value):
+    """A file path (str or os.PathLike); an int (a file descriptor) is refused."""
+    if isinstance(value, (str, os.PathLike)) and not isinstance(value, bytes):
+        path = os.fspath(value)
+        if isinstance(path, str) and path and "\x00" not in path:
+            return path
+        raise InputError(f"{name} must be a non-empty path, got {value!r}")
+    raise ArgumentTypeError(f"{name} must be a path (str or os.PathLike), got "
+                            f"{_describe(value)}")
+
+
+def broadcast(names_and_shapes):
+    """The broadcast shape of named arrays, or an InputError naming them."""
+    try:
+        return np.broadcast_shapes(*(shape for _, shape in names_and_shapes))
+    except ValueError:
+        listed = ", ".join(f"{name} {shape}" for name, shape in names_and_shapes)
+        raise InputError(f"shapes do not broadcast together: {listed}") from None
