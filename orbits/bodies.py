@@ -15,8 +15,8 @@ import math
 
 import numpy as np
 
-from ._args import real_array
-from .errors import NonPhysicalBodyError, SymmetricTopError
+from ._args import integer, real_array
+from .errors import InputError, NonPhysicalBodyError, SymmetricTopError
 
 # Relative slack for I3 <= I1 + I2: a flat body built in floating point
 # (e.g. I3 = fl(I1 + I2)) may exceed the bound by a few rounding errors.
@@ -728,8 +728,15 @@ def region_grid(resolution):
 
     Returns an (n, 3) array of unit-norm moments, the grid points inside
     the region, in row-major order of (I1, I2).
+
+    Raises
+    ------
+    InputError
+        ``resolution`` not an integer >= 2, or a grid larger than half the
+        machine's memory (:func:`orbits.survey.check_resolution`).
     """
-    resolution = int(resolution)
+    from .survey import check_resolution
+    resolution = check_resolution(resolution)
     (lo1, hi1), (lo2, hi2) = REGION_BOX
     axis1 = lo1 + (np.arange(resolution) + 0.5) * (hi1 - lo1) / resolution
     axis2 = lo2 + (np.arange(resolution) + 0.5) * (hi2 - lo2) / resolution
@@ -738,13 +745,30 @@ def region_grid(resolution):
     return moments[inside]
 
 
+# Halton draws (about 2.6 per body kept), moments and masks, per body
+_BYTES_PER_SAMPLE = 400
+
+
 def region_sample(count):
     """``count`` bodies spread evenly over the region (deterministic).
 
     A Halton sequence (bases 2 and 3) over the bounding box, keeping the
     points inside the region until there are ``count`` of them.
+
+    Raises
+    ------
+    InputError
+        ``count`` not an integer >= 1, or more bodies than half the
+        machine's memory holds.
     """
     from scipy.stats import qmc
+
+    from .catalog import _bytes, memory_budget
+    count = integer("count", count, minimum=1)
+    if count * _BYTES_PER_SAMPLE > memory_budget():
+        raise InputError(f"region_sample({count}) would need about "
+                         f"{_bytes(count * _BYTES_PER_SAMPLE)} of memory, more than the "
+                         f"{_bytes(memory_budget())} allowed (half of this machine's)")
     (lo1, hi1), (lo2, hi2) = REGION_BOX
     sampler = qmc.Halton(d=2, scramble=False)
     sampler.fast_forward(1)                  # skip the corner (0, 0)

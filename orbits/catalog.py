@@ -30,10 +30,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from ._args import path_argument
 from ._version import __version__
 from .atomic import atomic_path, csv_float_options
 from .bodies import Body
-from .errors import InputError, OrbitsError
+from .errors import ArgumentTypeError, InputError, OrbitsError
 from .search import CATALOG_COLUMNS, _count, closed_orbits
 
 VERIFIED_COLUMN = "closure_error"
@@ -131,7 +132,7 @@ def catalog(bodies, n_max=10, q_max=1, *, verify=False, progress=None):
 
     Parameters
     ----------
-    bodies : Body or iterable of Body
+    bodies : Body or iterable of Body (or of moments, shape (3,))
     n_max, q_max : int
         As :func:`orbits.closed_orbits`.
     verify : bool
@@ -156,7 +157,10 @@ def catalog(bodies, n_max=10, q_max=1, *, verify=False, progress=None):
     from .checks import closure_errors
     if isinstance(bodies, Body):
         bodies = [bodies]
-    bodies = list(bodies)
+    if isinstance(bodies, (str, bytes)) or not hasattr(bodies, "__iter__"):
+        raise ArgumentTypeError(f"bodies must be a Body or an iterable of Body objects "
+                                f"(or moments), got {type(bodies).__name__}")
+    bodies = [b if isinstance(b, Body) else Body(b) for b in bodies]
     if not bodies:
         raise InputError("no bodies given")
     n_max, q_max = _count("n_max", n_max), _count("q_max", q_max)
@@ -274,6 +278,7 @@ def read_catalog(path, *, check=True):
         column); bad branch labels; ``n``/``q`` not integers >= 1;
         non-finite numbers.
     """
+    path = path_argument("path", path)
     try:
         with open(path, "rb") as handle:
             raw = handle.read()

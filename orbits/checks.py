@@ -32,10 +32,14 @@ from .core import checks as _checks
 from .core import quadrature as _quadrature
 from .core.exact import separatrix_gap_exact
 from .core.ode import STATE_SIZE, euler_rhs
-from .errors import InputError
+from ._args import broadcast, real_array, real_scalar
+from .bodies import unit_moments
+from .errors import AngleError, InputError
 from .motion import Motion, _as_body
 
 TOLERANCE = 1e-9
+# longest closure check: q periods integrated at rtol 1e-13
+MAX_CLOSURE_PERIODS = 100_000
 TWO_PI = 2.0 * np.pi
 
 RotationCheck = namedtuple("RotationCheck",
@@ -178,9 +182,12 @@ def closure_errors(moments, dtheta, periods, rtol=1e-13):
     moments : array_like, shape (n, 3) or (3,)
         Principal moments (any order, any scale).
     dtheta : array_like, shape (n,)
-        Offsets from the critical angle (phi = 0).
+        Offsets from the critical angle (phi = 0), finite and nonzero.
     periods : array_like of int, shape (n,)
-        After how many periods each orbit should close (the catalog's q).
+        After how many periods each orbit should close (the catalog's q),
+        1 to :data:`MAX_CLOSURE_PERIODS`.
+    rtol : float
+        Integration tolerance, in (0, 1e-3].
 
     Returns
     -------
@@ -194,14 +201,45 @@ def closure_errors(moments, dtheta, periods, rtol=1e-13):
         closest approach to the I2 axis (exact reversibility of Euler's
         equations makes the four quarters equal); the angle is then
         ``|q Delta alpha|`` reduced to [0, pi].
+
+    Raises
+    ------
+    NonPhysicalBodyError, SymmetricTopError
+        Invalid moments.
+    AngleError
+        ``dtheta`` not finite, zero, or outside the range of theta.
+    InputError
+        ``periods`` not integers in range, ``rtol`` out of range, shapes
+        that do not match.
     """
-    dtheta = np.atleast_1d(np.asarray(dtheta, dtype=float))
-    moments = np.broadcast_to(np.sort(np.asarray(moments, dtype=float), axis=-1),
-                              dtheta.shape + (3,))
-    periods = np.broadcast_to(np.asarray(periods, dtype=np.int64), dtheta.shape)
+    dtheta = np.atleast_1d(real_array("dtheta", dtheta, AngleError))
+    if not np.all(np.isfinite(dtheta)) or np.any(dtheta == 0.0):
+        raise AngleError("dtheta must be finite and nonzero (0 is the separatrix)")
+    moments, _ = unit_moments(moments)
+    periods = real_array("periods", periods)
+    if not np.all(np.isfinite(periods)) or np.any(periods != np.round(periods)) \
+            or np.any(periods < 1) or np.any(periods > MAX_CLOSURE_PERIODS):
+        raise InputError(f"periods (the catalog's q) must be integers from 1 to "
+                         f"{MAX_CLOSURE_PERIODS}, got {periods.ravel()[:5].tolist()}")
+    rtol = real_scalar("rtol", rtol)
+    if not (0.0 < rtol <= 1e-3):
+        raise InputError(f"rtol must be in (0, 1e-3], got {rtol!r}")
+    shape = broadcast([("moments", moments.shape[:-1]), ("dtheta", dtheta.shape),
+                       ("periods", periods.shape)])
+    if len(shape) != 1:
+        raise InputError(f"closure_errors takes one row per orbit: moments (n, 3) or "
+                         f"(3,), dtheta and periods (n,), got broadcast shape {shape}")
+    dtheta = np.broadcast_to(dtheta, shape)
+    moments = np.broadcast_to(moments, shape + (3,))
+    periods = np.broadcast_to(periods.astype(np.int64), shape)
     out = np.empty(dtheta.shape)
     _checks.closure_batch(np.ascontiguousarray(moments), np.ascontiguousarray(dtheta),
                           np.ascontiguousarray(periods), rtol, out)
+    bad = ~np.isfinite(out)
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        raise AngleError(f"dtheta = {dtheta[k]!r} puts theta outside [0, pi/2] for the "
+                         f"body {moments[k].tolist()} (unit scale)")
     return out
 
 

@@ -601,6 +601,7 @@ def load_manifest(out_dir):
     InputError
         No manifest, not JSON, or not a survey manifest of this version.
     """
+    out_dir = path_argument("out_dir", out_dir)
     manifest = Path(out_dir) / MANIFEST
     if not Path(out_dir).is_dir():
         raise InputError(f"{out_dir} is not a directory")
@@ -734,6 +735,8 @@ def read_table(out_dir, table, verify=True):
         Not a survey directory, incomplete, or (with ``verify``) a part that
         is missing or does not match its SHA-256.
     """
+    if table not in ("bodies", "orbits"):
+        raise InputError(f"table must be 'bodies' or 'orbits', got {table!r}")
     document = load_manifest(out_dir)
     status = check_survey(out_dir) if verify else None
     if status is not None and not status["complete"]:

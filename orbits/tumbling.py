@@ -14,17 +14,15 @@ import warnings
 
 import numpy as np
 
-from .bodies import as_moments
+from ._args import real_scalar
+from .bodies import unit_moments
 from .errors import InputError
 
 TWO_PI = 2.0 * math.pi
 
 
 def _positive_finite(name, value):
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a number, got {value!r}") from None
+    value = real_scalar(name, value)
     if not (math.isfinite(value) and value > 0.0):
         raise InputError(f"{name} must be finite and positive, got {value!r}")
     return value
@@ -38,7 +36,8 @@ def _solve(moments, targets):
     unreached = 0
     for branch, sign in (("SAM", 1), ("LAM", -1)):
         target = targets.get(branch)
-        if target is None:
+        # Delta alpha > 2 pi on every spin of every body (orbits.search.searched)
+        if target is None or target <= TWO_PI:
             continue
         branches, _, offsets, info = find_roots(moments, np.array([target]))
         found.append(offsets[branches == sign])
@@ -102,7 +101,7 @@ def spins_with_total_phase(body_or_moments, total_phase):
     UnresolvedOrbitsWarning
         Roots closer to the separatrix than the smallest normal double.
     """
-    moments = as_moments(body_or_moments)
+    moments, _ = unit_moments(body_or_moments)
     if moments.shape != (3,):
         raise InputError("spins_with_total_phase takes one body")
     target = _positive_finite("total_phase", total_phase)
@@ -128,7 +127,7 @@ def spins_with_period_ratio(body_or_moments, ratio):
         As :func:`spins_with_total_phase`, with ``target`` the total phase
         solved for on each row's branch.
     """
-    moments = as_moments(body_or_moments)
+    moments, _ = unit_moments(body_or_moments)
     if moments.shape != (3,):
         raise InputError("spins_with_period_ratio takes one body")
     ratio = _positive_finite("ratio", ratio)
