@@ -1,0 +1,183 @@
+"""The flat edge I3 = I1 + I2, decided exactly (issue 9, item 3).
+
+The triangle test is exact (TwoSum); a body beyond the edge by at most
+8 eps I3 is moved exactly onto it by changing one moment by the excess,
+beyond that it is rejected.  On every accepted body Delta alpha >= 2 pi,
+equal to 2 pi only in the limit theta -> 0 on the edge, so no n = 1 orbit
+is ever reported.
+"""
+
+import math
+from fractions import Fraction
+
+import mpmath as mp
+import numpy as np
+import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+
+import orbits
+from orbits.bodies import Body, canonical_moments
+from orbits.survey import compute_chunk
+
+TWO_PI = 2.0 * math.pi
+EPS = np.finfo(float).eps
+ANGLES = np.array([0.0, 1e-300, 1e-12, 1e-6, 1e-3, 0.1, 0.5, 0.9, 1.2, 1.5,
+                   math.pi / 2 - 1e-9, math.pi / 2])
+
+
+def exact_excess(moments):
+    a, b, c = sorted(Fraction(float(v)) for v in moments)
+    return c - a - b
+
+
+def check_never_below_two_pi(body):
+    """min Delta alpha >= 2 pi, no p/q <= 1 orbit, every phase >= 2 pi."""
+    low, _ = orbits.minimum_phase(body)
+    assert low >= TWO_PI
+    table = orbits.closed_orbits(body, n_max=3, q_max=2)
+    assert (table["n"] > table["q"]).all()
+    assert (table["total_phase"] > TWO_PI).all()
+    for branch in ("SAM", "LAM"):
+        assert table.attrs["minimum_phase"][branch][0] >= TWO_PI
+    theta_c = orbits.critical_angle(body)
+    angles = ANGLES[ANGLES != theta_c]
+    phases = orbits.total_phase(body, angles)
+    assert np.all(np.isfinite(phases)) and np.all(phases >= TWO_PI)
+    return low
+
+
+def test_the_issue_body_has_no_n1_orbit():
+    """0.3 + 0.6 < 0.9 in doubles: main reported an n = 1 orbit at theta = 4.3e-8."""
+    assert exact_excess((0.3, 0.6, 0.9)) > 0
+    body = Body((0.3, 0.6, 0.9))
+    assert body.is_flat and exact_excess(body.moments) == 0
+    # I1 moved up by the excess (5.6e-17), nothing else
+    assert body.moments[1:].tolist() == [0.6, 0.9]
+    assert Fraction(body.moments[0]) - Fraction(0.3) == exact_excess((0.3, 0.6, 0.9))
+    low = check_never_below_two_pi(body)
+    assert low <= TWO_PI * (1 + 1e-14)      # the flat edge: 2 pi, at theta -> 0
+    assert 1 not in orbits.closed_orbits([0.3, 0.6, 0.9], 3)["n"].tolist()
+
+
+def test_rod_given_as_1e_minus_200_no_longer_gives_zero():
+    """--moments 1e-200 1 1.0000000000000002 printed total_phase 0 on main."""
+    body = Body((1e-200, 1.0, 1.0000000000000002))
+    assert body.is_flat
+    assert float(orbits.total_phase(body, 0.5)) > TWO_PI
+
+
+def test_beyond_the_slack_is_rejected_with_the_reason():
+    with pytest.raises(orbits.NonPhysicalBodyError, match="triangle inequality"):
+        Body((0.3, 0.6, 0.9 * (1 + 16 * EPS)))
+    with pytest.raises(orbits.NonPhysicalBodyError, match="triangle inequality"):
+        orbits.total_phase([1.0, 4.0, 8.0], 0.3)
+
+
+def test_inside_is_never_moved_and_clearly_inside_is_above_two_pi():
+    body = Body((0.26, 0.55, 0.793662))
+    assert body.moments.tolist() == [0.26, 0.55, 0.793662] and not body.is_flat
+    # eqn:alphamin1 > 2 pi strictly inside: the minimum is the end value
+    low = check_never_below_two_pi(body)
+    assert low > TWO_PI * (1 + 1e-3)
+    assert low == pytest.approx(orbits.phase_limits(body).theta_zero, rel=1e-12)
+
+
+@settings(max_examples=150, deadline=None)
+@given(a=st.floats(1e-6, 1.0), ratio=st.floats(1.0, 1e6), scale=st.integers(-900, 900))
+def test_bodies_built_as_a_b_a_plus_b(a, ratio, scale):
+    """(a, b, fl(a + b)) in floating point: rounding puts it on either side."""
+    b = a * ratio
+    moments = np.ldexp([a, b, a + b], scale)
+    try:
+        body = Body(moments)
+    except orbits.SymmetricTopError:
+        assert a == b or a + b == b
+        return
+    excess = exact_excess(moments)
+    assert exact_excess(body.moments) <= 0
+    assert body.is_flat == (excess >= 0)
+    moved = [Fraction(float(x)) - Fraction(float(y))
+             for x, y in zip(body.moments, np.sort(moments))]
+    if excess > 0:
+        # exactly one moment moved, by exactly the excess (<= 8 eps I3)
+        assert sum(d != 0 for d in moved) == 1
+        assert abs(sum(moved)) == excess
+        assert excess <= Fraction(8 * EPS) * Fraction(float(np.max(moments)))
+    else:
+        assert not any(moved)
+    low = check_never_below_two_pi(body)
+    if body.is_flat:
+        # 2 pi at theta -> 0, to the rounding of the closed form there
+        assert low <= TWO_PI * (1 + 1e-14)
+
+
+@settings(max_examples=60, deadline=None)
+@given(exponent=st.floats(1.0, 300.0), ulps=st.integers(1, 40), scale=st.integers(-900, 900))
+def test_rods_down_to_1e_minus_300(exponent, ulps, scale):
+    """I1/I3 = 10^-exponent, I3 - I2 = ulps * 2^-53: accepted (then on or
+    inside the edge, with phases >= 2 pi) or rejected as non-physical."""
+    i1 = 10.0 ** -exponent
+    moments = np.ldexp([i1, 1.0 - ulps * 2.0**-53, 1.0], scale)
+    assume(moments[0] >= np.finfo(float).tiny)      # the scaled I1 still a normal double
+    excess = exact_excess(moments)
+    try:
+        body = Body(moments)
+    except orbits.NonPhysicalBodyError as error:
+        assert excess > Fraction(8 * EPS) * Fraction(float(moments[2]))
+        assert "triangle" in str(error)
+        return
+    except orbits.SymmetricTopError:
+        ordered = np.sort(moments)
+        assert ordered[0] == ordered[1] or ordered[1] == ordered[2]
+        return
+    assert exact_excess(body.moments) <= 0
+    assert body.is_flat == (excess >= 0)
+    check_never_below_two_pi(body)
+
+
+def test_thin_flat_rod_matches_the_exact_rod_of_ratio_1e_minus_300():
+    """(1e-300, 1 - 2^-53, 1) is computed as the flat rod (2^-53, 1 - 2^-53, 1);
+    its phase is that of the exact flat rod I1/I3 = 1e-300 to a few ulp
+    (mpmath at 340 digits, theta away from theta_crit ~ pi/4)."""
+    with mp.workdps(340):
+        i1, i2 = mp.mpf(10) ** -300, mp.mpf(1)
+        i3 = i1 + i2
+        for theta in (0.3, 0.7, 1.2, 1.5):
+            t = mp.mpf(theta)
+            w1, w3 = mp.sin(t), mp.cos(t)
+            two_e = i1 * w1**2 + i3 * w3**2
+            m_sq = i1**2 * w1**2 + i3**2 * w3**2
+            if m_sq > two_e * i2:
+                k2 = (i2 - i1) * (two_e * i3 - m_sq) / ((i3 - i2) * (m_sq - two_e * i1))
+                rate = mp.sqrt((i3 - i2) * (m_sq - two_e * i1) / (i1 * i2 * i3))
+                n, shift = -i3 * (i2 - i1) / (i1 * (i3 - i2)), 2 * mp.pi
+            else:
+                k2 = (i3 - i2) * (m_sq - two_e * i1) / ((i2 - i1) * (two_e * i3 - m_sq))
+                rate = mp.sqrt((i2 - i1) * (two_e * i3 - m_sq) / (i1 * i2 * i3))
+                n, shift = -i3 * (m_sq - two_e * i1) / (i1 * (two_e * i3 - m_sq)), 0
+            momentum = mp.sqrt(m_sq)
+            period = 4 * mp.ellipk(k2) / rate
+            exact = float(momentum * period / i3 - shift
+                          + 4 * momentum * (i3 - i1) * mp.ellippi(n, k2) / (i1 * i3 * rate))
+            got = float(orbits.total_phase([1e-300, 1 - 2.0**-53, 1.0], theta))
+            assert abs(got / exact - 1) <= 4 * EPS
+
+
+def test_canonical_form_is_vectorised_and_exact():
+    rows = np.array([[0.3, 0.6, 0.9], [0.26, 0.55, 0.793662], [0.1, 0.2, 0.1 + 0.2]])
+    unit, exponent = canonical_moments(rows)
+    for k in range(3):
+        single, e = canonical_moments(rows[k])
+        assert np.array_equal(single, unit[k]) and e == exponent[k]
+        assert exact_excess(unit[k]) <= 0
+
+
+def test_survey_of_flat_bodies_reports_no_two_pi_orbit():
+    moments = np.array([[0.3, 0.6, 0.9], [0.1, 0.2, 0.1 + 0.2], [2.0**-53, 1 - 2.0**-53, 1.0],
+                        [0.26, 0.55, 0.793662]])
+    bodies, table = compute_chunk(moments, 4, q_max=3)
+    assert (bodies["min_total_phase"] >= TWO_PI).all()
+    assert bodies["min_at_end"].all()
+    assert (table["n"] > table["q"]).all()
+    assert (bodies["n_smallest"] != 1).all()
