@@ -15,7 +15,7 @@ from .errors import ArgumentTypeError, InputError
 
 
 def _describe(value):
-    text = repr(value)
+    text = " ".join(repr(value).split())      # one line, for the CLI's messages
     if len(text) > 60:
         text = text[:57] + "..."
     return f"{text} ({type(value).__name__})"
@@ -82,12 +82,13 @@ def integer(name, value, minimum=1, maximum=None):
     else:
         real = float(value)
         if not real.is_integer():
-            raise InputError(f"{name} must be an integer >= {minimum}, got {value!r}")
+            raise InputError(f"{name} must be an integer >= {minimum}, got "
+                             f"{_describe(value)}")
         number = int(real)
     if number < minimum:
-        raise InputError(f"{name} must be an integer >= {minimum}, got {value!r}")
+        raise InputError(f"{name} must be an integer >= {minimum}, got {_describe(value)}")
     if maximum is not None and number > maximum:
-        raise InputError(f"{name} must be an integer <= {maximum}, got {value!r}")
+        raise InputError(f"{name} must be an integer <= {maximum}, got {_describe(value)}")
     return number
 
 
@@ -96,8 +97,13 @@ def path_argument(name, value):
     if isinstance(value, (str, os.PathLike)) and not isinstance(value, bytes):
         path = os.fspath(value)
         if isinstance(path, str) and path and "\x00" not in path:
+            try:
+                os.fsencode(path)
+            except UnicodeError:
+                raise InputError(f"{name} {_describe(value)} cannot be a file name on this "
+                                 "system (not encodable)") from None
             return path
-        raise InputError(f"{name} must be a non-empty path, got {value!r}")
+        raise InputError(f"{name} must be a non-empty path, got {_describe(value)}")
     raise ArgumentTypeError(f"{name} must be a path (str or os.PathLike), got "
                             f"{_describe(value)}")
 

@@ -43,9 +43,18 @@ def phase_levels(n_max, q_max=1):
     p, q : ndarray of int
     values : ndarray of float
         ``2 pi p / q``.
+
+    Raises
+    ------
+    InputError
+        ``n_max`` or ``q_max`` not an integer >= 1 (``ArgumentTypeError`` for
+        a wrong type), or so many levels that building them would exceed the
+        machine (:func:`orbits.catalog.check_search_bounds`).
     """
+    from .catalog import check_search_bounds
     n_max = _count("n_max", n_max)
     q_max = _count("q_max", q_max)
+    check_search_bounds(n_max, q_max, 0, "the phase levels")
     fractions = sorted({Fraction(p, q) for q in range(1, q_max + 1)
                         for p in range(1, n_max * q + 1)})
     p = np.array([f.numerator for f in fractions], dtype=np.int64)

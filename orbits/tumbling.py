@@ -34,6 +34,7 @@ def _solve(moments, targets):
     from .core import search as _kernels
     found = []
     unreached = 0
+    info = None
     for branch, sign in (("SAM", 1), ("LAM", -1)):
         target = targets.get(branch)
         # Delta alpha > 2 pi on every spin of every body (orbits.search.searched)

@@ -1,0 +1,213 @@
+"""Every public function validates its inputs (issue 9, item 5).
+
+Random garbage goes into one argument of each public function at a time
+(the others valid); the only acceptable outcomes are a correct result
+(finite numbers where numbers are returned, equal to the result for the
+same value given as a plain float where that is defined) or an
+``OrbitsError`` subclass.  Type faults are ``ArgumentTypeError``, which is
+also a ``TypeError``.
+"""
+
+import math
+from decimal import Decimal
+from fractions import Fraction
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import orbits
+from orbits import ArgumentTypeError, InputError, OrbitsError
+from orbits.survey import Survey, check_survey, compute_chunk, read_survey
+
+FIG6 = [0.26, 0.55, 0.793662]
+BODY = orbits.Body(FIG6)
+MOTION = orbits.Motion.from_spin(BODY, 0.4)
+
+junk = st.one_of(
+    st.none(), st.booleans(), st.text(max_size=6), st.binary(max_size=4),
+    st.complex_numbers(max_magnitude=10), st.floats(allow_nan=True, allow_infinity=True),
+    st.integers(-4, 40), st.sampled_from([10**30, -(10**30), 2**64, 2**63 - 1]),
+    st.lists(st.floats(allow_nan=True, allow_infinity=True), max_size=5),
+    st.lists(st.integers(-2, 6), max_size=4),
+    st.lists(st.floats(0.05, 2.0), min_size=3, max_size=3),
+    st.sampled_from([[[1, 2], [1, 2, 3]], {"a": 1}, object(), np.array(["x"]),
+                     np.float32(0.5), np.int8(3), Fraction(1, 3), Decimal("0.5"),
+                     np.zeros((2, 2)), np.ones((2, 3)), np.array([]), [], (), FIG6,
+                     [FIG6, FIG6], [0.3, 0.6, 0.9], [1e300, 1e300, 1e300], np.bool_(True),
+                     np.datetime64("2020-01-01"), slice(1), "3", "0.5", b"3", 3 + 0j,
+                     [1e-200] * 3, math.nan, math.inf, -0.0, 0, 1, 2, 0.5, 1.2]),
+)
+
+
+def check_finite(result):
+    """Numbers in a result are finite (no silent NaN or inf)."""
+    if isinstance(result, pd.DataFrame):
+        numeric = result.select_dtypes("number").to_numpy(dtype=float)
+        assert np.all(np.isfinite(numeric)), result
+    elif isinstance(result, (tuple, list)):
+        for item in result:
+            check_finite(item)
+    elif isinstance(result, (np.ndarray, float, int, np.floating)):
+        assert np.all(np.isfinite(np.asarray(result, dtype=float))), result
+
+
+def same_as_float(call, value):
+    """The call's result with ``value`` given as a float64 array."""
+    return call(np.asarray(value, dtype=float))
+
+
+CALLS = {
+    # phases
+    "total_phase.moments": lambda x: orbits.total_phase(x, 0.5),
+    "total_phase.theta": lambda x: orbits.total_phase(FIG6, x),
+    "total_phase.dtheta": lambda x: orbits.total_phase(FIG6, dtheta=x),
+    "total_phase.phi": lambda x: orbits.total_phase(FIG6, 0.5, phi=x),
+    "phases.moments": lambda x: orbits.phases(x, 0.5),
+    "phases.theta": lambda x: orbits.phases(FIG6, x),
+    "phases.dtheta": lambda x: orbits.phases(BODY, dtheta=x, phi=0.1),
+    "phases.phi": lambda x: orbits.phases(FIG6, [0.1, 1.3], phi=x),
+    "spin_phases.moments": lambda x: orbits.spin_phases(x, [0.3, 0.2, 0.9]),
+    "spin_phases.omega": lambda x: orbits.spin_phases(BODY, x),
+    "critical_angle.moments": lambda x: orbits.critical_angle(x),
+    "critical_angle.phi": lambda x: orbits.critical_angle(FIG6, x),
+    "phase_limits": lambda x: orbits.phase_limits(x),
+    # motion
+    "Motion.from_spin.body": lambda x: orbits.Motion.from_spin(x, 0.3).period,
+    "Motion.from_spin.theta": lambda x: orbits.Motion.from_spin(BODY, x).period,
+    "Motion.from_spin.dtheta": lambda x: orbits.Motion.from_spin(BODY, dtheta=x).period,
+    "Motion.from_spin.phi": lambda x: orbits.Motion.from_spin(BODY, 0.3, phi=x).period,
+    "Motion.from_spin.speed": lambda x: orbits.Motion.from_spin(BODY, 0.3, speed=x).energy,
+    "Motion.from_omega.body": lambda x: orbits.Motion.from_omega(x, [0.3, 0.2, 0.9]).period,
+    "Motion.from_omega.omega": lambda x: orbits.Motion.from_omega(BODY, x).period,
+    "Motion.state": lambda x: tuple(MOTION.state(x)),
+    "Motion.omega": lambda x: MOTION.omega(x),
+    "Motion.angular_momentum": lambda x: MOTION.angular_momentum(x),
+    "Motion.euler_angles": lambda x: MOTION.euler_angles(x),
+    "Motion.rotation": lambda x: MOTION.rotation(x),
+    "Motion.quaternion": lambda x: MOTION.quaternion(x),
+    "Motion.omega_space": lambda x: MOTION.omega_space(x),
+    "Motion.rotation_object": lambda x: MOTION.rotation_object(x).as_quat(),
+    "herpolhode.body": lambda x: orbits.herpolhode(x, 0.3, points=5),
+    "herpolhode.theta": lambda x: orbits.herpolhode(FIG6, x, points=5),
+    "herpolhode.periods": lambda x: orbits.herpolhode(FIG6, 0.3, periods=x, points=5),
+    "herpolhode.points": lambda x: orbits.herpolhode(FIG6, 0.3, points=x),
+    "polhode.body": lambda x: orbits.polhode(x, 0.3, points=5),
+    "polhode.dtheta": lambda x: orbits.polhode(FIG6, dtheta=x, points=5),
+    "polhode.periods": lambda x: orbits.polhode(FIG6, 0.3, periods=x, points=5),
+    "polhode.points": lambda x: orbits.polhode(FIG6, 0.3, points=x),
+    # closed orbits
+    "closed_orbits.body": lambda x: orbits.closed_orbits(x, 3),
+    "closed_orbits.n_max": lambda x: orbits.closed_orbits(BODY, x),
+    "closed_orbits.q_max": lambda x: orbits.closed_orbits(BODY, 3, x),
+    "minimum_phase": lambda x: orbits.minimum_phase(x),
+    "phase_levels": lambda x: orbits.phase_levels(x, 2),
+    "catalog.bodies": lambda x: orbits.catalog(x, 3),
+    "catalog.n_max": lambda x: orbits.catalog([BODY], x),
+    "closure_errors.moments": lambda x: orbits.closure_errors(x, [-0.05], [2]),
+    "closure_errors.dtheta": lambda x: orbits.closure_errors(FIG6, x, [1]),
+    "closure_errors.periods": lambda x: orbits.closure_errors(FIG6, [-0.05], x),
+    "closure_errors.rtol": lambda x: orbits.closure_errors(FIG6, [-0.05], [1], rtol=x),
+    "read_catalog": lambda x: orbits.read_catalog(x),
+    "region_grid": lambda x: orbits.region_grid(x),
+    "region_sample": lambda x: orbits.region_sample(x),
+    "spins_with_total_phase": lambda x: orbits.spins_with_total_phase(BODY, x),
+    # survey API
+    "compute_chunk.moments": lambda x: compute_chunk(x, 3),
+    "compute_chunk.n_max": lambda x: compute_chunk([FIG6], x),
+    "Survey.from_bodies": lambda x: Survey.from_bodies("unused-survey-dir", x, 3,
+                                                      fmt="csv").parameters,
+    "Survey.n_max": lambda x: Survey("unused-survey-dir", [FIG6], {}, x, fmt="csv").chunks,
+    "Survey.out_dir": lambda x: Survey(x, [FIG6], {}, 3, fmt="csv").chunks,
+    "read_survey": lambda x: read_survey(x),
+    "check_survey": lambda x: check_survey(x),
+}
+
+# calls whose result for a float array of the same value must be identical
+COMPARABLE = {"total_phase.moments", "total_phase.theta", "total_phase.dtheta",
+              "total_phase.phi", "critical_angle.moments", "critical_angle.phi"}
+
+
+@pytest.mark.parametrize("name", sorted(CALLS))
+@settings(max_examples=40, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@pytest.mark.filterwarnings("ignore::orbits.UnresolvedOrbitsWarning")
+@given(value=junk)
+def test_garbage_gives_a_result_or_an_orbits_error(name, value, monkeypatch, tmp_path):
+    monkeypatch.chdir(tmp_path)        # any relative path junk stays in here
+    call = CALLS[name]
+    try:
+        result = call(value)
+    except OrbitsError as error:
+        assert str(error).strip()        # a message (the CLI prints it on one line)
+        return
+    check_finite(result)
+    if name in COMPARABLE:
+        expected = same_as_float(call, value)
+        np.testing.assert_array_equal(result, expected)
+
+
+# ------------------------------------------------------- the issue's examples
+def test_type_faults_are_argument_type_errors_naming_the_argument():
+    cases = [
+        (lambda: orbits.total_phase([1j, 2, 3], 0.5), "moments"),
+        (lambda: orbits.total_phase(["a", "b", "c"], 0.5), "moments"),
+        (lambda: orbits.closed_orbits(FIG6, n_max="3"), "n_max"),
+        (lambda: orbits.total_phase(FIG6, "0.5"), "theta"),
+        (lambda: orbits.spin_phases(FIG6, [1, 2, "x"]), "omega"),
+        (lambda: orbits.read_catalog(3), "path"),
+        (lambda: orbits.region_grid(None), "resolution"),
+        (lambda: orbits.herpolhode(FIG6, 0.3, periods="2"), "periods"),
+    ]
+    for call, name in cases:
+        with pytest.raises(ArgumentTypeError, match=name):
+            call()
+    assert issubclass(ArgumentTypeError, TypeError)
+    assert issubclass(ArgumentTypeError, InputError)
+
+
+def test_shapes_that_do_not_broadcast_are_refused():
+    with pytest.raises(InputError, match="broadcast"):
+        orbits.total_phase([FIG6, FIG6, FIG6], [0.1, 0.2])
+    with pytest.raises(InputError, match="broadcast"):
+        orbits.phases(FIG6, [0.1, 0.2], phi=[0.0, 0.1, 0.2])
+    with pytest.raises(InputError, match="broadcast"):
+        orbits.closure_errors([FIG6, FIG6], [-0.05, -0.06, -0.07], [1])
+
+
+def test_closure_errors_refuses_q_zero():
+    """Returned NaN on main."""
+    with pytest.raises(InputError, match="periods"):
+        orbits.closure_errors(FIG6, [-0.05], [0])
+
+
+def test_tiny_spin_is_not_called_the_separatrix():
+    """spin_phases(body, [1e-200]*3) said 'on the separatrix' on main: its
+    energy (~1e-400) is not a double, which is now what the error says; a
+    spin of 1e-100 is computed (the phases do not depend on |omega|)."""
+    with pytest.raises(InputError, match="energy does not fit"):
+        orbits.spin_phases(BODY, [1e-200] * 3)
+    small = orbits.spin_phases(BODY, [1e-100] * 3).iloc[0]
+    unit = orbits.spin_phases(BODY, [1.0] * 3).iloc[0]
+    assert small["total_phase"] == pytest.approx(unit["total_phase"], rel=1e-15)
+    assert small["energy"] == pytest.approx(1e-200 * unit["energy"], rel=1e-15)
+    assert small["period"] == pytest.approx(1e100 * unit["period"], rel=1e-15)
+
+
+def test_survey_with_an_unusable_body_is_refused_up_front(tmp_path):
+    """Main reported the paper's conjecture FAILED from a NaN minimum."""
+    with pytest.raises(orbits.NonPhysicalBodyError, match="body #1"):
+        Survey.from_bodies(tmp_path / "s", [FIG6, [1.0, 4.0, 8.0]], 3, fmt="csv")
+    # a body at 1e150 is usable now, and its row is that of the unscaled body
+    survey = Survey.from_bodies(tmp_path / "s", [FIG6, [v * 2.0**500 for v in FIG6]], 3,
+                                fmt="csv")
+    survey.prepare()
+    survey.run()
+    report = survey.report()
+    assert report["conjecture_minimum_at_the_ends"]["held_on_every_body"]
+    bodies, _ = read_survey(tmp_path / "s")
+    first, second = bodies.iloc[0], bodies.iloc[1]
+    for column in ("I1", "I2", "I3", "min_total_phase", "theta_crit"):
+        assert first[column] == second[column]
