@@ -20,7 +20,9 @@ handed about the angular momentum, by which the body's orientation after
 one period T differs from its start:  ``R(T) = Rot(M, Delta alpha) R(0)``.
 It splits as ``Delta alpha = 2ET/M - Omega`` (eqn:montgomery) into the
 dynamic phase ``2ET/M`` and the geometric phase ``Omega``, the signed solid
-angle enclosed by the polhode (positive on SAM, negative on LAM).
+angle enclosed by the polhode (positive on SAM, negative on LAM).  ``Omega``
+is evaluated in its own closed form (:mod:`orbits.core.solid_angle`), not as
+that difference, which loses every digit near the sphere.
 """
 
 from collections import namedtuple
@@ -30,6 +32,7 @@ import pandas as pd
 
 from .bodies import as_moments
 from .core import phase as _kernels
+from .core import solid_angle as _solid
 from .errors import AngleError, SeparatrixError
 from .threads import size_aware
 
@@ -214,7 +217,10 @@ def phases(body_or_moments, theta=None, phi=0.0, *, dtheta=None):
         ``total_phase``
             Delta alpha, eqn:GeometricPhase;
         ``geometric_phase``
-            2ET/M - Delta alpha = Omega (eqn:montgomery).
+            Omega = 2ET/M - Delta alpha (eqn:montgomery), the signed solid
+            angle of the polhode, from the cancellation-free closed form of
+            :mod:`orbits.core.solid_angle` (relative error ~1e-15, also near
+            the sphere, the axes and the separatrix).
 
     Raises
     ------
@@ -223,11 +229,14 @@ def phases(body_or_moments, theta=None, phi=0.0, *, dtheta=None):
     moments = as_moments(body_or_moments)
     from_offset, angle, phi, shape = _spin_inputs(moments, theta, dtheta, phi)
     i1, i2, i3 = (_flat(moments[..., k], shape) for k in range(3))
+    phi_flat, angle_flat = _flat(phi, shape), _flat(angle, shape)
     parts = np.empty((i1.shape[0], len(_kernels.PARTS_COLUMNS)))
     status = np.empty(i1.shape[0], dtype=np.int8)
-    _kernels.phase_parts_many(i1, i2, i3, _flat(phi, shape), _flat(angle, shape),
-                              from_offset, parts, status)
+    _kernels.phase_parts_many(i1, i2, i3, phi_flat, angle_flat, from_offset, parts,
+                              status)
     _check_status(status, moments, angle, phi, shape, from_offset)
+    geometric = np.empty(i1.shape[0])
+    _solid.solid_angle_many(i1, i2, i3, phi_flat, angle_flat, from_offset, geometric)
     (theta, dtheta, theta_c, two_e, m_sq, m_param, branch, period, dynamic,
      total) = parts.T
     norm = np.sqrt(i1 * i1 + i2 * i2 + i3 * i3)
@@ -235,11 +244,13 @@ def phases(body_or_moments, theta=None, phi=0.0, *, dtheta=None):
         "I1": i1 / norm, "I2": i2 / norm, "I3": i3 / norm,
         "theta": theta, "dtheta": dtheta, "phi": _flat(phi, shape),
         "theta_crit": theta_c,
-        **_parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total),
+        **_parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total,
+                         geometric),
     })
 
 
-def _parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total):
+def _parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total,
+                   geometric):
     """The columns shared by :func:`phases` and :func:`spin_phases`."""
     return {
         "branch": pd.Categorical.from_codes((branch < 0).astype(np.int8),
@@ -250,7 +261,7 @@ def _parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total):
         "period": period,
         "dynamic_phase": dynamic,
         "total_phase": total,
-        "geometric_phase": dynamic - total,
+        "geometric_phase": geometric,
     }
 
 
@@ -330,6 +341,8 @@ def spin_phases(body_or_moments, omega):
     parts = np.empty((i1.shape[0], 7))
     _kernels.parts_from_vector_array(i1, i2, i3, w1, w2, w3, parts)
     two_e, m_sq, m_param, branch, period, dynamic, total = parts.T
+    geometric = np.empty(i1.shape[0])
+    _solid.solid_angle_from_vector_array(i1, i2, i3, w1, w2, w3, geometric)
     if np.any(branch == 0):
         k = int(np.flatnonzero(branch == 0)[0])
         raise SeparatrixError(
@@ -338,5 +351,6 @@ def spin_phases(body_or_moments, omega):
     norm = np.sqrt(i1 * i1 + i2 * i2 + i3 * i3)
     return pd.DataFrame({
         "w1": w1, "w2": w2, "w3": w3,
-        **_parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total),
+        **_parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total,
+                         geometric),
     })
