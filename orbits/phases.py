@@ -220,7 +220,9 @@ def phases(body_or_moments, theta=None, phi=0.0, *, dtheta=None):
             Omega = 2ET/M - Delta alpha (eqn:montgomery), the signed solid
             angle of the polhode, from the cancellation-free closed form of
             :mod:`orbits.core.solid_angle` (relative error ~1e-15, also near
-            the sphere, the axes and the separatrix).
+            the sphere, the axes and the separatrix).  Near an axis give
+            ``theta``: ``theta_c + dtheta`` is rounded to ulp(theta_c), and
+            Omega ~ theta^2 there.
 
     Raises
     ------
