@@ -313,3 +313,16 @@ def test_hypothesis_theta(body, theta):
         return    # theta_c is known to a few ulps: the branch itself is uncertain
     got = orbits.phases(body, [theta])["geometric_phase"].iloc[0]
     assert got == pytest.approx(mp_omega(body, theta=theta), rel=BOUND)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=list(HealthCheck))
+@given(body=near_bodies(),
+       omega=st.tuples(*[st.tuples(st.sampled_from([-1.0, 1.0]), st.floats(-40.0, 2.0))
+                         .map(lambda t: t[0] * 10.0 ** t[1])] * 3))
+def test_hypothesis_spin_vectors(body, omega):
+    """Any spin vector (the spin_phases path, taken as exact doubles)."""
+    try:
+        got = orbits.spin_phases(body, omega)["geometric_phase"].iloc[0]
+    except orbits.SeparatrixError:
+        return
+    assert got == pytest.approx(mp_omega(body, omega=omega), rel=BOUND)
