@@ -253,12 +253,15 @@ def _omega_table(body, args):
     import pandas as pd
 
     from .motion import Motion
+    from .phases import spin_phases
     omega = np.array(args.omega) * OMEGA_UNITS[args.units]
     principal = body.frame @ omega
     motion = Motion.from_omega(body, principal)
     periods = motion.tumbling_periods()
     total = motion.total_phase()
     dynamic = 2.0 * motion.energy * motion.period / motion.momentum
+    # Omega in its closed form: dynamic - total cancels near the sphere
+    geometric = float(spin_phases(body, principal)["geometric_phase"].iloc[0])
     i1, i2, i3 = body.moments
     return pd.DataFrame({
         "I1": [i1], "I2": [i2], "I3": [i3],
@@ -271,7 +274,7 @@ def _omega_table(body, args):
         "rotation_period": [periods.rotation],
         "period_ratio": [periods.ratio],
         "dynamic_phase": [dynamic], "total_phase": [total],
-        "geometric_phase": [dynamic - total],
+        "geometric_phase": [geometric],
     })
 
 

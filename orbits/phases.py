@@ -20,7 +20,9 @@ handed about the angular momentum, by which the body's orientation after
 one period T differs from its start:  ``R(T) = Rot(M, Delta alpha) R(0)``.
 It splits as ``Delta alpha = 2ET/M - Omega`` (eqn:montgomery) into the
 dynamic phase ``2ET/M`` and the geometric phase ``Omega``, the signed solid
-angle enclosed by the polhode (positive on SAM, negative on LAM).
+angle enclosed by the polhode (positive on SAM, negative on LAM).  ``Omega``
+is evaluated in its own closed form (:mod:`orbits.core.solid_angle`), not as
+that difference, which loses every digit near the sphere.
 """
 
 from collections import namedtuple
@@ -31,6 +33,7 @@ import pandas as pd
 from ._args import broadcast, real_array
 from .bodies import unit_moments
 from .core import phase as _kernels
+from .core import solid_angle as _solid
 from .errors import AngleError, InputError, SeparatrixError
 from .threads import size_aware
 
@@ -228,7 +231,12 @@ def phases(body_or_moments, theta=None, phi=0.0, *, dtheta=None):
         ``total_phase``
             Delta alpha, eqn:GeometricPhase;
         ``geometric_phase``
-            2ET/M - Delta alpha = Omega (eqn:montgomery).
+            Omega = 2ET/M - Delta alpha (eqn:montgomery), the signed solid
+            angle of the polhode, from the cancellation-free closed form of
+            :mod:`orbits.core.solid_angle` (relative error ~1e-15, also near
+            the sphere, the axes and the separatrix).  Near an axis give
+            ``theta``: ``theta_c + dtheta`` is rounded to ulp(theta_c), and
+            Omega ~ theta^2 there.
 
     Raises
     ------
@@ -237,11 +245,14 @@ def phases(body_or_moments, theta=None, phi=0.0, *, dtheta=None):
     moments, _ = unit_moments(body_or_moments)
     from_offset, angle, phi, shape = _spin_inputs(moments, theta, dtheta, phi)
     i1, i2, i3 = (_flat(moments[..., k], shape) for k in range(3))
+    phi_flat, angle_flat = _flat(phi, shape), _flat(angle, shape)
     parts = np.empty((i1.shape[0], len(_kernels.PARTS_COLUMNS)))
     status = np.empty(i1.shape[0], dtype=np.int8)
-    _kernels.phase_parts_many(i1, i2, i3, _flat(phi, shape), _flat(angle, shape),
-                              from_offset, parts, status)
+    _kernels.phase_parts_many(i1, i2, i3, phi_flat, angle_flat, from_offset, parts,
+                              status)
     _check_status(status, moments, angle, phi, shape, from_offset)
+    geometric = np.empty(i1.shape[0])
+    _solid.solid_angle_many(i1, i2, i3, phi_flat, angle_flat, from_offset, geometric)
     (theta, dtheta, theta_c, two_e, m_sq, m_param, branch, period, dynamic,
      total) = parts.T
     norm = np.sqrt(i1 * i1 + i2 * i2 + i3 * i3)
@@ -249,11 +260,13 @@ def phases(body_or_moments, theta=None, phi=0.0, *, dtheta=None):
         "I1": i1 / norm, "I2": i2 / norm, "I3": i3 / norm,
         "theta": theta, "dtheta": dtheta, "phi": _flat(phi, shape),
         "theta_crit": theta_c,
-        **_parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total),
+        **_parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total,
+                         geometric),
     })
 
 
-def _parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total):
+def _parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total,
+                   geometric):
     """The columns shared by :func:`phases` and :func:`spin_phases`."""
     return {
         "branch": pd.Categorical.from_codes((branch < 0).astype(np.int8),
@@ -264,7 +277,7 @@ def _parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total):
         "period": period,
         "dynamic_phase": dynamic,
         "total_phase": at_least_two_pi(total),
-        "geometric_phase": dynamic - total,
+        "geometric_phase": geometric,
     }
 
 
@@ -348,13 +361,16 @@ def spin_phases(body_or_moments, omega):
     parts = np.empty((i1.shape[0], 7))
     _kernels.parts_from_vector_array(i1, i2, i3, u1, u2, u3, parts)
     two_e, m_sq, m_param, branch, period, dynamic, total = parts.T
+    geometric = np.empty(i1.shape[0])
+    _solid.solid_angle_from_vector_array(i1, i2, i3, u1, u2, u3, geometric)
     if np.any(branch == 0):
         k = int(np.flatnonzero(branch == 0)[0])
         raise SeparatrixError(
             f"omega = ({w1[k]:.17g}, {w2[k]:.17g}, {w3[k]:.17g}) lies on the "
             "separatrix M^2 = 2 E I2 (infinite period and phase)")
     norm = np.sqrt(i1 * i1 + i2 * i2 + i3 * i3)
-    columns = _parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total)
+    columns = _parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total,
+                             geometric)
     # E ~ |omega|^2, M ~ |omega|, T ~ 1/|omega|: Euler's equations are
     # homogeneous, and the scaling by 2**speed is exact unless it over- or
     # underflows, which is refused rather than rounded to 0 or inf
