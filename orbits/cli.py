@@ -366,6 +366,14 @@ def bodies_file_from_args(args):
     from .catalog import read_bodies_csv
     if getattr(args, "name", None) is not None:
         raise InputError("--name names a single body; a --bodies file has a name column")
+    import os
+    try:
+        size = os.path.getsize(args.bodies)
+    except OSError:
+        size = 0
+    if size > 20 << 20 and sys.stderr.isatty():
+        print(f"orbits: reading {args.bodies} ({size / 2 ** 20:.0f} MiB)...",
+              file=sys.stderr, flush=True)
     table = read_bodies_csv(args.bodies, skip_invalid=args.skip_invalid)
     for _, message in table.skipped[:20]:
         print(f"orbits: warning: skipped {message}", file=sys.stderr)
@@ -656,14 +664,23 @@ def _cmd_survey(args):
     if args.scheduler is not None and not args.scheduler.strip():
         raise InputError("--scheduler is empty; give tcp://HOST:PORT")
     options = dict(q_max=args.q_max, fmt=args.format, chunk=args.chunk)
+    from .survey import survey_estimate
+    announced = False
     if args.resolution is not None:
+        # say it before building the grid, which itself takes seconds when large
+        from .survey import _GRID_INSIDE, check_resolution, check_survey_bounds
+        check_resolution(args.resolution)
+        count = max(1, int(_GRID_INSIDE * args.resolution ** 2))
+        check_survey_bounds(count, args.n_max, args.q_max, args.chunk)
+        announce("survey", *reversed(survey_estimate(count, args.n_max, args.q_max,
+                                                     args.chunk)))
+        announced = True
         survey = Survey.grid(args.out, args.resolution, args.n_max, **options)
     else:
         table = bodies_file_from_args(args)
         survey = Survey(args.out, table.moments, {"file": str(args.bodies)}, args.n_max,
                         names=table.names,
                         skipped=[message for _, message in table.skipped], **options)
-    from .survey import survey_estimate
     memory, seconds = survey_estimate(survey.moments.shape[0], survey.n_max,
                                       survey.q_max, survey.chunk)
     total = survey.moments.shape[0]
@@ -674,7 +691,8 @@ def _cmd_survey(args):
         def status(message):
             if sys.stderr.isatty():
                 notify(message)
-        announce("survey", seconds, memory)
+        if not announced:
+            announce("survey", seconds, memory)
         report = survey.run(scheduler=args.scheduler, progress=bar.update, notify=notify,
                             status=status)
     pending = sum(len(survey.chunk_moments(k)) for k in survey.last_todo)
@@ -792,7 +810,6 @@ _VERIFY_BYTES_PER_CONDITION = 2000
 def _cmd_verify(args):
     import json
 
-    from .checks import verify, verify_body
     if not args.tolerance > 0:
         raise InputError(f"--tolerance must be a positive number of radians, "
                          f"got {args.tolerance:g}")
@@ -811,6 +828,7 @@ def _cmd_verify(args):
                          f"of memory, more than the {_bytes(memory_budget())} allowed "
                          "(half of this machine's)")
     announce("verify", total * _VERIFY_SECONDS_PER_CONDITION, memory)
+    from .checks import verify, verify_body      # imports SciPy: after the estimate
     with progress_bar(total, "verify", None if not args.no_progress else False) as bar:
         if one:
             report = verify_body(body, args.angles, tolerance=args.tolerance,
