@@ -828,7 +828,8 @@ def _cmd_verify(args):
                          f"of memory, more than the {_bytes(memory_budget())} allowed "
                          "(half of this machine's)")
     announce("verify", total * _VERIFY_SECONDS_PER_CONDITION, memory)
-    from .checks import verify, verify_body      # imports SciPy: after the estimate
+    # imports SciPy (seconds on a cold start): after the estimate
+    from .checks import verify, verify_body
     with progress_bar(total, "verify", None if not args.no_progress else False) as bar:
         if one:
             report = verify_body(body, args.angles, tolerance=args.tolerance,
