@@ -349,8 +349,8 @@ def _one_line(error):
 
 
 # --------------------------------------------------------------- bodies files
-# a plain decimal number: no True, 1_000, 0x10, nan, inf or empty cell
-NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
+# a plain decimal number in ASCII digits: no True, 1_000, 0x10, nan, inf, empty cell
+NUMBER = re.compile(r"[+-]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 BODY_FILE_COLUMNS = ("I1", "I2", "I3", "name")
 
 
@@ -432,16 +432,25 @@ def read_bodies_csv(path, skip_invalid=False):
         raise InputError(f"cannot read {path}: {error.strerror}") from None
     lines = text.split("\n")
     start = 0
-    while start < len(lines) and lines[start].startswith("#"):
+    while start < len(lines) and (lines[start].startswith("#")
+                                  or not lines[start].strip("\r")):
         start += 1
+    rest = "\n".join(lines[start:])
     try:
-        records = list(csv.reader(io.StringIO("\n".join(lines[start:])), strict=True))
+        raw_header = next(csv.reader(io.StringIO(rest), strict=True), [])
     except csv.Error as error:
         raise InputError(f"{path} is not a CSV of bodies: {error}") from None
-    records = [r for r in records if r]       # blank lines
-    if not records:
+    header = _check_header(path, raw_header)
+    cells = _arrow_cells(rest, raw_header) if _have_pyarrow() else None
+    if cells is None:
+        cells = _python_cells(path, rest, header)
+    return _validated(path, header, cells, skip_invalid)
+
+
+def _check_header(path, raw_header):
+    if not raw_header:
         raise InputError(f"{path}: no header line (need I1, I2, I3 and optionally name)")
-    header = [cell.strip() for cell in records[0]]
+    header = [cell.strip() for cell in raw_header]
     unknown = [c for c in header if c not in BODY_FILE_COLUMNS]
     duplicate = sorted({c for c in header if header.count(c) > 1})
     missing = [c for c in ("I1", "I2", "I3") if c not in header]
@@ -452,40 +461,177 @@ def read_bodies_csv(path, skip_invalid=False):
             duplicate and f"repeated column(s) {', '.join(duplicate)}"]))
         raise InputError(f"{path}: {what} (the header must name I1, I2, I3 and "
                          "optionally name)")
-    data = records[1:]
-    if not data:
-        raise InputError(f"{path}: no bodies")
+    return header
+
+
+@dataclass
+class _Cells:
+    """The data rows of a bodies file, parsed but not yet validated."""
+
+    count: int
+    moments: np.ndarray         # (count, 3); NaN where a cell is not a number
+    problems: dict              # row index -> first reason
+    whole: np.ndarray           # bool: the row has the header's number of fields
+    names: list = None
+
+
+def _have_pyarrow():
+    from importlib.util import find_spec
+    return find_spec("pyarrow") is not None
+
+
+def _arrow_cells(rest, raw_header):
+    """Parse with pyarrow's CSV reader (every cell as text), or None to fall back.
+
+    Ten times faster than the csv module on large files.  A row with the
+    wrong number of fields (or any other parse error) returns None: the
+    csv-module path then names each such row.  Numbers are converted by
+    Arrow's correctly rounded parser, which like :data:`NUMBER` refuses
+    ``True``, ``1_000``, ``0x10`` and empty cells; ``nan`` and ``inf`` are
+    refused below.
+    """
+    import pyarrow as pa
+    from pyarrow import csv as pacsv
+    if any("\n" in cell or "\r" in cell for cell in raw_header):
+        return None
+    names = [f"c{k}" for k in range(len(raw_header))]
+    data = rest.encode("utf-8", "surrogatepass")
+    if _stray_quote(data):
+        return None
+    try:
+        table = pacsv.read_csv(
+            io.BytesIO(data),
+            read_options=pacsv.ReadOptions(column_names=names, skip_rows=1),
+            parse_options=pacsv.ParseOptions(newlines_in_values=True,
+                                              ignore_empty_lines=True),
+            convert_options=pacsv.ConvertOptions(
+                column_types={name: pa.string() for name in names},
+                strings_can_be_null=False, quoted_strings_can_be_null=False))
+    except (pa.ArrowInvalid, pa.ArrowNotImplementedError, UnicodeEncodeError):
+        return None
+    header = [cell.strip() for cell in raw_header]
+    count = table.num_rows
+    problems = {}
+    columns = []
+    for column in ("I1", "I2", "I3"):
+        values = _arrow_numbers(column, table.column(names[header.index(column)]),
+                                problems)
+        if values is None:
+            return None
+        columns.append(values)
+    moments = (np.column_stack(columns) if count else np.empty((0, 3)))
+    names_list = None
+    if "name" in header:
+        names_list = table.column(names[header.index("name")]).to_pylist()
+    return _Cells(count, moments, problems, np.ones(count, dtype=bool), names_list)
+
+
+def _stray_quote(data):
+    """Whether a quote may stand where the csv module's strict mode refuses it.
+
+    Arrow reads ``"a"b`` as ``ab``; the csv module (strict) refuses a
+    closing quote followed by anything but a delimiter.  A quote between two
+    characters that are neither delimiters nor quotes marks such a place (or
+    a quote inside an unquoted cell, which the csv module then accepts):
+    those files take the csv-module path.  Vectorised: ~0.1 s per 30 MB.
+    """
+    raw = np.frombuffer(data, dtype=np.uint8)
+    where = np.flatnonzero(raw == ord('"'))
+    if where.size == 0:
+        return False
+    padded = np.concatenate([[ord("\n")], raw, [ord("\n")]]).astype(np.uint8)
+    may_precede, may_follow = np.zeros(256, dtype=bool), np.zeros(256, dtype=bool)
+    may_precede[list(b',\n"')] = True
+    may_follow[list(b',\r\n"')] = True
+    return bool(np.any(~may_precede[padded[where]] & ~may_follow[padded[where + 2]]))
+
+
+def _arrow_numbers(column, given, problems, whole=None):
+    """Float64 values of a text column (NaN where not a number); None to fall back.
+
+    Cells that are not plain decimal numbers are added to ``problems`` (row
+    index -> reason), except rows where ``whole`` is False (already wrong).
+    """
+    import pyarrow as pa
+    import pyarrow.compute as pc
+    text = pc.utf8_trim_whitespace(given)
+    count = len(given)
+    try:
+        values = pc.cast(text, pa.float64())
+        suspects = np.zeros(count, dtype=bool)
+    except pa.ArrowInvalid:
+        ok = pc.match_substring_regex(text, f"^(?:{NUMBER.pattern})$")
+        suspects = ~ok.to_numpy(zero_copy_only=False)
+        try:
+            values = pc.cast(pc.if_else(ok, text, "nan"), pa.float64())
+        except pa.ArrowInvalid:
+            return None
+    values = np.array(values.to_numpy(zero_copy_only=False), dtype=float)
+    # nan, inf, infinity: parsed by Arrow, refused here (an overflowing
+    # decimal such as 1e400 is a number; the moments check refuses it)
+    suspects |= ~np.isfinite(values)
+    for k in np.flatnonzero(suspects):
+        cell = given[int(k)].as_py()
+        if not NUMBER.fullmatch(cell.strip()):
+            values[k] = np.nan
+            if whole is None or whole[k]:
+                problems.setdefault(int(k), f"{column} {cell!r} is not a number")
+    return values
+
+
+def _python_cells(path, rest, header):
+    """Parse with the csv module: slower, but names every malformed row."""
+    try:
+        records = list(csv.reader(io.StringIO(rest), strict=True))
+    except csv.Error as error:
+        raise InputError(f"{path} is not a CSV of bodies: {error}") from None
+    data = [r for r in records[1:] if r]       # blank lines
     width = len(header)
     count = len(data)
-    problems = {}                  # row index -> first reason
+    problems = {}
     lengths = np.fromiter((len(r) for r in data), dtype=np.int64, count=count)
     for k in np.flatnonzero(lengths != width):
         problems[int(k)] = (f"{lengths[k]} fields, the header has {width} "
                             "(no implicit index column)")
-    good_shape = lengths == width
-    cells = {}
+    whole = lengths == width
+    columns = []
     for column in ("I1", "I2", "I3"):
         j = header.index(column)
-        values = pd.Series([r[j] if len(r) == width else "0" for r in data], dtype=object)
-        stripped = values.str.strip()
-        numeric = stripped.str.fullmatch(NUMBER.pattern).to_numpy(dtype=bool)
-        for k in np.flatnonzero(~numeric & good_shape):
-            problems.setdefault(int(k), f"{column} {values[k]!r} is not a number")
-        cells[column] = np.where(numeric, stripped.to_numpy(dtype=object), "nan")
-    with np.errstate(over="ignore"):
-        moments = np.column_stack([cells[c].astype(float) for c in ("I1", "I2", "I3")])
-    candidate = np.array(sorted(set(range(count)) - set(problems)), dtype=np.int64)
-    for k in _invalid_moments(moments[candidate]):
-        index = int(candidate[k])
-        problems[index] = _body_error(moments[index])
+        values = [r[j] if len(r) == width else "0" for r in data]
+        numbers = None
+        if _have_pyarrow():
+            import pyarrow as pa
+            numbers = _arrow_numbers(column, pa.array(values, pa.string()), problems,
+                                     whole)
+        if numbers is None:
+            numbers = np.full(count, np.nan)
+            for k, cell in enumerate(values):
+                if NUMBER.fullmatch(cell.strip()):
+                    numbers[k] = float(cell)
+                elif whole[k]:
+                    problems.setdefault(k, f"{column} {cell!r} is not a number")
+        columns.append(numbers)
+    moments = np.column_stack(columns) if count else np.empty((0, 3))
     names = None
     if "name" in header:
         j = header.index("name")
         names = [r[j] if len(r) == width else "" for r in data]
+    return _Cells(count, moments, problems, whole, names)
+
+
+def _validated(path, header, cells, skip_invalid):
+    """Check the moments of every row; raise or skip the bad rows."""
+    count, moments, problems, names = cells.count, cells.moments, cells.problems, cells.names
+    if not count:
+        raise InputError(f"{path}: no bodies")
+    candidate = np.array(sorted(set(range(count)) - set(problems)), dtype=np.int64)
+    for k in _invalid_moments(moments[candidate]):
+        index = int(candidate[k])
+        problems[index] = _body_error(moments[index])
 
     def label(k):
         return f"{path}, row {k + 1}" + (f" ({names[k]!r})" if names is not None
-                                         and len(data[k]) == width else "")
+                                         and cells.whole[k] else "")
     bad = sorted(problems)
     if bad and not skip_invalid:
         more = len(bad) - 1

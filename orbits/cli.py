@@ -25,14 +25,15 @@ EXIT_INTERRUPTED = 130
 class _Parser(argparse.ArgumentParser):
     """argparse with a one-line error message (no usage dump).
 
-    It also reads ``-1e-300`` as a number: argparse's own pattern for
-    negative numbers has no exponent, so ``--dtheta -1e-300`` would fail.
+    It also reads ``-1e-300`` (and ``-inf``) as a number: argparse's own
+    pattern for negative numbers has no exponent, so ``--dtheta -1e-300``
+    would fail, and ``-inf`` must reach the finiteness check.
     """
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
         self._negative_number_matcher = re.compile(
-            r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$")
+            r"^-((\d+\.?\d*|\.\d+)([eE][-+]?\d+)?|inf|infinity|nan)$", re.IGNORECASE)
 
     def error(self, message):
         raise InputError(f"{self.prog}: {message}")
@@ -214,6 +215,15 @@ def _named_body_from_args(args):
 
 # ---------------------------------------------------------------- phase
 def _cmd_phase(args):
+    import numpy as np
+
+    # numpy's overflow warnings would add lines to stderr; a non-finite result
+    # is refused by _print_table instead (never a silent inf or nan)
+    with np.errstate(all="ignore"):
+        return _phase_table(args)
+
+
+def _phase_table(args):
     body = body_from_args(args)
     if args.omega is not None:
         return _print_table(_omega_table(body, args), args.csv)
@@ -291,6 +301,14 @@ def format_value(value):
 
 
 def _print_table(table, csv):
+    import numpy as np
+    numbers = table.select_dtypes("number")
+    bad = [name for name in numbers.columns
+           if not np.all(np.isfinite(numbers[name].to_numpy(dtype=float)))]
+    if bad:
+        raise InputError(f"the result is not finite ({', '.join(bad[:4])}): the inputs "
+                         "are beyond the range of double precision (e.g. moments below "
+                         "1e-150 or above 1e150, or a huge --omega); rescale them")
     if csv:
         table.to_csv(sys.stdout, index=False, float_format="%.17g")
         return 0
@@ -351,6 +369,14 @@ def bodies_file_from_args(args):
     from .catalog import read_bodies_csv
     if getattr(args, "name", None) is not None:
         raise InputError("--name names a single body; a --bodies file has a name column")
+    import os
+    try:
+        size = os.path.getsize(args.bodies)
+    except OSError:
+        size = 0
+    if size > 20 << 20 and sys.stderr.isatty():
+        print(f"orbits: reading {args.bodies} ({size / 2 ** 20:.0f} MiB)...",
+              file=sys.stderr, flush=True)
     table = read_bodies_csv(args.bodies, skip_invalid=args.skip_invalid)
     for _, message in table.skipped[:20]:
         print(f"orbits: warning: skipped {message}", file=sys.stderr)
@@ -473,13 +499,14 @@ def _cmd_figures(args):
     if sum(selectors) != 1:
         raise InputError("orbits figures: give exactly one of a body (--moments, "
                          "--t-handle, --ellipsoid, --preset), --paper or --survey DIR")
-    out = _output_directory(args.out)
+    # every input is checked before the output directory is created
     start = time.perf_counter()
     if args.paper or args.survey:
         grid = None
         if args.survey:
             from .survey import survey_grid
             grid = survey_grid(args.survey)
+        out = _output_directory(args.out)
         names = ["fig2"] if args.survey else list(figures.PAPER_FIGURES)
         with progress_bar(len(names), "figures", unit="figure") as bar:
             written = figures.paper_figures(out, formats=args.formats, survey_grid=grid,
@@ -488,8 +515,11 @@ def _cmd_figures(args):
         if args.n_max is None:
             raise InputError("orbits figures: --n-max is required with a body")
         body = body_from_args(args)
+        from .catalog import check_search_bounds
         from .search import closed_orbits
+        check_search_bounds(args.n_max, args.q_max, 1, "the figures' search")
         orbits_table = closed_orbits(body, n_max=args.n_max, q_max=args.q_max)
+        out = _output_directory(args.out)
         with progress_bar(len(orbits_table) + 1, "figures", unit="figure") as bar:
             written = figures.herpolhode_set(body, args.n_max, out, q_max=args.q_max,
                                              formats=args.formats, progress=bar.update,
@@ -637,14 +667,23 @@ def _cmd_survey(args):
     if args.scheduler is not None and not args.scheduler.strip():
         raise InputError("--scheduler is empty; give tcp://HOST:PORT")
     options = dict(q_max=args.q_max, fmt=args.format, chunk=args.chunk)
+    from .survey import survey_estimate
+    announced = False
     if args.resolution is not None:
+        # say it before building the grid, which itself takes seconds when large
+        from .survey import _GRID_INSIDE, check_resolution, check_survey_bounds
+        check_resolution(args.resolution)
+        count = max(1, int(_GRID_INSIDE * args.resolution ** 2))
+        check_survey_bounds(count, args.n_max, args.q_max, args.chunk)
+        announce("survey", *reversed(survey_estimate(count, args.n_max, args.q_max,
+                                                     args.chunk)))
+        announced = True
         survey = Survey.grid(args.out, args.resolution, args.n_max, **options)
     else:
         table = bodies_file_from_args(args)
         survey = Survey(args.out, table.moments, {"file": str(args.bodies)}, args.n_max,
                         names=table.names,
                         skipped=[message for _, message in table.skipped], **options)
-    from .survey import survey_estimate
     memory, seconds = survey_estimate(survey.moments.shape[0], survey.n_max,
                                       survey.q_max, survey.chunk)
     total = survey.moments.shape[0]
@@ -652,8 +691,13 @@ def _cmd_survey(args):
     with progress_bar(total, "survey", unit="body") as bar:
         def notify(message):
             bar.write(f"orbits survey: {message}", file=sys.stderr)
-        announce("survey", seconds, memory)
-        report = survey.run(scheduler=args.scheduler, progress=bar.update, notify=notify)
+        def status(message):
+            if sys.stderr.isatty():
+                notify(message)
+        if not announced:
+            announce("survey", seconds, memory)
+        report = survey.run(scheduler=args.scheduler, progress=bar.update, notify=notify,
+                            status=status)
     pending = sum(len(survey.chunk_moments(k)) for k in survey.last_todo)
     elapsed = time.perf_counter() - start
     if args.json:
@@ -769,7 +813,6 @@ _VERIFY_BYTES_PER_CONDITION = 2000
 def _cmd_verify(args):
     import json
 
-    from .checks import verify, verify_body
     if not args.tolerance > 0:
         raise InputError(f"--tolerance must be a positive number of radians, "
                          f"got {args.tolerance:g}")
@@ -788,6 +831,8 @@ def _cmd_verify(args):
                          f"of memory, more than the {_bytes(memory_budget())} allowed "
                          "(half of this machine's)")
     announce("verify", total * _VERIFY_SECONDS_PER_CONDITION, memory)
+    # imports SciPy (seconds on a cold start): after the estimate
+    from .checks import verify, verify_body
     with progress_bar(total, "verify", None if not args.no_progress else False) as bar:
         if one:
             report = verify_body(body, args.angles, tolerance=args.tolerance,

@@ -326,12 +326,7 @@ class Survey:
         manifest = self.out_dir / MANIFEST
         if manifest.exists():
             existing = load_manifest(self.out_dir)
-            if existing["parameters"] != self.parameters:
-                old, new = existing["parameters"], self.parameters
-                changed = sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
-                raise InputError(
-                    f"{self.out_dir} holds a survey with different parameters "
-                    f"({', '.join(changed)}); use a new directory")
+            self._compare(existing)
             self._ledger = existing["parts"]
         else:
             try:
@@ -409,7 +404,7 @@ class Survey:
         self._ledger[str(index)] = entry
         self._write_manifest()
 
-    def run(self, scheduler=None, progress=None, notify=None):
+    def run(self, scheduler=None, progress=None, notify=None, status=None):
         """Compute and write every missing chunk; then the report.
 
         Parameters
@@ -422,6 +417,9 @@ class Survey:
         notify : callable, optional
             Called with one-line messages (e.g. how many damaged parts are
             recomputed).
+        status : callable, optional
+            Called with transient one-line messages (waiting for the
+            scheduler), for a terminal.
 
         Returns
         -------
@@ -437,7 +435,32 @@ class Survey:
         """
         if scheduler is not None:
             _check_scheduler(scheduler)
+        # refusals first, touching nothing: a foreign directory, another
+        # survey's parameters, then an unusable scheduler
         self._refuse_foreign_directory()
+        self._refuse_other_parameters()
+        client = None
+        if scheduler is not None:
+            client = self._connect(scheduler, status)
+        try:
+            return self._run_locked(client, progress, notify)
+        finally:
+            if client is not None and client is not scheduler:
+                client.close()
+
+    def _refuse_other_parameters(self):
+        if (self.out_dir / MANIFEST).exists():
+            self._compare(load_manifest(self.out_dir))
+
+    def _compare(self, existing):
+        if existing["parameters"] != self.parameters:
+            old, new = existing["parameters"], self.parameters
+            changed = sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
+            raise InputError(
+                f"{self.out_dir} holds a survey with different parameters "
+                f"({', '.join(changed)}); use a new directory")
+
+    def _run_locked(self, client, progress, notify):
         try:
             self.out_dir.mkdir(parents=True, exist_ok=True)
         except OSError as error:
@@ -453,7 +476,7 @@ class Survey:
                            + "; ".join(damaged[:3]) + (" ..." if len(damaged) > 3 else ""))
             todo = self.missing()
             self.last_todo = todo
-            if scheduler is None:
+            if client is None:
                 for index in todo:
                     bodies, orbits = compute_chunk(self.chunk_moments(index), self.n_max,
                                                    self.q_max, index * self.chunk)
@@ -461,39 +484,57 @@ class Survey:
                     if progress is not None:
                         progress(len(bodies))
             else:
-                self._run_distributed(scheduler, todo, progress)
+                self._run_distributed(client, todo, progress)
             return self.report()
 
-    def _run_distributed(self, scheduler, todo, progress):
+    @staticmethod
+    def _connect(scheduler, status=None):
+        """A Client with at least one worker, within :data:`CONNECT_TIMEOUT` s each.
+
+        Raises
+        ------
+        InputError
+            No dask.distributed, no scheduler at the address, or no worker
+            joined within the timeout (the message states it).
+        """
         try:
-            from distributed import Client, as_completed
+            from distributed import Client
         except ImportError:
             raise InputError("--scheduler needs dask.distributed: "
                              "pip install 'orbits[distributed]'") from None
-        own = not isinstance(scheduler, Client)
-        try:
-            client = Client(scheduler, timeout=CONNECT_TIMEOUT) if own else scheduler
-        except Exception as error:          # noqa: BLE001 - any failure to connect
-            raise InputError(f"cannot reach the dask scheduler at {scheduler} within "
-                             f"{CONNECT_TIMEOUT} s: {_one_line(error)}") from None
-        try:
+        if isinstance(scheduler, Client):
+            client, own = scheduler, False
+        else:
+            if status is not None:
+                status(f"connecting to the dask scheduler at {scheduler} "
+                       f"(timeout {CONNECT_TIMEOUT} s)...")
             try:
-                client.wait_for_workers(1, timeout=CONNECT_TIMEOUT)
-            except Exception:               # noqa: BLE001 - dask raises TimeoutError
-                raise InputError(f"the dask scheduler at {scheduler} has no workers "
-                                 f"(waited {CONNECT_TIMEOUT} s); start one with "
-                                 f"'dask worker ADDRESS'") from None
-            futures = {client.submit(compute_chunk, self.chunk_moments(index), self.n_max,
-                                     self.q_max, index * self.chunk, pure=False): index
-                       for index in todo}
-            for future in as_completed(futures):
-                bodies, orbits = future.result()
-                self.write_chunk(futures[future], bodies, orbits)
-                if progress is not None:
-                    progress(len(bodies))
-        finally:
+                client, own = Client(scheduler, timeout=CONNECT_TIMEOUT), True
+            except Exception as error:          # noqa: BLE001 - any failure to connect
+                raise InputError(f"cannot reach the dask scheduler at {scheduler} "
+                                 f"within {CONNECT_TIMEOUT} s: {_one_line(error)}") from None
+        try:
+            if status is not None and not client.scheduler_info().get("workers"):
+                status(f"waiting up to {CONNECT_TIMEOUT} s for a dask worker...")
+            client.wait_for_workers(1, timeout=CONNECT_TIMEOUT)
+        except Exception:                       # noqa: BLE001 - dask raises TimeoutError
             if own:
                 client.close()
+            raise InputError(f"the dask scheduler at {scheduler} has no workers "
+                             f"(waited {CONNECT_TIMEOUT} s); start one with "
+                             f"'dask worker ADDRESS'") from None
+        return client
+
+    def _run_distributed(self, client, todo, progress):
+        from distributed import as_completed
+        futures = {client.submit(compute_chunk, self.chunk_moments(index), self.n_max,
+                                 self.q_max, index * self.chunk, pure=False): index
+                   for index in todo}
+        for future in as_completed(futures):
+            bodies, orbits = future.result()
+            self.write_chunk(futures[future], bodies, orbits)
+            if progress is not None:
+                progress(len(bodies))
 
     def report(self):
         """Summary of a complete survey from its verified parts; written to ``report.json``."""
@@ -560,10 +601,11 @@ def _check_scheduler(scheduler):
     import re
     if not isinstance(scheduler, str):
         return
-    if not re.fullmatch(r"(?:(?:tcp|tls|ucx|inproc|ws|wss)://)?[\w.\-\[\]:]+:\d{1,5}",
-                        scheduler):
+    match = re.fullmatch(r"(?:(?:tcp|tls|ucx|inproc|ws|wss)://)?[\w.\-\[\]:]+:(\d{1,5})",
+                         scheduler)
+    if not match or not 0 < int(match.group(1)) < 65536:
         raise InputError(f"--scheduler {scheduler!r} is not a dask scheduler address "
-                         "(expected tcp://HOST:PORT)")
+                         "(expected tcp://HOST:PORT, port 1-65535)")
 
 
 def _sha256(path):

@@ -1,0 +1,205 @@
+"""What sits on disk is complete: the survey ledger and lock, atomic output."""
+
+import fcntl
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import pandas as pd
+import pytest
+
+import orbits
+import orbits.survey
+from orbits.atomic import remove_stale_temporaries, write_text_atomic
+from orbits.cli import main
+from orbits.survey import check_survey, read_survey
+
+# a pid that no process has (above the kernel's pid_max of 2**22)
+DEAD_PID = 2 ** 22 + 7
+GRID = ["survey", "--resolution", "6", "--n-max", "3", "--format", "csv", "--chunk", "3"]
+
+
+def files(directory):
+    return {p.relative_to(directory).as_posix(): p.read_bytes()
+            for p in sorted(directory.rglob("*")) if p.is_file() and p.name != ".lock"}
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    out = tmp_path_factory.mktemp("ref") / "s"
+    assert main(GRID + ["--out", str(out)]) == 0
+    return out
+
+
+def copy(reference, tmp_path):
+    target = tmp_path / "s"
+    shutil.copytree(reference, target)
+    return target
+
+
+# ------------------------------------------------------------------ ledger
+def test_ledger_records_every_part(reference):
+    document = json.loads((reference / "manifest.json").read_text())
+    parameters, ledger = document["parameters"], document["parts"]
+    assert len(ledger) == -(-parameters["body_count"] // parameters["chunk"])
+    bodies, orbits_table = read_survey(reference)
+    assert len(bodies) == parameters["body_count"]
+    assert sum(entry["bodies"]["rows"] for entry in ledger.values()) == len(bodies)
+    assert sum(entry["orbits"]["rows"] for entry in ledger.values()) == len(orbits_table)
+    for key, entry in ledger.items():
+        assert entry["first_body"] == int(key) * parameters["chunk"]
+        part = pd.read_csv(reference / entry["bodies"]["file"])
+        assert part["body"].tolist() == list(range(entry["first_body"],
+                                                    entry["last_body"] + 1))
+    report = json.loads((reference / "report.json").read_text())
+    assert report["bodies"] == len(bodies) and report["orbits"] == len(orbits_table)
+
+
+def test_damaged_parts_are_found_and_recomputed(reference, tmp_path, capsys):
+    target = copy(reference, tmp_path)
+    (target / "orbits" / "part-00000.csv").unlink()
+    part = target / "bodies" / "part-00001.csv"
+    part.write_bytes(part.read_bytes()[:-30])
+    # --check: exit 1, both named, nothing computed or written
+    before = files(target)
+    capsys.readouterr()
+    assert main(["survey", "--check", str(target)]) == 1
+    out = capsys.readouterr().out
+    assert "chunk 0: orbits/part-00000.csv is missing" in out
+    assert "chunk 1: bodies/part-00001.csv does not match its SHA-256" in out
+    assert files(target) == before
+    with pytest.raises(orbits.InputError, match="damaged or incomplete"):
+        read_survey(target)
+    # a rerun recomputes exactly those two chunks and says so
+    assert main(GRID + ["--out", str(target)]) == 0
+    err = capsys.readouterr().err
+    assert "2 part(s) missing or damaged, recomputing" in err
+    mine, theirs = files(target), files(reference)
+    # the same parts, report and ledger (the ledger's key order may differ)
+    assert json.loads(mine.pop("manifest.json")) == json.loads(theirs.pop("manifest.json"))
+    assert mine == theirs
+    assert check_survey(target)["complete"]
+
+
+def test_foreign_files_are_ignored(reference, tmp_path, capsys):
+    target = copy(reference, tmp_path)
+    part = target / "bodies" / "part-00001.csv"
+    shutil.copy(part, part.with_name(part.name + ".bak"))
+    shutil.copy(part, target / "bodies" / "part-00099.csv")
+    bodies, _ = read_survey(target)
+    assert len(bodies) == len(read_survey(reference)[0])
+    assert bodies["body"].is_unique
+    assert main(GRID + ["--out", str(target), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report == json.loads((reference / "report.json").read_text())
+    assert (target / "bodies" / "part-00099.csv").exists()     # not ours: left alone
+
+
+def test_a_stale_temporary_is_removed_a_live_one_kept(reference, tmp_path):
+    target = copy(reference, tmp_path)
+    stale = target / "orbits" / f".part-00000.csv.{DEAD_PID}.x1.part"
+    live = target / "orbits" / f".part-00000.csv.{os.getppid()}.x2.part"
+    other = target / "orbits" / f".notes.txt.{DEAD_PID}.x3.part"
+    for path in (stale, live, other):
+        path.write_bytes(b"partial")
+    orbits.survey.Survey.grid(target, 6, 3, fmt="csv", chunk=3).run()
+    assert not stale.exists() and live.exists() and other.exists()
+
+
+# ------------------------------------------------------------------ lock
+def test_a_second_run_is_refused_while_the_lock_is_held(reference, tmp_path, capsys):
+    target = copy(reference, tmp_path)
+    before = files(target)
+    with open(target / ".lock", "a+") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        handle.seek(0)
+        handle.truncate()
+        handle.write("12345\n")
+        handle.flush()
+        capsys.readouterr()
+        assert main(GRID + ["--out", str(target)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "being written by another orbits run (pid 12345)" in err[0]
+    assert files(target) == before
+
+
+def test_concurrent_runs_never_break_each_other(tmp_path):
+    """Four identical runs at once: each finishes or is refused by the lock."""
+    out = tmp_path / "s"
+    argv = [sys.executable, "-m", "orbits", "survey", "--resolution", "40", "--n-max", "4",
+            "--chunk", "50", "--format", "csv", "--out", str(out)]
+    runs = [subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                             text=True) for _ in range(4)]
+    results = [(run.wait(timeout=600), run.stderr.read()) for run in runs]
+    for code, err in results:
+        assert code in (0, 2), err
+        assert "Traceback" not in err
+        if code == 2:
+            assert "being written by another orbits run" in err
+    assert any(code == 0 for code, _ in results)
+    status = check_survey(out)
+    assert status["complete"] and status["verified"] == status["chunks"]
+    assert not list(out.rglob("*.part"))
+
+
+# ------------------------------------------------------------------ atomic output
+@pytest.mark.parametrize("signum, code, message", [
+    (signal.SIGTERM, 143, "orbits: stopped by SIGTERM; no partial output was written"),
+    (signal.SIGHUP, 129, "orbits: stopped by SIGHUP; no partial output was written"),
+])
+def test_termination_leaves_no_partial_file(tmp_path, signum, code, message):
+    bodies = tmp_path / "bodies.csv"
+    pd.DataFrame(orbits.region_grid(60), columns=["I1", "I2", "I3"]).to_csv(bodies,
+                                                                            index=False)
+    out = tmp_path / "out.csv"
+    out.write_text("previous good catalog\n")
+    proc = subprocess.Popen([sys.executable, "-m", "orbits", "catalog", "--bodies",
+                             str(bodies), "--n-max", "300", "--q-max", "5", "--out", str(out)],
+                            stderr=subprocess.PIPE, text=True)
+    time.sleep(4.0)
+    assert proc.poll() is None, "the run ended before it could be stopped"
+    proc.send_signal(signum)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == code
+    assert err.strip().splitlines() == [message]
+    assert out.read_text() == "previous good catalog\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bodies.csv", "out.csv"]
+
+
+def test_stale_temporaries_of_the_same_name_only(tmp_path):
+    target = tmp_path / "c.csv"
+    stale = tmp_path / f".c.csv.{DEAD_PID}.abc.part"
+    live = tmp_path / f".c.csv.{os.getpid()}.def.part"
+    other_name = tmp_path / f".d.csv.{DEAD_PID}.abc.part"
+    for path in (stale, live, other_name):
+        path.write_text("x")
+    write_text_atomic(target, "new\n")
+    assert target.read_text() == "new\n"
+    assert not stale.exists() and live.exists() and other_name.exists()
+    assert remove_stale_temporaries(tmp_path, "d.csv") == 1
+
+
+def test_out_dash_writes_a_checked_catalog_to_stdout(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["catalog", "--preset", "fig6", "--n-max", "4", "--out", "-"]) == 0
+    out, err = capsys.readouterr()
+    assert "written to standard output" in err
+    assert list(tmp_path.iterdir()) == []
+    (tmp_path / "piped.csv").write_text(out)
+    frame = orbits.read_catalog(tmp_path / "piped.csv")
+    expected = orbits.closed_orbits(orbits.Body.preset("fig6"), n_max=4)
+    pd.testing.assert_frame_equal(frame[expected.columns], expected)
+
+
+def test_a_symlink_to_a_regular_file_keeps_the_link(tmp_path):
+    real = tmp_path / "real.csv"
+    real.write_text("old\n")
+    (tmp_path / "link.csv").symlink_to(real)
+    orbits.write_catalog(orbits.closed_orbits(orbits.Body.preset("fig6"), n_max=2),
+                         tmp_path / "link.csv")
+    assert (tmp_path / "link.csv").is_symlink()
+    assert len(orbits.read_catalog(real)) > 0
