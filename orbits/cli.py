@@ -309,7 +309,8 @@ def _add_phase(subparsers):
     add_body_options(parser)
     angle = parser.add_mutually_exclusive_group(required=True)
     angle.add_argument("--theta", nargs="+", type=_finite,
-                       help="polar angle(s) of omega0 from the I3 axis, in [0, pi/2]")
+                       help="polar angle(s) of omega0 from the I3 axis (any value: folded "
+                            "into [0, pi/2] by the top's symmetries)")
     angle.add_argument("--dtheta", nargs="+", type=_finite,
                        help="offset(s) theta - theta_crit from the separatrix "
                             "(well conditioned down to 1e-300)")

@@ -34,6 +34,10 @@ def assert_one_line_error(code, err, fragment):
 def test_schema_and_order():
     frame = orbits.closed_orbits(FIG6, n_max=4)
     assert list(frame.columns) == list(orbits.CATALOG_COLUMNS)
+    assert list(orbits.CATALOG_COLUMNS) == [
+        "body", "I1", "I2", "I3", "theta_crit", "branch", "n", "q", "theta", "dtheta",
+        "total_phase", "dynamic_phase", "geometric_phase", "period", "energy", "momentum",
+        "D", "m", "residual", "closes_after"]
     assert frame["body"].unique().tolist() == ["fig6"]
     assert frame["n"].dtype.kind == "i" and frame["q"].dtype.kind == "i"
     np.testing.assert_allclose(frame[["I1", "I2", "I3"]].pow(2).sum(axis=1), 1.0, rtol=1e-15)
