@@ -213,3 +213,48 @@ def test_compile_note_only_on_a_terminal_with_an_empty_cache(tmp_path, monkeypat
     (core / "__pycache__").mkdir()
     (core / "__pycache__" / "phase.cel-1.py311.nbi").write_bytes(b"")
     assert announce_compilation(_Terminal()) is False
+
+
+def test_compile_note_follows_numba_cache_dir(tmp_path, monkeypatch):
+    """With NUMBA_CACHE_DIR set numba caches only there: an index file next
+    to the sources does not mean the kernels are compiled."""
+    import orbits.cli as cli
+    core = tmp_path / "orbits" / "core"
+    (core / "__pycache__").mkdir(parents=True)
+    (core / "__pycache__" / "phase.cel-1.py311.nbi").write_bytes(b"")
+    monkeypatch.setattr(cli, "__file__", str(tmp_path / "orbits" / "cli.py"))
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(cache))
+    assert announce_compilation(_Terminal()) is True
+    (cache / "sub").mkdir()
+    (cache / "sub" / "search.search_body-331.py311.nbi").write_bytes(b"")
+    assert announce_compilation(_Terminal()) is False
+
+
+def test_first_run_on_a_terminal_says_it_compiles(tmp_path):
+    """End to end: stderr a pseudo-terminal, an empty numba cache."""
+    import os
+    import pty
+    import subprocess
+    import sys
+    main_fd, child_fd = pty.openpty()
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    result = subprocess.run([sys.executable, "-m", "orbits", "phase", "--preset", "fig6",
+                             "--theta", "0.3"], stderr=child_fd, stdout=subprocess.PIPE,
+                            env=env, timeout=600)
+    os.close(child_fd)
+    err = b""
+    while True:
+        try:
+            chunk = os.read(main_fd, 4096)
+        except OSError:
+            break
+        if not chunk:
+            break
+        err += chunk
+    os.close(main_fd)
+    assert result.returncode == 0
+    lines = err.decode().splitlines()
+    assert len(lines) == 1 and "compiling" in lines[0], lines
+    assert b"total_phase" in result.stdout
