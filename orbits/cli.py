@@ -134,7 +134,8 @@ def _point_masses_from_csv(path):
     import numpy as np
     import pandas as pd
     try:
-        table = pd.read_csv(path, comment="#")
+        from .atomic import csv_float_options
+        table = pd.read_csv(path, comment="#", **csv_float_options())
     except (OSError, ValueError) as error:
         raise InputError(f"cannot read point masses from {path}: {error}") from None
     missing = {"mass", "x", "y", "z"} - set(table.columns)

@@ -21,7 +21,8 @@ def run(capsys, *argv):
 
 
 def csv_rows(out):
-    return pd.read_csv(io.StringIO(out))
+    from orbits.atomic import csv_float_options
+    return pd.read_csv(io.StringIO(out), **csv_float_options())
 
 
 PHONE = ("--box", "0.146", "0.071", "0.008", "--mass", "0.17")

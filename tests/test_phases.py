@@ -170,7 +170,8 @@ class TestErrata:
 # --------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def reference():
-    return pd.read_csv(REFERENCE, comment="#")
+    from orbits.atomic import csv_float_options
+    return pd.read_csv(REFERENCE, comment="#", **csv_float_options())
 
 
 def test_reference_covers_the_body_space(reference):
