@@ -248,7 +248,7 @@ def _omega_table(body, args):
     omega is given along the caller's axes (the order of --moments, x y z of
     --box, ...) in --units, turned to the principal frame with Body.frame.
     With moments in kg m^2 the energy is in J, |L| in J s and the periods
-    in s.
+    in s; ``D_normalised = D/|I|`` is the ``D`` of the orbit's catalog row.
     """
     import numpy as np
     import pandas as pd
@@ -265,7 +265,9 @@ def _omega_table(body, args):
         "I1": [i1], "I2": [i2], "I3": [i3],
         "w1": [principal[0]], "w2": [principal[1]], "w3": [principal[2]],
         "branch": [motion.branch],
-        "D": [motion.momentum ** 2 / (2.0 * motion.energy)],
+        "D": [motion.D],
+        # the catalog's D (|I| = 1): the row of this orbit in a catalog
+        "D_normalised": [motion.D / float(np.linalg.norm(body.moments))],
         "energy": [motion.energy], "momentum": [motion.momentum],
         "m": [motion.m], "period": [motion.period],
         "precession_period": [periods.precession],

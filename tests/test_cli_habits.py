@@ -45,6 +45,10 @@ class TestOmega:
         assert row.momentum == pytest.approx(momentum, rel=1e-14)    # J s
         assert row.D == pytest.approx(momentum**2 / (2 * energy), rel=1e-14)
         assert body.moments[0] <= row.D <= body.moments[2]
+        # and it finds its catalog row: phases() at the same direction, |I| = 1
+        theta = math.atan2(math.hypot(principal[0], principal[1]), abs(principal[2]))
+        unit_row = orbits.phases(body, theta, math.atan2(principal[1], principal[0]))
+        assert row.D_normalised == pytest.approx(unit_row.D.iloc[0], rel=1e-13)
         # the period in seconds: the unit-spin period over |omega| in rad/s
         unit = Motion.from_omega(body, principal / np.linalg.norm(principal))
         assert row.period == pytest.approx(unit.period / np.linalg.norm(omega), rel=1e-12)
