@@ -228,7 +228,7 @@ def bench_survey(resolution=400, n_max=10, repeats=1):
             shutil.rmtree(directory, ignore_errors=True)
 
     for fmt in ("csv", "parquet"):
-        times[fmt] = best_time(lambda: survey_once(fmt), repeats)
+        times[fmt] = best_time(lambda fmt=fmt: survey_once(fmt), repeats)
     sample = region_grid(resolution)[::max(1, count // 500)]
 
     def loop():
@@ -436,9 +436,8 @@ def format_table(report):
         lines.append(f"    baseline: {row['baseline']}; {row['note']}")
     loaded = [row for row in report["results"] if "load" in row]
     if loaded:
-        lines += ["", f"under load: each task again beside one CPU-bound process "
-                      f"(a Python busy loop), medians; must hold within "
-                      f"{LOAD_LIMIT:g}x",
+        lines += ["", ("under load: each task again beside one CPU-bound process "
+                       f"(a Python busy loop), medians; must hold within {LOAD_LIMIT:g}x"),
                   f"{'task':<52} {'idle':>10} {'loaded':>10} {'slowdown':>8}"]
         for row in loaded:
             load = row["load"]

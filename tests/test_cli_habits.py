@@ -247,7 +247,7 @@ def test_first_run_on_a_terminal_says_it_compiles(tmp_path):
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
     result = subprocess.run([sys.executable, "-m", "orbits", "phase", "--preset", "fig6",
                              "--theta", "0.3"], stderr=child_fd, stdout=subprocess.PIPE,
-                            env=env, timeout=600)
+                            env=env, timeout=600, check=False)
     os.close(child_fd)
     err = b""
     while True:

@@ -18,9 +18,9 @@ README = Path(__file__).resolve().parent.parent / "README.md"
 def example_blocks():
     text = README.read_text(encoding="utf-8")
     section = re.search(r"<!-- example:phone:start -->(.*?)<!-- example:phone:end -->",
-                        text, re.S).group(1)
-    python = re.search(r"```python\n(.*?)```", section, re.S).group(1)
-    bash = re.search(r"```bash\n(.*?)```", section, re.S).group(1).strip()
+                        text, re.DOTALL).group(1)
+    python = re.search(r"```python\n(.*?)```", section, re.DOTALL).group(1)
+    bash = re.search(r"```bash\n(.*?)```", section, re.DOTALL).group(1).strip()
     return python, bash
 
 
@@ -30,7 +30,7 @@ def ran():
     namespace = {}
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
-        exec(compile(python, str(README), "exec"), namespace)   # as written
+        exec(compile(python, str(README), "exec"), namespace)  # noqa: S102 (as written)
     return namespace, out.getvalue().splitlines()
 
 
