@@ -465,6 +465,11 @@ def test_fold_angle_keeps_the_domain_bit_for_bit():
     inside = np.array([0.0, 1e-300, 0.3, 1.0, math.pi / 4, math.pi / 2])
     assert np.array_equal(fold_angle(inside), inside)
     assert np.array_equal(fold_angle(-inside), inside)
+    # any magnitude lands in the domain
+    huge = fold_angle([1e20, -3e15, 7.5e300, 1e6 + 0.25])
+    assert np.all((huge >= 0) & (huge <= math.pi / 2))
+    assert fold_angle(1e6 + 0.25) == pytest.approx(
+        float(abs(mp.mpf(1e6 + 0.25) - mp.pi * mp.nint((1e6 + 0.25) / mp.pi))), abs=1e-9)
 
 
 @pytest.mark.parametrize("given, folded", FOLDS)
