@@ -68,6 +68,7 @@ def bench_total_phase(points=1_000_000, repeats=3, seed=0):
     theirs = best_time(lambda: scipy_total_phase(body.moments, theta), repeats)
     agree = np.max(np.abs(total_phase(body, theta) / scipy_total_phase(body.moments, theta) - 1))
     return {
+        "_ours": (lambda: total_phase(body, theta), repeats),
         "task": f"total phase, {points:.0e} random theta (fig6 body)",
         "ours_s": ours,
         "baseline": "NumPy + scipy.special ellipk/elliprf/elliprj",
@@ -139,6 +140,7 @@ def bench_motion(points=2001, repeats=5, dtheta=None):
     where = ("theta 0.9" if dtheta is None
              else f"1 - m = {motion.one_minus_m:.0e}")
     return {
+        "_ours": (lambda: herpolhode(body, theta, points=points), repeats),
         "task": f"herpolhode, {points} points, 1 period ({where})",
         "ours_s": ours,
         "baseline": "solve_ivp DOP853 rtol 1e-12, dense output",
@@ -155,6 +157,7 @@ def bench_motion_rate(points=1_000_000, repeats=3):
     times = np.linspace(0.0, 10.0 * motion.period, points)
     ours = best_time(lambda: motion.state(times), repeats)
     return {
+        "_ours": (lambda: motion.state(times), repeats),
         "task": f"exact motion, full state, {points:.0e} times",
         "ours_s": ours,
         "baseline": "none (throughput row)",
@@ -194,6 +197,7 @@ def bench_search(n_max=50, repeats=20):
     theirs = best_time(lambda: _roots_by_scipy(body, n_max), 3)
     found = _roots_by_scipy(body, n_max)
     return {
+        "_ours": (lambda: closed_orbits(body, n_max=n_max), repeats),
         "task": f"closed orbits n <= {n_max}, both branches (fig6)",
         "ours_s": ours,
         "baseline": "theta grid (2000 points) + scipy.optimize.brentq on the SciPy-route phase",
@@ -215,15 +219,16 @@ def bench_survey(resolution=400, n_max=10, repeats=1):
     from .survey import Survey
     count = len(region_grid(resolution))
     times = {}
-    for fmt in ("csv", "parquet"):
+
+    def survey_once(fmt):
         directory = tempfile.mkdtemp(prefix="orbits-bench-")
         try:
-            def run():
-                shutil.rmtree(directory)
-                Survey.grid(directory, resolution, n_max, fmt=fmt).run()
-            times[fmt] = best_time(run, repeats)
+            Survey.grid(directory, resolution, n_max, fmt=fmt).run()
         finally:
             shutil.rmtree(directory, ignore_errors=True)
+
+    for fmt in ("csv", "parquet"):
+        times[fmt] = best_time(lambda fmt=fmt: survey_once(fmt), repeats)
     sample = region_grid(resolution)[::max(1, count // 500)]
 
     def loop():
@@ -232,6 +237,7 @@ def bench_survey(resolution=400, n_max=10, repeats=1):
             minimum_phase(moments)
     per_body = best_time(loop, 1) / len(sample)
     return {
+        "_ours": (lambda: survey_once("csv"), 1),
         "task": f"survey {count} bodies, n <= {n_max} (grid {resolution})",
         "ours_s": times["csv"],
         "baseline": "a Python loop of closed_orbits + minimum_phase per body",
@@ -243,7 +249,80 @@ def bench_survey(resolution=400, n_max=10, repeats=1):
     }
 
 
+def _fresh_interpreter(args, env=None):
+    """Wall and CPU seconds of one ``python args`` run in a new process."""
+    import resource
+    import subprocess
+    import sys
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    start = time.perf_counter()
+    subprocess.run([sys.executable, *args], check=True, env=env, stdin=subprocess.DEVNULL,
+                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    wall = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    return wall, cpu
+
+
+def _median_wall(args, repeats):
+    return float(np.median([_fresh_interpreter(args)[0] for _ in range(repeats)]))
+
+
+def bench_startup(repeats=7):
+    """Start-up: ``orbits --help`` and ``import orbits`` against ``import numpy``.
+
+    Each is a fresh interpreter (median of ``repeats``); the target is
+    within 4x of ``python -c "import numpy"``.
+    """
+    numpy_s = _median_wall(["-c", "import numpy"], repeats)
+    import_s = _median_wall(["-c", "import orbits"], repeats)
+    help_s = _median_wall(["-m", "orbits", "--help"], repeats)
+    return {
+        "task": "start-up: python -m orbits --help (fresh process)",
+        "ours_s": help_s,
+        "baseline": 'python -c "import numpy"',
+        "baseline_s": numpy_s,
+        "speedup": numpy_s / help_s,
+        "note": f"--help takes {help_s / numpy_s:.1f}x and import orbits "
+                f"{import_s / numpy_s:.1f}x the time of import numpy (target <= 4x); "
+                f"medians of {repeats} runs",
+    }
+
+
+def bench_cold_compile():
+    """A first ``orbits catalog --preset fig6 --n-max 30`` with an empty numba cache.
+
+    The cache goes to a fresh ``NUMBA_CACHE_DIR`` (the package's own cache is
+    not touched), so every kernel the command needs is compiled; the same
+    command is then run again warm (kernels loaded from that cache).  CPU
+    seconds are those of the child process: on a shared machine they are
+    what the command costs, the wall time is what it waited.
+    """
+    import shutil
+    import tempfile
+    cache = tempfile.mkdtemp(prefix="orbits-bench-cache-")
+    out = os.path.join(cache, "fig6.csv")
+    env = dict(os.environ, NUMBA_CACHE_DIR=cache)
+    args = ["-m", "orbits", "catalog", "--preset", "fig6", "--n-max", "30", "--out", out]
+    try:
+        cold, cold_cpu = _fresh_interpreter(args, env)
+        warm, warm_cpu = _fresh_interpreter(args, env)
+    finally:
+        shutil.rmtree(cache, ignore_errors=True)
+    return {
+        "task": "cold compile: orbits catalog --preset fig6 --n-max 30",
+        "ours_s": cold,
+        "baseline": "the same command warm (kernels from the numba cache)",
+        "baseline_s": warm,
+        "speedup": warm / cold,
+        "note": f"cold {cold:.1f} s wall / {cold_cpu:.1f} s CPU (target <= 8 s), "
+                f"warm {warm:.1f} s wall / {warm_cpu:.1f} s CPU",
+    }
+
+
 BENCHMARKS = {
+    "startup": bench_startup,
+    "cold_compile": bench_cold_compile,
     "phase": bench_total_phase,
     "motion": bench_motion,
     "motion_near_separatrix": lambda **kw: bench_motion(dtheta=-2e-4, **kw),
@@ -253,8 +332,63 @@ BENCHMARKS = {
 }
 
 
-def run(names=None, quick=False):
-    """Run the named benchmarks (all by default); return a JSON-able dict."""
+# under load, each row's own time may grow at most by this factor
+LOAD_LIMIT = 2.0
+
+
+def _median_time(function, repeats):
+    """Median wall time of ``repeats`` calls after one warm-up call."""
+    function()
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        function()
+        times.append(time.perf_counter() - start)
+    return float(np.median(times))
+
+
+def _busy_process():
+    """A CPU-bound child (a Python busy loop) standing for another user's job."""
+    import subprocess
+    import sys
+    return subprocess.Popen([sys.executable, "-c", "while True:\n    pass"],
+                            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+
+
+def load_check(rows):
+    """Re-time each row's own task idle and beside a CPU-bound process.
+
+    For each row (in place) adds ``load``: ``idle_s`` and ``loaded_s``
+    (medians, measured back to back so that the rest of the machine is the
+    same), ``slowdown`` = loaded/idle and ``holds`` (slowdown <=
+    :data:`LOAD_LIMIT`).  Rows without a task of their own (start-up, cold
+    compile) are skipped.  The busy process is ours and is always stopped.
+    """
+    for row in rows:
+        task = row.pop("_ours", None)
+        if task is None:
+            continue
+        function, repeats = task
+        repeats = max(repeats, 3) if repeats > 1 else 1
+        idle = _median_time(function, repeats)
+        busy = _busy_process()
+        try:
+            time.sleep(0.3)            # let it start spinning
+            loaded = _median_time(function, repeats)
+        finally:
+            busy.kill()
+            busy.wait()
+        row["load"] = {"idle_s": idle, "loaded_s": loaded, "slowdown": loaded / idle,
+                       "holds": bool(loaded / idle <= LOAD_LIMIT)}
+
+
+def run(names=None, quick=False, load=True):
+    """Run the named benchmarks (all by default); return a JSON-able dict.
+
+    With ``load`` each row's task is then re-timed beside a CPU-bound
+    process (:func:`load_check`).
+    """
     names = list(BENCHMARKS) if not names else names
     rows = []
     for name in names:
@@ -263,7 +397,13 @@ def run(names=None, quick=False):
             kwargs = {"points": 100_000}
         if quick and name == "survey":
             kwargs = {"resolution": 60}
+        if quick and name == "startup":
+            kwargs = {"repeats": 2}
         rows.append(dict(name=name, **BENCHMARKS[name](**kwargs)))
+    if load:
+        load_check(rows)
+    for row in rows:
+        row.pop("_ours", None)
     return {
         "machine": {
             "cpu_count": os.cpu_count(),
@@ -294,6 +434,19 @@ def format_table(report):
         lines.append(f"{row['task']:<52} {_seconds(row['ours_s']):>10} "
                      f"{baseline:>10} {ratio}")
         lines.append(f"    baseline: {row['baseline']}; {row['note']}")
+    loaded = [row for row in report["results"] if "load" in row]
+    if loaded:
+        lines += ["", ("under load: each task again beside one CPU-bound process "
+                       f"(a Python busy loop), medians; must hold within {LOAD_LIMIT:g}x"),
+                  f"{'task':<52} {'idle':>10} {'loaded':>10} {'slowdown':>8}"]
+        for row in loaded:
+            load = row["load"]
+            lines.append(f"{row['task']:<52} {_seconds(load['idle_s']):>10} "
+                         f"{_seconds(load['loaded_s']):>10} {load['slowdown']:>7.2f}x"
+                         + ("" if load["holds"] else "  FAILS"))
+        held = sum(row["load"]["holds"] for row in loaded)
+        lines.append(f"under-load check: {held} of {len(loaded)} rows hold within "
+                     f"{LOAD_LIMIT:g}x" + ("" if held == len(loaded) else " (NOT ALL)"))
     return "\n".join(lines)
 
 

@@ -135,7 +135,8 @@ def _point_masses_from_csv(path):
     import numpy as np
     import pandas as pd
     try:
-        table = pd.read_csv(path, comment="#")
+        from .atomic import csv_float_options
+        table = pd.read_csv(path, comment="#", **csv_float_options())
     except (OSError, ValueError) as error:
         raise InputError(f"cannot read point masses from {path}: {error}") from None
     missing = {"mass", "x", "y", "z"} - set(table.columns)
@@ -257,7 +258,7 @@ def _omega_table(body, args):
     omega is given along the caller's axes (the order of --moments, x y z of
     --box, ...) in --units, turned to the principal frame with Body.frame.
     With moments in kg m^2 the energy is in J, |L| in J s and the periods
-    in s.
+    in s; ``D_normalised = D/|I|`` is the ``D`` of the orbit's catalog row.
     """
     import numpy as np
     import pandas as pd
@@ -277,7 +278,9 @@ def _omega_table(body, args):
         "I1": [i1], "I2": [i2], "I3": [i3],
         "w1": [principal[0]], "w2": [principal[1]], "w3": [principal[2]],
         "branch": [motion.branch],
-        "D": [motion.momentum ** 2 / (2.0 * motion.energy)],
+        "D": [motion.D],
+        # the catalog's D (|I| = 1): the row of this orbit in a catalog
+        "D_normalised": [motion.D / float(np.linalg.norm(body.moments))],
         "energy": [motion.energy], "momentum": [motion.momentum],
         "m": [motion.m], "period": [motion.period],
         "precession_period": [periods.precession],
@@ -330,7 +333,8 @@ def _add_phase(subparsers):
     add_body_options(parser)
     angle = parser.add_mutually_exclusive_group(required=True)
     angle.add_argument("--theta", nargs="+", type=_finite,
-                       help="polar angle(s) of omega0 from the I3 axis, in [0, pi/2]")
+                       help="polar angle(s) of omega0 from the I3 axis (any value: folded "
+                            "into [0, pi/2] by the top's symmetries)")
     angle.add_argument("--dtheta", nargs="+", type=_finite,
                        help="offset(s) theta - theta_crit from the separatrix "
                             "(well conditioned down to 1e-300)")
@@ -914,7 +918,7 @@ def _cmd_bench(args):
     if unknown:
         raise InputError(f"unknown benchmark(s): {', '.join(sorted(unknown))}; "
                          f"known: {', '.join(bench.BENCHMARKS)}")
-    report = bench.run(args.only, quick=args.quick)
+    report = bench.run(args.only, quick=args.quick, load=not args.no_load_check)
     print(bench.to_json(report) if args.json else bench.format_table(report))
     return 0
 
@@ -931,6 +935,10 @@ def _add_bench(subparsers):
                              "wrong name lists them)")
     parser.add_argument("--quick", action="store_true",
                         help="smaller problem sizes (a smoke test, not for the README)")
+    parser.add_argument("--no-load-check", action="store_true",
+                        help="skip the under-load check (by default each task is "
+                             "timed again beside a CPU-bound process and must hold "
+                             "within 2x)")
     parser.set_defaults(run=_cmd_bench)
 
 
@@ -989,9 +997,11 @@ def announce_compilation(stream=None):
     if not stream.isatty():
         return False
     core = Path(__file__).resolve().parent / "core"
-    places = [core / "__pycache__"]
+    # numba uses NUMBA_CACHE_DIR instead of __pycache__ when it is set
     if os.environ.get("NUMBA_CACHE_DIR"):
-        places.append(Path(os.environ["NUMBA_CACHE_DIR"]))
+        places = [Path(os.environ["NUMBA_CACHE_DIR"])]
+    else:
+        places = [core / "__pycache__"]
     if any(next(place.rglob("*.nbi"), None) is not None
            for place in places if place.is_dir()):
         return False

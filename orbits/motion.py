@@ -85,7 +85,14 @@ class Motion:
     branch : str
         ``"SAM"`` or ``"LAM"``.
     energy, momentum : float
-        E and M for the body's moments as given.
+        E and M for the body's moments and omega0 as given (kg m^2 and
+        rad/s give J and J s; the same convention as
+        :func:`orbits.spin_phases`).
+    D : float
+        ``M^2 / (2E)`` (eqn:E, eqn:J), in the units of the moments, with
+        ``I1 <= D <= I3``: the label of the orbit independent of
+        ``|omega0|``.  ``D / |I|`` is the ``D`` column of a catalog row
+        (which is for ``|I| = 1``).
     period : float
         T of eqn:TK, in the time unit of omega0.
     m : float
@@ -126,6 +133,9 @@ class Motion:
         self.momentum = float(_scaled(orbit[_kernels.SLOT_MOMENTUM],
                                       body.exponent + speed, "angular momentum"))
         self.period = float(_scaled(orbit[_kernels.SLOT_PERIOD], -speed, "period"))
+        # D = M^2/(2E) depends on the moments only (units of the moments)
+        self.D = float(_scaled(orbit[_kernels.SLOT_MOMENTUM] ** 2 / orbit[_kernels.SLOT_TWO_E],
+                               body.exponent, "D"))
         self.m = orbit[_kernels.SLOT_M]
         self.one_minus_m = orbit[_kernels.SLOT_KC] ** 2
 
@@ -149,6 +159,9 @@ class Motion:
         ``theta`` (or the offset ``dtheta = theta - theta_crit``) and ``phi``
         as in :func:`orbits.total_phase`; with ``dtheta`` the separatrix
         distance keeps full precision (tested down to ``1 - m = 1e-12``).
+        Any ``theta`` and ``phi`` are accepted: the motion is that of the
+        spin as given, and its period, E, M and total phase equal those of
+        the spin folded by :func:`orbits.phases.fold_angle`.
 
         Raises
         ------
@@ -167,6 +180,12 @@ class Motion:
         from_offset = dtheta is not None
         angle = real_scalar("dtheta" if from_offset else "theta",
                             dtheta if from_offset else theta, AngleError)
+        if not from_offset and np.isfinite(angle) and not 0.0 <= angle <= 0.5 * np.pi:
+            # the spin as given (not folded: the motion differs by signs; its
+            # T, E, M and total phase are those of the folded spin)
+            return cls(body, speed * np.array([np.sin(angle) * np.cos(phi),
+                                               np.sin(angle) * np.sin(phi),
+                                               np.cos(angle)]))
         status, theta_, _, _, w1, w2, w3, scale, offset, closing = \
             _phase.spin_from_angle(_phase.body_constants(*body.unit_moments, phi),
                                    angle, from_offset)

@@ -1,15 +1,27 @@
 """Total, dynamic and geometric phase in closed form.
 
-Conventions (the paper's): moments normalised to ``|I| = 1`` for reported
-energies and momenta, ``|omega0| = 1`` (so times are in units of
-``1/|omega0|``: seconds for 1 rad/s), and the initial spin
+Energy convention (the same across the API): every energy, momentum and
+``D = M^2/(2E)`` is for the moments and the spin it is reported with.
+:func:`phases` (and the catalogs and surveys built on it) takes a spin
+*direction*, so its rows are in the paper's normalisation throughout: the
+``I1, I2, I3`` columns are the moments normalised to ``|I| = 1``, the spin
+has ``|omega0| = 1`` and energy, momentum and D are for those (times in
+units of ``1/|omega0|``: seconds for 1 rad/s).  :func:`spin_phases` and
+:class:`orbits.Motion` take a spin *vector* and use the moments as given:
+kg m^2 and rad/s give J, J s, kg m^2 and s.  The phases and ``m`` do not
+depend on either scale.  The initial spin of :func:`phases` is
 
     omega0 = (sin(theta) cos(phi), sin(theta) sin(phi), cos(theta))
 
 in the principal frame, ``theta`` from the I3 axis and ``phi`` from the I1
-axis, both in radians, ``0 <= theta <= pi/2``.  By the symmetries of the
-top (omega -> -omega, reflections of the principal axes) every initial
-spin maps to one in this range with the same phase.
+axis, both in radians.  Any ``theta`` and ``phi`` are accepted and folded
+into the fundamental domain ``0 <= theta, phi <= pi/2`` (:func:`fold_angle`):
+the half-turns about each principal axis (flipping the signs of two
+components of omega) and ``omega -> -omega`` with ``t -> -t`` map the
+motion to one with the same T, E, M and total phase (about the mapped M),
+and together they flip the sign of any component.  ``dtheta`` is not
+folded (it is an offset from ``theta_c``; ``theta_c + dtheta`` must lie in
+``[0, pi/2]``); ``phi`` is folded on both paths.
 
 Branches: ``SAM`` (short-axis mode, ``M^2 > 2 E I2``, ``theta < theta_c``:
 the angular momentum circles the I3 axis in the body) and ``LAM``
@@ -59,14 +71,49 @@ def _first_bad(array):
     return flat[~np.isfinite(flat)][0]
 
 
+def fold_angle(angle):
+    """Fold polar or azimuthal angles into ``[0, pi/2]`` by the top's symmetries.
+
+    The spin ``(sin t cos p, sin t sin p, cos t)`` has the same period,
+    E, M and total phase as the one with each component's sign flipped
+    (module docstring), i.e. as ``(|w1|, |w2|, |w3|)``.  Its angles are
+    ``|t'|`` and ``|p'|`` with ``t' = t - k pi``, ``p' = p - j pi`` reduced to
+    ``[-pi/2, pi/2]``: ``sin t`` and ``cos t`` change sign together under
+    ``t -> t - pi``, and ``t -> -t`` flips ``w1`` and ``w2`` only.
+
+    Parameters
+    ----------
+    angle : float or array_like
+        Radians, finite.
+
+    Returns
+    -------
+    ndarray
+        Radians in ``[0, pi/2]`` for any magnitude; values in
+        ``[-pi/2, pi/2]`` come back as ``|angle|`` bit for bit.  Others are
+        reduced exactly by the double nearest pi, which is 1.2e-16 below
+        pi: an absolute error of ``|angle| / pi * 1.2e-16`` (as ``ulp(angle)``).
+    """
+    angle = np.asarray(angle, dtype=float)
+    with np.errstate(invalid="ignore"):
+        # t -> -t first (exact); fmod by the double pi is exact, so the
+        # result is in [0, pi/2] for any magnitude, and |t| <= pi/2 is kept
+        reduced = np.fmod(np.abs(angle), np.pi)
+        folded = np.minimum(reduced, np.pi - reduced)
+    return np.where(np.isfinite(angle), folded, angle)
+
+
 def _spin_inputs(moments, theta, dtheta, phi):
-    """Validate the angle arguments; return ``(from_offset, angle, phi, shape)``."""
+    """Validate and fold the angle arguments; return ``(from_offset, angle, phi, shape)``."""
     if (theta is None) == (dtheta is None):
         raise AngleError("give exactly one of theta and dtheta")
     from_offset = dtheta is not None
     name = "dtheta" if from_offset else "theta"
     angle = real_array(name, dtheta if from_offset else theta, AngleError)
     phi = _float_array("phi", phi)
+    if not from_offset:
+        angle = fold_angle(angle)
+    phi = fold_angle(phi)
     shape = broadcast([("moments", moments.shape[:-1]), (name, angle.shape),
                        ("phi", phi.shape)])
     return from_offset, angle, phi, shape
@@ -90,11 +137,10 @@ def _check_status(status, moments, angle, phi, shape, from_offset):
     i1, i2, i3 = (float(_flat(moments[..., j], shape)[k]) for j in range(3))
     theta_c = _kernels.critical_angle(i1, i2, i3, float(_flat(phi, shape)[k]))
     if code == _kernels.STATUS_OUT_OF_RANGE:
-        what = (f"theta_c + dtheta = {theta_c:.17g} + {value:.17g}"
-                if from_offset else f"theta = {value:.17g}")
         raise AngleError(
-            f"{what} is outside [0, pi/2]; by symmetry every spin maps into "
-            "that range (theta is measured from the I3 axis)")
+            f"theta_c + dtheta = {theta_c:.17g} + {value:.17g} is outside "
+            "[0, pi/2]; dtheta is an offset from theta_c and is not folded "
+            "(pass theta, which is folded by the top's symmetries)")
     raise SeparatrixError(
         f"{name} = {value:.17g} puts the spin on the separatrix M^2 = 2 E I2 "
         f"(theta_c = {theta_c:.17g}), where the period and the total phase "
@@ -145,7 +191,8 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0):
     body_or_moments : Body or array_like, shape (..., 3)
         Principal moments in any order and scale (sorted internally).
     theta : float or array_like, optional
-        Polar angle of omega0 from the I3 axis, radians, in [0, pi/2].
+        Polar angle of omega0 from the I3 axis, radians; any value, folded
+        into [0, pi/2] by :func:`fold_angle`.
     dtheta : float or array_like, optional
         Offset ``theta - theta_c`` from the critical angle instead of
         ``theta``.  Near the separatrix the phase is ill-conditioned in
@@ -153,7 +200,8 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0):
         ``dtheta``: with ``dtheta`` the result keeps ~1e-15 relative
         accuracy down to ``|dtheta| = 1e-300``.
     phi : float or array_like
-        Azimuth of omega0 from the I1 axis, radians (default 0).
+        Azimuth of omega0 from the I1 axis, radians (default 0); any
+        value, folded into [0, pi/2].
 
     Returns
     -------
@@ -168,7 +216,7 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0):
         Invalid moments.
     AngleError
         Angles NaN or infinite, both or neither of theta/dtheta given, or
-        ``theta`` outside [0, pi/2].
+        ``theta_c + dtheta`` outside [0, pi/2].
     SeparatrixError
         ``theta`` exactly on the separatrix (``dtheta == 0``).
     """
@@ -210,7 +258,10 @@ def phases(body_or_moments, theta=None, phi=0.0, *, dtheta=None):
     Returns
     -------
     pandas.DataFrame
-        Columns, with ``|I| = 1`` and ``|omega0| = 1``:
+        Columns, all in the paper's normalisation ``|I| = 1`` and
+        ``|omega0| = 1`` (the ``I1, I2, I3`` columns are the normalised
+        moments, and ``energy``, ``momentum``, ``D`` are for them; see
+        :func:`spin_phases` for the moments and spin as given):
 
         ``I1, I2, I3``
             normalised principal moments;
@@ -222,6 +273,11 @@ def phases(body_or_moments, theta=None, phi=0.0, *, dtheta=None):
             E = omega0 . I . omega0 / 2 (eqn:E);
         ``momentum``
             M = |I . omega0| (eqn:J);
+        ``D``
+            ``M^2 / (2E)``, the orbit's label independent of ``|omega0|``,
+            in the units of the moments (here ``|I| = 1``):
+            ``I1 <= D <= I3``, ``D > I2`` on SAM, ``D < I2`` on LAM
+            (Landau & Lifshitz, Mechanics, Sec. 37);
         ``m``
             elliptic parameter k^2 of eqn:TK (indices 1<->3 on LAM);
         ``period``
@@ -273,6 +329,8 @@ def _parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total,
                                             categories=["SAM", "LAM"]),
         "energy": 0.5 * two_e / norm,
         "momentum": np.sqrt(m_sq) / norm,
+        # D = M^2/(2E): the same for every |omega|; I1 <= D <= I3 in the row's moments
+        "D": m_sq / (two_e * norm),
         "m": m_param,
         "period": period,
         "dynamic_phase": dynamic,
@@ -320,11 +378,15 @@ def spin_phases(body_or_moments, omega):
     Returns
     -------
     pandas.DataFrame
-        Columns ``w1, w2, w3`` (the spin given) followed by ``branch,
-        energy, momentum, m, period, dynamic_phase, total_phase,
-        geometric_phase`` as in :func:`phases`, for ``|I| = 1`` and the
-        given ``|omega|`` (energy scales as ``|omega|^2``, momentum as
-        ``|omega|``, the period as ``1/|omega|``; the phases not at all).
+        Columns ``I1, I2, I3`` (the moments as given, sorted) and ``w1, w2,
+        w3`` (the spin as given) followed by ``branch, energy, momentum, D,
+        m, period, dynamic_phase, total_phase, geometric_phase`` as in
+        :func:`phases`, but for the moments and the spin *as given*, like
+        :class:`orbits.Motion`: with moments in kg m^2 and omega in rad/s,
+        ``energy`` is in J, ``momentum`` in J s, ``D = M^2/(2E)`` in kg m^2
+        and ``period`` in s.  (Energy scales as ``|omega|^2`` and ``|I|``,
+        momentum as ``|omega| |I|``, D as ``|I|`` only, the period as
+        ``1/|omega|`` only; the phases not at all.)
 
     Raises
     ------
@@ -341,7 +403,7 @@ def spin_phases(body_or_moments, omega):
     near it this path is ill-conditioned (as the ``theta`` path of
     :func:`total_phase`); use ``dtheta`` there.
     """
-    moments, _ = unit_moments(body_or_moments)
+    moments, exponent = unit_moments(body_or_moments)
     omega = real_array("omega", omega, AngleError)
     if omega.ndim == 0 or omega.shape[-1] != 3:
         raise AngleError(f"omega must have shape (..., 3), got {omega.shape}")
@@ -368,21 +430,26 @@ def spin_phases(body_or_moments, omega):
         raise SeparatrixError(
             f"omega = ({w1[k]:.17g}, {w2[k]:.17g}, {w3[k]:.17g}) lies on the "
             "separatrix M^2 = 2 E I2 (infinite period and phase)")
-    norm = np.sqrt(i1 * i1 + i2 * i2 + i3 * i3)
-    columns = _parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total,
+    # E, M and D for the moments and the spin *as given* (as Motion): the
+    # kernel saw unit moments (times 2**-exponent) and a unit-scale spin
+    # (times 2**-speed), both exact; Euler's equations are homogeneous, so
+    # E ~ |I| |omega|^2, M ~ |I| |omega|, D ~ |I|, T ~ 1/|omega|.  A value
+    # that over- or underflows is refused rather than rounded to 0 or inf.
+    exponent = np.broadcast_to(exponent, shape).ravel()
+    columns = _parts_columns(1.0, two_e, m_sq, m_param, branch, period, dynamic, total,
                              geometric)
-    # E ~ |omega|^2, M ~ |omega|, T ~ 1/|omega|: Euler's equations are
-    # homogeneous, and the scaling by 2**speed is exact unless it over- or
-    # underflows, which is refused rather than rounded to 0 or inf
-    for label, power in (("energy", 2), ("momentum", 1), ("period", -1)):
+    for label, power in (("energy", exponent + 2 * speed), ("momentum", exponent + speed),
+                         ("D", exponent), ("period", -speed)):
         with np.errstate(over="ignore", under="ignore"):
-            value = np.ldexp(columns[label], power * speed)
+            value = np.ldexp(columns[label], power)
         wrong = ~np.isfinite(value) | (value < np.finfo(float).tiny)
         if wrong.any():
             k = int(np.flatnonzero(wrong)[0])
             raise InputError(
                 f"omega = ({w1[k]:.17g}, {w2[k]:.17g}, {w3[k]:.17g}): its {label} "
-                "does not fit a normal double (|omega| too large or too small); "
-                "the phases do not depend on |omega|: pass a unit spin")
+                "does not fit a normal double (|omega| or the moments too large or too "
+                "small); the phases do not depend on |omega|: pass a unit spin")
         columns[label] = value
-    return pd.DataFrame({"w1": w1, "w2": w2, "w3": w3, **columns})
+    given = [np.ldexp(i, exponent) for i in (i1, i2, i3)]
+    return pd.DataFrame({"I1": given[0], "I2": given[1], "I3": given[2],
+                         "w1": w1, "w2": w2, "w3": w3, **columns})

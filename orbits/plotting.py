@@ -6,7 +6,11 @@ into files.  They never call ``pyplot`` and need no display.
 
 Conventions as everywhere in ``orbits``: ``|I| = 1``, ``|omega0| = 1``,
 angles in radians, the herpolhode drawn in the invariable plane (space
-frame, z along the angular momentum).
+frame, z along the angular momentum).  :func:`plot_herpolhode`,
+:func:`plot_omega_components` and :func:`plot_binet` also take a
+:class:`orbits.Motion` in place of ``body`` (and no angles): they then draw
+that motion with its moments and spin as given, so a body in kg m^2 spun
+in rad/s is drawn in s, rad/s and J s (the axis labels).
 """
 
 import numpy as np
@@ -38,6 +42,7 @@ def plot_herpolhode(ax, body, theta=None, *, dtheta=None, phi=0.0, periods=1,
     ----------
     ax : matplotlib.axes.Axes
     body, theta, dtheta, phi : as :func:`orbits.herpolhode`
+        Or ``body`` a :class:`orbits.Motion` (no angles): its own spin.
     periods : int
         Periods to draw (a p/q orbit closes after q).
     points : int, optional
@@ -52,11 +57,16 @@ def plot_herpolhode(ax, body, theta=None, *, dtheta=None, phi=0.0, periods=1,
     matplotlib.lines.Line2D
         Its data are the curve: ``line.get_xydata()``.
     """
-    if points is None:
-        turns = abs(float(total_phase(body, theta, dtheta=dtheta, phi=phi))) / TWO_PI
-        points = herpolhode_points(turns, periods)
-    t, omega = herpolhode(body, theta, dtheta=dtheta, phi=phi, periods=periods,
-                          points=points)
+    if isinstance(body, Motion):
+        if points is None:
+            points = herpolhode_points(abs(body.total_phase()) / TWO_PI, periods)
+        omega = body.omega_space(np.linspace(0.0, periods * body.period, int(points)))
+    else:
+        if points is None:
+            turns = abs(float(total_phase(body, theta, dtheta=dtheta, phi=phi))) / TWO_PI
+            points = herpolhode_points(turns, periods)
+        _, omega = herpolhode(body, theta, dtheta=dtheta, phi=phi, periods=periods,
+                              points=points)
     style = dict(color="tab:purple", linewidth=0.8)
     style.update(line)
     (curve,) = ax.plot(omega[:, 0], omega[:, 1], **style)
@@ -352,7 +362,7 @@ def plot_binet(ax3d, body, theta=None, *, dtheta=None, phi=0.0):
     """The momentum sphere meeting the Binet ellipsoid, and the polhode (Fig. 3a).
 
     Both surfaces in angular-momentum space for the given spin (``|I| = 1``,
-    ``|omega0| = 1``): the sphere ``|M| = M`` and the ellipsoid
+    ``|omega0| = 1``; or ``body`` a :class:`orbits.Motion`, as given): the sphere ``|M| = M`` and the ellipsoid
     ``M1^2/I1 + M2^2/I2 + M3^2/I3 = 2E``; their intersection is the polhode.
 
     Returns
@@ -361,15 +371,20 @@ def plot_binet(ax3d, body, theta=None, *, dtheta=None, phi=0.0):
         ``sphere``, ``ellipsoid`` (surfaces), ``polhode`` (Line3D) and
         ``energy``, ``momentum``.
     """
-    body = _as_body(body)
-    unit = body.normalized_moments
-    row = phases(unit, theta, phi, dtheta=dtheta).iloc[0]
+    if isinstance(body, Motion):
+        # the motion as given: moments in kg m^2 and rad/s give J and J s
+        unit = body.body.moments
+        row = body
+        momentum = body.angular_momentum(np.linspace(0.0, body.period, 1500))
+    else:
+        unit = _as_body(body).normalized_moments
+        row = phases(unit, theta, phi, dtheta=dtheta).iloc[0]
+        _, momentum = polhode(unit, theta, dtheta=dtheta, phi=phi, points=1500)
     x, y, z = _ellipsoid_surface([row.momentum] * 3, resolution=50)
     sphere = ax3d.plot_surface(x, y, z, color="tab:blue", alpha=0.25, linewidth=0)
     semi = np.sqrt(2.0 * row.energy * unit)
     x, y, z = _ellipsoid_surface(semi, resolution=50)
     ellipsoid = ax3d.plot_surface(x, y, z, color="gold", alpha=0.35, linewidth=0)
-    _, momentum = polhode(unit, theta, dtheta=dtheta, phi=phi, points=1500)
     (curve,) = ax3d.plot(momentum[:, 0], momentum[:, 1], momentum[:, 2], color="black",
                          linewidth=1.5, label="polhode")
     _momentum_axes(ax3d, 1.05 * semi.max())
@@ -381,14 +396,18 @@ def plot_omega_components(ax, body, theta=None, *, dtheta=None, phi=0.0, periods
                           points=3001):
     """The body-frame components of omega against time, period marked (Fig. 3b).
 
+    ``body`` may be a :class:`orbits.Motion` (no angles): its spin as given.
+
     Returns
     -------
     dict
         ``lines`` (three Line2D: x solid red, y dashed green, z dot-dashed
         blue, as the paper) and ``period`` (the gray vertical line's x).
     """
-    body = _as_body(body)
-    motion = Motion.from_spin(body, theta, dtheta=dtheta, phi=phi)
+    if isinstance(body, Motion):
+        motion = body
+    else:
+        motion = Motion.from_spin(_as_body(body), theta, dtheta=dtheta, phi=phi)
     t = np.linspace(0.0, periods * motion.period, points)
     omega = motion.omega(t)
     styles = (dict(color="tab:red", linestyle="-"), dict(color="tab:green", linestyle="--"),

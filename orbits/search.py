@@ -22,7 +22,7 @@ from .phases import phases
 
 CATALOG_COLUMNS = ("body", "I1", "I2", "I3", "theta_crit", "branch", "n", "q",
                    "theta", "dtheta", "total_phase", "dynamic_phase",
-                   "geometric_phase", "period", "energy", "momentum", "m",
+                   "geometric_phase", "period", "energy", "momentum", "D", "m",
                    "residual", "closes_after")
 # every root must satisfy |Delta alpha - 2 pi p/q| <= RESIDUAL_TOLERANCE * 2 pi p/q
 RESIDUAL_TOLERANCE = 1e-10
@@ -253,7 +253,7 @@ def catalog_rows(body, moments, level, offset, p, q, levels):
         "geometric_phase": table["geometric_phase"],
         "period": table["period"],
         "energy": table["energy"], "momentum": table["momentum"],
-        "m": table["m"],
+        "D": table["D"], "m": table["m"],
         "residual": residual,
         "closes_after": closes_after(p[level], q[level]),
     }, columns=list(CATALOG_COLUMNS))

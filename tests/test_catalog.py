@@ -34,6 +34,10 @@ def assert_one_line_error(code, err, fragment):
 def test_schema_and_order():
     frame = orbits.closed_orbits(FIG6, n_max=4)
     assert list(frame.columns) == list(orbits.CATALOG_COLUMNS)
+    assert list(orbits.CATALOG_COLUMNS) == [
+        "body", "I1", "I2", "I3", "theta_crit", "branch", "n", "q", "theta", "dtheta",
+        "total_phase", "dynamic_phase", "geometric_phase", "period", "energy", "momentum",
+        "D", "m", "residual", "closes_after"]
     assert frame["body"].unique().tolist() == ["fig6"]
     assert frame["n"].dtype.kind == "i" and frame["q"].dtype.kind == "i"
     np.testing.assert_allclose(frame[["I1", "I2", "I3"]].pow(2).sum(axis=1), 1.0, rtol=1e-15)
@@ -48,8 +52,9 @@ def test_csv_round_trip_is_bit_exact(tmp_path):
     write_catalog(frame, path, command="orbits catalog --preset fig6")
     again = read_catalog(path)
     pd.testing.assert_frame_equal(again, frame, check_exact=True)
-    # the one documented option is enough for plain pandas too
-    plain = pd.read_csv(path, comment="#")
+    # plain pandas with the documented option (none needed on pandas >= 3)
+    from orbits.atomic import csv_float_options
+    plain = pd.read_csv(path, comment="#", **csv_float_options())
     for column in frame.select_dtypes("float").columns:
         assert np.array_equal(plain[column].to_numpy().view(np.int64),
                               frame[column].to_numpy().view(np.int64)), column

@@ -55,7 +55,7 @@ class TestPhase:
         (["phase", "--moments", "1", "1", "2", "--theta", "0.3"], ["symmetric top"]),
         (["phase", "--moments", "1", "2", "4", "--theta", "0.3"], ["triangle"]),
         (["phase", "--moments", "1", "2", "nan", "--theta", "0.3"], ["not a finite number"]),
-        (["phase", "--preset", "fig6", "--theta", "2"], ["outside [0, pi/2]"]),
+        (["phase", "--preset", "fig6", "--dtheta", "2"], ["outside [0, pi/2]", "not folded"]),
         (["phase", "--preset", "nope", "--theta", "1"], ["invalid choice"]),
         (["phase", "--preset", "fig6"], ["--theta", "required"]),
         (["phase", "--preset", "fig6", "--moments", "1", "2", "2.5", "--theta", "1"],
@@ -90,3 +90,19 @@ def test_console_script_has_no_traceback():
     assert "Traceback" not in proc.stderr
     version = subprocess.run(argv + ["--version"], capture_output=True, text=True)
     assert version.returncode == 0 and version.stdout.startswith("orbits ")
+
+
+def test_phase_folds_theta_and_phi(capsys):
+    """--theta 2 is folded to pi - 2 (the same phase), not rejected."""
+    import math
+
+    import orbits
+    code, out, _ = run(capsys, "phase", "--preset", "fig6", "--theta", "2", "--phi", "-3",
+                       "--csv")
+    assert code == 0
+    row = pd.read_csv(io.StringIO(out)).iloc[0]
+    assert row.theta == pytest.approx(math.pi - 2, abs=1e-15)
+    want = orbits.phases(orbits.Body.preset("fig6"), math.pi - 2, math.pi - 3).iloc[0]
+    assert row.phi == pytest.approx(math.pi - 3, abs=1e-15)
+    assert row.total_phase == pytest.approx(want.total_phase, rel=1e-15)
+    assert row.D == pytest.approx(want.D, rel=1e-15)

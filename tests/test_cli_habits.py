@@ -21,7 +21,8 @@ def run(capsys, *argv):
 
 
 def csv_rows(out):
-    return pd.read_csv(io.StringIO(out))
+    from orbits.atomic import csv_float_options
+    return pd.read_csv(io.StringIO(out), **csv_float_options())
 
 
 PHONE = ("--box", "0.146", "0.071", "0.008", "--mass", "0.17")
@@ -44,6 +45,10 @@ class TestOmega:
         assert row.momentum == pytest.approx(momentum, rel=1e-14)    # J s
         assert row.D == pytest.approx(momentum**2 / (2 * energy), rel=1e-14)
         assert body.moments[0] <= row.D <= body.moments[2]
+        # and it finds its catalog row: phases() at the same direction, |I| = 1
+        theta = math.atan2(math.hypot(principal[0], principal[1]), abs(principal[2]))
+        unit_row = orbits.phases(body, theta, math.atan2(principal[1], principal[0]))
+        assert row.D_normalised == pytest.approx(unit_row.D.iloc[0], rel=1e-13)
         # the period in seconds: the unit-spin period over |omega| in rad/s
         unit = Motion.from_omega(body, principal / np.linalg.norm(principal))
         assert row.period == pytest.approx(unit.period / np.linalg.norm(omega), rel=1e-12)
@@ -213,3 +218,48 @@ def test_compile_note_only_on_a_terminal_with_an_empty_cache(tmp_path, monkeypat
     (core / "__pycache__").mkdir()
     (core / "__pycache__" / "phase.cel-1.py311.nbi").write_bytes(b"")
     assert announce_compilation(_Terminal()) is False
+
+
+def test_compile_note_follows_numba_cache_dir(tmp_path, monkeypatch):
+    """With NUMBA_CACHE_DIR set numba caches only there: an index file next
+    to the sources does not mean the kernels are compiled."""
+    import orbits.cli as cli
+    core = tmp_path / "orbits" / "core"
+    (core / "__pycache__").mkdir(parents=True)
+    (core / "__pycache__" / "phase.cel-1.py311.nbi").write_bytes(b"")
+    monkeypatch.setattr(cli, "__file__", str(tmp_path / "orbits" / "cli.py"))
+    cache = tmp_path / "cache"
+    cache.mkdir()
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(cache))
+    assert announce_compilation(_Terminal()) is True
+    (cache / "sub").mkdir()
+    (cache / "sub" / "search.search_body-331.py311.nbi").write_bytes(b"")
+    assert announce_compilation(_Terminal()) is False
+
+
+def test_first_run_on_a_terminal_says_it_compiles(tmp_path):
+    """End to end: stderr a pseudo-terminal, an empty numba cache."""
+    import os
+    import pty
+    import subprocess
+    import sys
+    main_fd, child_fd = pty.openpty()
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    result = subprocess.run([sys.executable, "-m", "orbits", "phase", "--preset", "fig6",
+                             "--theta", "0.3"], stderr=child_fd, stdout=subprocess.PIPE,
+                            env=env, timeout=600, check=False)
+    os.close(child_fd)
+    err = b""
+    while True:
+        try:
+            chunk = os.read(main_fd, 4096)
+        except OSError:
+            break
+        if not chunk:
+            break
+        err += chunk
+    os.close(main_fd)
+    assert result.returncode == 0
+    lines = err.decode().splitlines()
+    assert len(lines) == 1 and "compiling" in lines[0], lines
+    assert b"total_phase" in result.stdout

@@ -187,7 +187,8 @@ def reference():
     onto it (orbits.bodies.canonical_moments), so their mpmath values, for
     the unmoved doubles, are not references for it.
     """
-    table = pd.read_csv(REFERENCE, comment="#")
+    from orbits.atomic import csv_float_options
+    table = pd.read_csv(REFERENCE, comment="#", **csv_float_options())
     beyond = _beyond_flat_edge(table)
     assert beyond.sum() == 217 and set(table.loc[beyond, "kind"]) == {"exactly_flat"}
     return table[~beyond].reset_index(drop=True)
@@ -427,9 +428,8 @@ def test_critical_angle_with_phi():
 @pytest.mark.parametrize("kwargs, error, message", [
     (dict(theta=math.nan), AngleError, "finite"),
     (dict(theta=math.inf), AngleError, "finite"),
-    (dict(theta=-0.1), AngleError, r"outside \[0, pi/2\]"),
-    (dict(theta=1.6), AngleError, r"outside \[0, pi/2\]"),
-    (dict(dtheta=1.0), AngleError, r"outside \[0, pi/2\]"),
+    (dict(dtheta=1.0), AngleError, r"outside \[0, pi/2\].*not folded"),
+    (dict(dtheta=-1.5), AngleError, r"outside \[0, pi/2\].*not folded"),
     (dict(theta=0.3, dtheta=0.1), AngleError, "exactly one"),
     (dict(), AngleError, "exactly one"),
     (dict(dtheta=0.0), SeparatrixError, "separatrix"),
@@ -463,3 +463,118 @@ def test_bad_spin_vectors():
         orbits.spin_phases(FIG6, [0.0, 1.0, 0.0])   # steady spin about I2
     with pytest.raises(AngleError, match="finite"):
         orbits.spin_phases(FIG6, [math.nan, 0.0, 1.0])
+
+
+# --------------------------------------------------------------------------
+# Folding of any theta and phi into the fundamental domain
+# --------------------------------------------------------------------------
+# (theta, phi) pairs outside [0, pi/2] and their images inside it
+FOLDS = [
+    ((-0.3, 0.2), (0.3, 0.2)),
+    ((math.pi - 0.3, 0.2), (0.3, 0.2)),
+    ((math.pi + 0.3, -0.2), (0.3, 0.2)),
+    ((2 * math.pi - 1.3, math.pi - 0.7), (1.3, 0.7)),
+    ((1.3, math.pi + 0.7), (1.3, 0.7)),
+    ((-1.3 - 4 * math.pi, -0.7 + 6 * math.pi), (1.3, 0.7)),
+    ((1.7, 2.0), (math.pi - 1.7, math.pi - 2.0)),
+]
+
+
+def test_fold_angle_keeps_the_domain_bit_for_bit():
+    from orbits.phases import fold_angle
+    inside = np.array([0.0, 1e-300, 0.3, 1.0, math.pi / 4, math.pi / 2])
+    assert np.array_equal(fold_angle(inside), inside)
+    assert np.array_equal(fold_angle(-inside), inside)
+    # any magnitude lands in the domain
+    huge = fold_angle([1e20, -3e15, 7.5e300, 1e6 + 0.25])
+    assert np.all((huge >= 0) & (huge <= math.pi / 2))
+    assert fold_angle(1e6 + 0.25) == pytest.approx(
+        float(abs(mp.mpf(1e6 + 0.25) - mp.pi * mp.nint((1e6 + 0.25) / mp.pi))), abs=1e-9)
+
+
+@pytest.mark.parametrize("given, folded", FOLDS)
+def test_any_theta_and_phi_fold_to_the_same_phase(given, folded):
+    from orbits.phases import fold_angle
+    assert fold_angle(given[0]) == pytest.approx(folded[0], abs=4 * EPS * 20)
+    assert fold_angle(given[1]) == pytest.approx(folded[1], abs=4 * EPS * 20)
+    row = orbits.phases(FIG6, given[0], given[1]).iloc[0]
+    want = orbits.phases(FIG6, *folded).iloc[0]
+    assert row.theta == pytest.approx(folded[0], abs=1e-14)
+    assert row.phi == pytest.approx(folded[1], abs=1e-14)
+    for name in ("total_phase", "period", "energy", "momentum", "D"):
+        assert row[name] == pytest.approx(want[name], rel=1e-13)
+    # independently: the motion of the spin *as given* (not folded), its
+    # total phase from the Euler angle phi (Carlson's Pi, not cel)
+    motion = orbits.Motion.from_spin(FIG6, given[0], phi=given[1])
+    w = motion.omega0
+    assert np.allclose(w, [math.sin(given[0]) * math.cos(given[1]),
+                           math.sin(given[0]) * math.sin(given[1]), math.cos(given[0])],
+                       rtol=0, atol=1e-15)
+    assert motion.total_phase() == pytest.approx(want.total_phase, rel=1e-12)
+    assert motion.period == pytest.approx(want.period, rel=1e-12)
+
+
+def test_folding_against_integration():
+    """The spin at theta = pi - 0.9, phi = pi + 0.4 (all components flipped in
+    sign or not) integrated with DOP853 turns the body by the folded phase."""
+    from orbits.checks import rotation_by_integration
+    check = rotation_by_integration(FIG6, math.pi - 0.9, phi=math.pi + 0.4)
+    want = orbits.total_phase(FIG6, 0.9, phi=0.4)
+    assert abs(check.angle - math.fmod(want, 2 * math.pi)) < 1e-9
+
+
+# --------------------------------------------------------------------------
+# D = M^2/(2E) and the one energy convention
+# --------------------------------------------------------------------------
+def test_d_label_against_mpmath():
+    """D of phases() is M^2/(2E) for |I| = 1 (mpmath at 40 digits), in [I1, I3]."""
+    theta = np.array([1e-8, 0.3, 0.9, 1.0126, 1.0127, 1.3, math.pi / 2])
+    table = orbits.phases(FIG6, theta)
+    mp.mp.dps = 40
+    norm = mp.sqrt(sum(mp.mpf(v) ** 2 for v in FIG6.moments))
+    i1, _, i3 = (mp.mpf(v) / norm for v in FIG6.moments)
+    for t, row in zip(theta, table.itertuples()):
+        s2, c2 = mp.sin(mp.mpf(t)) ** 2, mp.cos(mp.mpf(t)) ** 2
+        want = (i1 ** 2 * s2 + i3 ** 2 * c2) / (i1 * s2 + i3 * c2)
+        assert abs(row.D / float(want) - 1) < 4 * EPS
+        assert row.I1 <= row.D <= row.I3
+        assert (row.D > row.I2) == (row.branch == "SAM")
+
+
+def test_d_does_not_depend_on_the_spin_rate():
+    omega = np.array([0.3, -0.2, 0.9])
+    rows = orbits.spin_phases(FIG6, np.outer([1e-3, 1.0, 1e3], omega))
+    assert np.allclose(rows["D"], rows["D"].iloc[0], rtol=4 * EPS, atol=0)
+
+
+def test_phone_energy_is_one_convention():
+    """A phone (kg, m) spun at 3 rad/s: spin_phases, Motion and phases agree.
+
+    spin_phases and Motion give J, J s and kg m^2 for the moments as given;
+    phases (and the catalogs) are for |I| = 1 and |omega0| = 1, and scale
+    back by |I| |omega|^2, |I| |omega| and |I|.
+    """
+    phone = Body.box(0.071, 0.147, 0.0078, mass=0.17)
+    omega = np.array([0.2, 0.1, 3.0])
+    row = orbits.spin_phases(phone, omega).iloc[0]
+    motion = orbits.Motion.from_omega(phone, omega)
+    i = phone.moments
+    # the definitions, eqn:E and eqn:J, in plain NumPy
+    energy = 0.5 * np.sum(i * omega ** 2)
+    momentum = math.sqrt(np.sum((i * omega) ** 2))
+    for got in (row.energy, motion.energy):
+        assert got == pytest.approx(energy, rel=1e-14)
+    for got in (row.momentum, motion.momentum):
+        assert got == pytest.approx(momentum, rel=1e-14)
+    for got in (row.D, motion.D):
+        assert got == pytest.approx(momentum ** 2 / (2 * energy), rel=1e-14)
+    assert row.period == pytest.approx(motion.period, rel=1e-13)
+    norm, speed = float(np.linalg.norm(i)), float(np.linalg.norm(omega))
+    theta = math.atan2(math.hypot(omega[0], omega[1]), omega[2])
+    unit = orbits.phases(phone, theta, math.atan2(omega[1], omega[0])).iloc[0]
+    assert unit.energy * norm * speed ** 2 == pytest.approx(energy, rel=1e-13)
+    assert unit.momentum * norm * speed == pytest.approx(momentum, rel=1e-13)
+    assert unit.D * norm == pytest.approx(motion.D, rel=1e-13)
+    assert unit.period / speed == pytest.approx(motion.period, rel=1e-13)
+    assert list(orbits.spin_phases(phone, omega).columns[:3]) == ["I1", "I2", "I3"]
+    assert row.I3 == i[2]

@@ -152,3 +152,33 @@ def test_t_handle_drawing():
         tensor += volume * (centre @ centre * np.eye(3) - np.outer(centre, centre))
     np.testing.assert_allclose(np.diag(tensor) / volumes.sum(),
                                np.sort(T_HANDLE.moments)[[0, 1, 2]], rtol=1e-13)
+
+
+def test_plots_take_a_motion_in_real_units():
+    """A phone (kg, m) spun at 120 rpm about its short axis with a wobble:
+    the drawn curves are its own motion in s, rad/s and J s."""
+    phone = Body.box(0.071, 0.147, 0.0078, mass=0.17)
+    omega = np.array([0.3, 0.2, 120 * 2 * np.pi / 60])        # rad/s, principal frame
+    motion = orbits.Motion.from_omega(phone, omega)
+    ax = new_figure().add_subplot()
+    line = plotting.plot_herpolhode(ax, motion, points=801)
+    xy = line.get_xydata()
+    np.testing.assert_array_equal(
+        xy, motion.omega_space(np.linspace(0.0, motion.period, 801))[:, :2])
+    assert "rad/s" in ax.get_xlabel()
+    ax = new_figure().add_subplot()
+    drawn = plotting.plot_omega_components(ax, motion)
+    assert drawn["period"] == motion.period
+    t = drawn["lines"][2].get_xdata()
+    np.testing.assert_array_equal(drawn["lines"][2].get_ydata(), motion.omega(t)[:, 2])
+    assert drawn["lines"][2].get_ydata()[0] == omega[2]
+    assert "(s)" in ax.get_xlabel() and "rad/s" in ax.get_ylabel()
+    ax = new_figure().add_subplot(projection="3d")
+    drawn = plotting.plot_binet(ax, motion)
+    # E = omega.I.omega/2 in J and |L| in J s, from the definitions
+    i = phone.moments
+    assert drawn["energy"] == pytest.approx(0.5 * np.sum(i * omega**2), rel=1e-14)
+    assert drawn["momentum"] == pytest.approx(np.linalg.norm(i * omega), rel=1e-14)
+    x, y, z = drawn["polhode"].get_data_3d()
+    np.testing.assert_allclose(np.sqrt(x**2 + y**2 + z**2), drawn["momentum"], rtol=1e-13)
+    assert "J s" in ax.get_xlabel()

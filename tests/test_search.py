@@ -157,3 +157,20 @@ def test_bad_body():
         closed_orbits([1.0, 1.0, 1.5], n_max=3)
     with pytest.raises(InputError, match="one body"):
         closed_orbits([[1.0, 2.0, 2.5], [1.0, 2.0, 2.6]], n_max=3)
+
+
+def test_catalog_rows_carry_d():
+    """D = M^2/(2E) of each row, for its |I| = 1 moments: I1 < D < I3, and
+    D > I2 exactly on SAM (the separatrix is D = I2), closer to I2 as the
+    orbit approaches the separatrix."""
+    table = closed_orbits(FIG6, n_max=12, q_max=2)
+    d = table["D"].to_numpy()
+    np.testing.assert_allclose(d, table["momentum"] ** 2 / (2 * table["energy"]),
+                               rtol=4e-16 * 8)
+    assert np.all((table["I1"] < d) & (d < table["I3"]))
+    assert np.array_equal(d > table["I2"], table["branch"] == "SAM")
+    # phi = 0: D = (I1^2 sin^2 + I3^2 cos^2)/(I1 sin^2 + I3 cos^2), independently
+    s2, c2 = np.sin(table["theta"]) ** 2, np.cos(table["theta"]) ** 2
+    i1, i3 = table["I1"], table["I3"]
+    np.testing.assert_allclose(d, (i1**2 * s2 + i3**2 * c2) / (i1 * s2 + i3 * c2),
+                               rtol=1e-14)

@@ -276,6 +276,12 @@ def test_cli_omega_nearly_spherical():
 # --------------------------------------------------------------------------
 # Hypothesis: bodies from the rod corner to the sphere, offsets to 1e-300
 # --------------------------------------------------------------------------
+def _as_computed(body):
+    """The moments the library computes with: a body drawn just beyond the flat
+    edge by rounding (fl(a + b) > a + b) is moved exactly onto it."""
+    return tuple(float(v) for v in orbits.Body(body).moments)
+
+
 @st.composite
 def near_bodies(draw):
     """``(a, a + a 10^x, a + a 10^x + a 10^y)``: gaps from 1e-12 to the edges."""
@@ -299,7 +305,7 @@ def test_hypothesis_dtheta(body, side, exponent, phi):
     # i.e. ulp(theta_c)/theta relatively (Omega ~ theta^2): pass theta there
     dtheta = side * min(10.0 ** exponent, 0.99 * room)
     got = orbits.phases(body, dtheta=[dtheta], phi=phi)["geometric_phase"].iloc[0]
-    assert got == pytest.approx(mp_omega(body, phi, dtheta=dtheta), rel=BOUND)
+    assert got == pytest.approx(mp_omega(_as_computed(body), phi, dtheta=dtheta), rel=BOUND)
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=list(HealthCheck))
@@ -312,7 +318,7 @@ def test_hypothesis_theta(body, theta):
     if abs(theta - theta_c) <= 8 * np.spacing(theta_c):
         return    # theta_c is known to a few ulps: the branch itself is uncertain
     got = orbits.phases(body, [theta])["geometric_phase"].iloc[0]
-    assert got == pytest.approx(mp_omega(body, theta=theta), rel=BOUND)
+    assert got == pytest.approx(mp_omega(_as_computed(body), theta=theta), rel=BOUND)
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=list(HealthCheck))
@@ -325,4 +331,4 @@ def test_hypothesis_spin_vectors(body, omega):
         got = orbits.spin_phases(body, omega)["geometric_phase"].iloc[0]
     except orbits.SeparatrixError:
         return
-    assert got == pytest.approx(mp_omega(body, omega=omega), rel=BOUND)
+    assert got == pytest.approx(mp_omega(_as_computed(body), omega=omega), rel=BOUND)

@@ -12,6 +12,7 @@ import pytest
 
 import orbits
 from orbits import InputError
+from orbits.atomic import csv_float_options
 from orbits.cli import main
 from orbits.survey import (BODY_COLUMNS, load_manifest, Survey, _sha256, _write_table, compute_chunk,
                            read_survey, survey_grid)
@@ -62,7 +63,7 @@ def test_report_lists_counterexamples(tmp_path):
     survey = Survey.grid(tmp_path / "s", 12, 3, chunk=50, fmt="csv")
     survey.run()
     part = tmp_path / "s" / "bodies" / "part-00000.csv"
-    frame = pd.read_csv(part)
+    frame = pd.read_csv(part, **csv_float_options())
     frame.loc[3, "min_at_end"] = False         # pretend one body's minimum is inside
     _write_table(frame, part, "csv")
     with pytest.raises(InputError, match="damaged.*part-00000.csv does not match"):
@@ -79,7 +80,7 @@ def test_parquet_and_csv_engines_agree(tmp_path):
     bodies, table = compute_chunk(orbits.region_sample(30), 5)
     for engine in ("arrow", "pandas"):
         _write_table(table, tmp_path / f"{engine}.csv", "csv", engine=engine)
-        again = pd.read_csv(tmp_path / f"{engine}.csv")
+        again = pd.read_csv(tmp_path / f"{engine}.csv", **csv_float_options())
         pd.testing.assert_frame_equal(again, table, check_exact=True, check_dtype=False)
     _write_table(table, tmp_path / "t.parquet", "parquet")
     pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "t.parquet"), table,

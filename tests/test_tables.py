@@ -64,5 +64,6 @@ def test_csv_writer_bits_on_random_bit_patterns(tmp_path):
     values = values[np.isfinite(values)]
     frame = pd.DataFrame({"x": values})
     _write_table(frame, tmp_path / "b.csv", "csv")
-    again = pd.read_csv(tmp_path / "b.csv", dtype={"x": np.float64})
+    from orbits.atomic import csv_float_options
+    again = pd.read_csv(tmp_path / "b.csv", dtype={"x": np.float64}, **csv_float_options())
     np.testing.assert_array_equal(_bits(again["x"]), _bits(values))
