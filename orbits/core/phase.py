@@ -45,7 +45,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from .elliptic import cel, cel_pair
+from .elliptic import cel, cel_lanes, cel_pair, cel_passes
 from .exact import separatrix_gap_exact
 
 TWO_PI = 2.0 * math.pi
@@ -306,25 +306,105 @@ def parts_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing):
     return two_e, m_sq, m_param, branch, period, two_e * period / momentum, total
 
 
+# lanes per batch of the SIMD path (its state stays in L1), and batches per
+# parallel task (the scratch rows are allocated once per task)
+LANES = 256
+BATCHES = 16
+_ROWS = 10
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _lane_setup(work, j, i1, i2, i3, constants, angle, from_offset):
+    """Fill lane ``j`` of ``work`` for one angle; returns the status code.
+
+    Rows: 0 ``kc``, 1 ``p``, 2 ``a = 1``, 3 ``b``, 4 the factor
+    ``4 M / (I1 D)`` and 5 the shift (``2 pi`` on SAM), as in
+    :func:`total_from_spin`.  Lanes off the phase's domain get harmless
+    values and an infinite factor.
+    """
+    code, _, _, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
+        constants, angle, from_offset)
+    branch = BRANCH_SEPARATRIX
+    if code == STATUS_OK:
+        branch, _, m_sq, _, _, k_c, q, p, b = orbit_constants(
+            i1, i2, i3, w1, w2, w3, scale, offset, closing)
+    work[2, j] = 1.0
+    if branch == BRANCH_SEPARATRIX:
+        work[0, j] = 1.0
+        work[1, j] = 1.0
+        work[3, j] = 1.0
+        work[4, j] = np.inf
+        work[5, j] = 0.0
+    else:
+        work[0, j] = k_c
+        work[1, j] = p
+        work[3, j] = b
+        work[4, j] = 4.0 * math.sqrt(m_sq * i2 * i3 / (i1 * q))
+        work[5, j] = TWO_PI if branch == BRANCH_SAM else 0.0
+    return code
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _lane_finish(work, count, out, lo):
+    """``cel`` of the filled lanes, then ``out[lo + j]``."""
+    smallest = 1.0
+    for j in range(count):
+        smallest = min(smallest, work[0, j])
+    cel_lanes(work[0], work[1], work[2], work[3], work[6], count,
+              cel_passes(smallest), work[7], work[8], work[9])
+    for j in range(count):
+        out[lo + j] = work[4, j] * work[6, j] - work[5, j]
+
+
 @njit(cache=True, nogil=True, parallel=True)
 def total_phase_one_body(i1, i2, i3, phi, angles, from_offset, out, status):
     """Total phase of one body at many polar angles (scalar ``phi``).
 
     Per-body constants are computed once.  ``status`` receives one of the
     ``STATUS_*`` codes per point; ``out`` is inf where it is not OK.
+    Batches of :data:`LANES` angles go through the SIMD ``cel``
+    (:func:`orbits.core.elliptic.cel_lanes`) with the pass count of ``cel``
+    for the smallest ``kc`` of the batch, which is enough for every lane
+    (:func:`orbits.core.elliptic.cel_passes`): the same values as
+    :func:`total_from_spin` to a few ulps.
     """
     constants = body_constants(i1, i2, i3, phi)
-    for k in prange(angles.shape[0]):
-        code, _, _, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
-            constants, angles[k], from_offset)
-        status[k] = code
-        out[k] = (total_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing)
-                  if code == STATUS_OK else np.inf)
+    n = angles.shape[0]
+    task = LANES * BATCHES
+    for t in prange((n + task - 1) // task):
+        work = np.empty((_ROWS, LANES))
+        for lo in range(t * task, min(n, (t + 1) * task), LANES):
+            count = min(n, lo + LANES) - lo
+            for j in range(count):
+                status[lo + j] = _lane_setup(work, j, i1, i2, i3, constants,
+                                             angles[lo + j], from_offset)
+            _lane_finish(work, count, out, lo)
 
 
 @njit(cache=True, nogil=True, parallel=True)
 def total_phase_many(i1, i2, i3, phi, angles, from_offset, out, status):
-    """Total phase with every input an array of the same length."""
+    """Total phase with every input an array of the same length (SIMD path)."""
+    n = angles.shape[0]
+    task = LANES * BATCHES
+    for t in prange((n + task - 1) // task):
+        work = np.empty((_ROWS, LANES))
+        for lo in range(t * task, min(n, (t + 1) * task), LANES):
+            count = min(n, lo + LANES) - lo
+            for j in range(count):
+                k = lo + j
+                status[k] = _lane_setup(
+                    work, j, i1[k], i2[k], i3[k],
+                    body_constants(i1[k], i2[k], i3[k], phi[k]), angles[k],
+                    from_offset)
+            _lane_finish(work, count, out, lo)
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def total_phase_many_scalar(i1, i2, i3, phi, angles, from_offset, out, status):
+    """The scalar path of :func:`total_phase_many` (one ``cel`` loop per point).
+
+    Kept as the reference of the SIMD path in the tests.
+    """
     for k in prange(angles.shape[0]):
         code, _, _, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
             body_constants(i1[k], i2[k], i3[k], phi[k]), angles[k], from_offset)
