@@ -127,3 +127,40 @@ def test_llvm_emits_packed_sqrt_and_division():
     asm = "\n".join(fresh.inspect_asm().values())
     assert re.search(r"\bv?sqrtpd\b", asm)
     assert re.search(r"\bv?divpd\b", asm)
+
+
+def test_polynomial_sin_cos_within_two_ulps():
+    """The SIMD set-up's sin/cos on [-pi/4, pi/4] against mpmath, to 2 ulp."""
+    import mpmath as mp
+    x = np.concatenate([np.linspace(-math.pi / 4, math.pi / 4, 2001),
+                        np.geomspace(1e-300, math.pi / 4, 500)])
+    for value in x:
+        with mp.workdps(40):
+            s, c = mp.sin(mp.mpf(value)), mp.cos(mp.mpf(value))
+        assert abs(kernels._sin_small(value) - float(s)) <= 2 * np.spacing(abs(float(s)))
+        assert abs(kernels._cos_small(value) - float(c)) <= 2 * np.spacing(float(c))
+
+
+def test_one_body_simd_path_against_mpmath_reference():
+    """Per-body calls (the one-body SIMD set-up) on the reference table.
+
+    dtheta rows: 1e-13.  theta rows: 1e-13 plus the conditioning of theta
+    itself, as in test_phases (theta_c is known to a few ulps only).
+    """
+    rows = pd.read_csv(REFERENCE, comment="#")
+    checked = 0
+    for (m1, m2, m3, phi, mode), group in rows.groupby(["m1", "m2", "m3", "phi", "mode"]):
+        body = orbits.Body((m1, m2, m3))
+        expected = group["total_phase"].to_numpy()
+        if mode == "dtheta":
+            got = orbits.total_phase(body, dtheta=group["dtheta"].to_numpy(), phi=phi)
+            assert np.all(np.abs(got / expected - 1) <= 1e-13)
+        else:
+            got = orbits.total_phase(body, group["theta"].to_numpy(), phi=phi)
+            theta_c = float(orbits.critical_angle(body, phi))
+            ulp = np.spacing(min(theta_c, math.pi / 2 - theta_c))
+            bound = 1e-13 + np.abs(group["dalpha_dtheta"].to_numpy()) * 4 * ulp / np.abs(
+                expected)
+            assert np.all(np.abs(got / expected - 1) <= bound)
+        checked += len(group)
+    assert checked == len(rows)
