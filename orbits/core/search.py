@@ -31,8 +31,16 @@ import numpy as np
 from numba import njit, prange
 
 from .elliptic import cel_dual
-from .phase import (BRANCH_SAM, BRANCH_SEPARATRIX, STATUS_OK, TWO_PI, body_constants,
-                    orbit_constants, spin_from_angle, total_from_spin)
+from .phase import (
+    BRANCH_SAM,
+    BRANCH_SEPARATRIX,
+    STATUS_OK,
+    TWO_PI,
+    body_constants,
+    orbit_constants,
+    spin_from_angle,
+    total_from_spin,
+)
 
 SMALLEST_OFFSET = 2.2250738585072014e-308
 LOG_POINTS = 64
