@@ -71,7 +71,7 @@ def _scalar_total_phase(moments, theta):
     return out
 
 
-def bench_total_phase(points=1_000_000, repeats=3, seed=0):
+def bench_total_phase(points=1_000_000, repeats=7, seed=0):
     """Total phase of the Fig. 6 body at ``points`` random angles."""
     body = Body.preset("fig6")
     theta = np.random.default_rng(seed).uniform(0.0, 0.5 * np.pi, points)

@@ -401,6 +401,8 @@ def _one_body_setup(i1, i2, i3, constants, theta, dtheta, co_theta, work, count)
     d32 = i3 - i2
     p_sam = i2 * d31 / (i1 * d32)
     b_sam = d31 / d32
+    inv_i1 = 1.0 / i1
+    i23_i1 = i2 * i3 / i1
     for j in range(count):
         t = theta[j]
         c = co_theta[j]
@@ -426,14 +428,14 @@ def _one_body_setup(i1, i2, i3, constants, theta, dtheta, co_theta, work, count)
         gap_m1 = i2 * d21 * s2 + i3 * d31 * s3
         gap_3m = i1 * d31 * s1 + i2 * d32 * s2
         sam = dt < 0.0
-        q = d32 * gap_m1 if sam else d21 * gap_3m
-        p_lam = d31 * m_sq / (i1 * gap_3m)
-        b_lam = two_e * d31 / gap_3m
-        work[0, j] = math.sqrt(d31 * scale * closing / q) * math.sqrt(offset)
-        work[1, j] = p_sam if sam else p_lam
+        inv_q = 1.0 / (d32 * gap_m1 if sam else d21 * gap_3m)
+        # d31 / gap_3m: only the LAM lanes use it (two divisions per lane in all)
+        ratio = d31 / gap_3m
+        work[0, j] = math.sqrt(d31 * scale * closing * inv_q) * math.sqrt(offset)
+        work[1, j] = p_sam if sam else m_sq * ratio * inv_i1
         work[2, j] = 1.0
-        work[3, j] = b_sam if sam else b_lam
-        work[4, j] = 4.0 * math.sqrt(m_sq * i2 * i3 / (i1 * q))
+        work[3, j] = b_sam if sam else two_e * ratio
+        work[4, j] = 4.0 * math.sqrt(m_sq * i23_i1 * inv_q)
         work[5, j] = TWO_PI if sam else 0.0
 
 
