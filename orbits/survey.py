@@ -92,8 +92,9 @@ def _flatten(moments, levels, level, offset, found, info):
     A body whose roots overflowed its row (``found < 0``: a phase with
     many monotone pieces) is searched again with room to spare.
     """
-    mask = np.arange(level.shape[1])[None, :] < np.maximum(found, 0)[:, None]
-    body, rows_level, rows_offset = np.nonzero(mask)[0], level[mask], offset[mask]
+    body, rows_level, rows_offset = _kernels.flatten_roots(level, offset, found)
+    if not (found < 0).any():
+        return body, rows_level, rows_offset       # already by body, then dtheta
     for b in np.flatnonzero(found < 0):
         size = 8 * level.shape[1]
         extra = (np.empty(size, np.int8), np.empty(size, np.int64), np.empty(size))
