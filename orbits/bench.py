@@ -60,11 +60,23 @@ def scipy_total_phase(moments, theta):
             - np.where(sam, 2.0 * np.pi, 0.0))
 
 
-def bench_total_phase(points=1_000_000, repeats=3, seed=0):
+def _scalar_total_phase(moments, theta):
+    """The scalar kernel path (one looping ``cel`` per angle), for comparison."""
+    from .core.phase import total_phase_many_scalar
+    n = theta.size
+    out = np.empty(n)
+    status = np.empty(n, dtype=np.int8)
+    i1, i2, i3 = (np.full(n, float(v)) for v in moments)
+    total_phase_many_scalar(i1, i2, i3, np.zeros(n), theta, False, out, status)
+    return out
+
+
+def bench_total_phase(points=1_000_000, repeats=7, seed=0):
     """Total phase of the Fig. 6 body at ``points`` random angles."""
     body = Body.preset("fig6")
     theta = np.random.default_rng(seed).uniform(0.0, 0.5 * np.pi, points)
     ours = best_time(lambda: total_phase(body, theta), repeats)
+    scalar = best_time(lambda: _scalar_total_phase(body.moments, theta), repeats)
     theirs = best_time(lambda: scipy_total_phase(body.moments, theta), repeats)
     agree = np.max(np.abs(total_phase(body, theta) / scipy_total_phase(body.moments, theta) - 1))
     return {
@@ -74,8 +86,10 @@ def bench_total_phase(points=1_000_000, repeats=3, seed=0):
         "baseline": "NumPy + scipy.special ellipk/elliprf/elliprj",
         "baseline_s": theirs,
         "speedup": theirs / ours,
-        "note": f"max relative difference {agree:.1e} (near theta_c the "
-                "baseline loses digits to 1 - m)",
+        "scalar_s": scalar,
+        "note": f"scalar-cel kernel path {_seconds(scalar)} ({theirs / scalar:.1f}x); "
+                f"max relative difference {agree:.1e} (near theta_c the baseline "
+                "loses digits to 1 - m)",
     }
 
 
@@ -186,8 +200,27 @@ def _roots_by_scipy(body, n_max, points=2000):
     return found
 
 
+def _search_counts(function, bodies, levels):
+    """Kernel time, phase evaluations and roots of a search over ``bodies``."""
+    from .core import search as kernels
+    capacity = 4 * levels.size + 16
+    branch = np.empty(capacity, dtype=np.int8)
+    level = np.empty(capacity, dtype=np.int64)
+    offset = np.empty(capacity)
+    info = np.empty(kernels.INFO_SIZE)
+    evaluations = 0.0
+    roots = 0
+    start = time.perf_counter()
+    for moments in bodies:
+        roots += function(moments[0], moments[1], moments[2], levels, branch, level,
+                          offset, info)
+        evaluations += info[kernels.INFO_EVALUATIONS]
+    return time.perf_counter() - start, evaluations, roots
+
+
 def bench_search(n_max=50, repeats=20):
     """Every closed orbit with n <= 50 on both branches of the fig6 body."""
+    from .core import search as kernels
     from .search import closed_orbits, find_roots, phase_levels
     body = Body.preset("fig6")
     ours = best_time(lambda: closed_orbits(body, n_max=n_max), repeats)
@@ -196,6 +229,9 @@ def bench_search(n_max=50, repeats=20):
     roots = len(closed_orbits(body, n_max=n_max))
     theirs = best_time(lambda: _roots_by_scipy(body, n_max), 3)
     found = _roots_by_scipy(body, n_max)
+    _, new_evaluations, _ = _search_counts(kernels.search_body, [body.moments], levels)
+    _, old_evaluations, _ = _search_counts(kernels.search_body_bracketing, [body.moments],
+                                           levels)
     return {
         "_ours": (lambda: closed_orbits(body, n_max=n_max), repeats),
         "task": f"closed orbits n <= {n_max}, both branches (fig6)",
@@ -204,13 +240,44 @@ def bench_search(n_max=50, repeats=20):
         "baseline_s": theirs,
         "speedup": theirs / ours,
         "note": f"ours finds {roots} roots ({kernel * 1e3:.2f} ms in the kernel, the rest "
-                f"is the DataFrame); the baseline finds {found}: roots closer to "
-                "theta_c than its grid step are missed",
+                f"is the DataFrame; {new_evaluations / roots:.1f} phase evaluations per "
+                f"root, the bracketing search {old_evaluations / roots:.1f}); the baseline "
+                f"finds {found}: roots closer to theta_c than its grid step are missed",
+    }
+
+
+def bench_search_evaluations(resolution=60, n_max=10):
+    """The Newton search against the bracketing search it replaced, kernel only."""
+    from .bodies import region_grid
+    from .core import search as kernels
+    from .search import phase_levels
+    bodies = region_grid(resolution)
+    levels = phase_levels(n_max)[2]
+    _search_counts(kernels.search_body, bodies[:2], levels)              # compile
+    _search_counts(kernels.search_body_bracketing, bodies[:2], levels)
+    ours, new_evaluations, roots = _search_counts(kernels.search_body, bodies, levels)
+    theirs, old_evaluations, _ = _search_counts(kernels.search_body_bracketing, bodies,
+                                                levels)
+    return {
+        "task": f"search kernel, {len(bodies)} bodies, n <= {n_max} (one thread)",
+        "ours_s": ours,
+        "baseline": "the scan-and-bracket search (Brent) it replaced",
+        "baseline_s": theirs,
+        "speedup": theirs / ours,
+        "evaluations_per_root": new_evaluations / roots,
+        "baseline_evaluations_per_root": old_evaluations / roots,
+        "note": f"{roots} roots; phase evaluations per root {new_evaluations / roots:.2f} "
+                f"vs {old_evaluations / roots:.2f} "
+                f"({old_evaluations / new_evaluations:.1f}x fewer)",
     }
 
 
 def bench_survey(resolution=400, n_max=10, repeats=1):
-    """Survey throughput: minimum-phase map plus orbits with n <= 10."""
+    """Survey throughput end to end: minimum-phase map plus orbits with n <= 10.
+
+    The default format (Parquet, pyarrow is a core dependency) and CSV, each
+    through :class:`orbits.survey.Survey` as ``orbits survey`` runs it.
+    """
     import shutil
     import tempfile
 
@@ -237,15 +304,16 @@ def bench_survey(resolution=400, n_max=10, repeats=1):
             minimum_phase(moments)
     per_body = best_time(loop, 1) / len(sample)
     return {
-        "_ours": (lambda: survey_once("csv"), 1),
-        "task": f"survey {count} bodies, n <= {n_max} (grid {resolution})",
-        "ours_s": times["csv"],
+        "_ours": (lambda: survey_once("parquet"), 1),
+        "task": f"survey {count} bodies, n <= {n_max} (grid {resolution}), Parquet",
+        "ours_s": times["parquet"],
         "baseline": "a Python loop of closed_orbits + minimum_phase per body",
         "baseline_s": per_body * count,
-        "speedup": per_body * count / times["csv"],
-        "note": f"{count / times['csv']:.0f} bodies/s to CSV, "
-                f"{count / times['parquet']:.0f} bodies/s to Parquet "
-                "(end to end: search, tables, atomic files, report)",
+        "speedup": per_body * count / times["parquet"],
+        "bodies_per_s": count / times["parquet"],
+        "note": f"{count / times['parquet']:.0f} bodies/s to Parquet (the default), "
+                f"{count / times['csv']:.0f} bodies/s to CSV (end to end: search, "
+                "tables, atomic files, report)",
     }
 
 
@@ -328,6 +396,7 @@ BENCHMARKS = {
     "motion_near_separatrix": lambda **kw: bench_motion(dtheta=-2e-4, **kw),
     "motion_rate": bench_motion_rate,
     "search": bench_search,
+    "search_evaluations": bench_search_evaluations,
     "survey": bench_survey,
 }
 
@@ -399,6 +468,8 @@ def run(names=None, quick=False, load=True):
             kwargs = {"resolution": 60}
         if quick and name == "startup":
             kwargs = {"repeats": 2}
+        if quick and name == "search_evaluations":
+            kwargs = {"resolution": 30}
         rows.append(dict(name=name, **BENCHMARKS[name](**kwargs)))
     if load:
         load_check(rows)

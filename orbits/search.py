@@ -208,9 +208,11 @@ def closes_after(p, q):
     p_arr = np.asarray(p, dtype=np.int64)
     q_arr = np.asarray(q, dtype=np.int64)
     both_odd = (p_arr % 2 == 1) & (q_arr % 2 == 1)
-    text = np.array([str(Fraction(int(qq), 2 if odd else 1))
-                     for qq, odd in zip(q_arr.ravel(), both_odd.ravel())],
-                    dtype=object).reshape(q_arr.shape)
+    # few distinct (q, both odd) pairs: format each once (a catalog has ~1e6 rows)
+    key, inverse = np.unique(2 * q_arr.ravel() + both_odd.ravel(), return_inverse=True)
+    names = np.array([str(Fraction(int(k // 2), 2 if k % 2 else 1)) for k in key],
+                     dtype=object)
+    text = names[inverse.reshape(-1)].reshape(q_arr.shape)
     return str(text[()]) if text.ndim == 0 else text
 
 

@@ -96,8 +96,9 @@ def _flatten(moments, levels, level, offset, found, info):
     A body whose roots overflowed its row (``found < 0``: a phase with
     many monotone pieces) is searched again with room to spare.
     """
-    mask = np.arange(level.shape[1])[None, :] < np.maximum(found, 0)[:, None]
-    body, rows_level, rows_offset = np.nonzero(mask)[0], level[mask], offset[mask]
+    body, rows_level, rows_offset = _kernels.flatten_roots(level, offset, found)
+    if not (found < 0).any():
+        return body, rows_level, rows_offset       # already by body, then dtheta
     for b in np.flatnonzero(found < 0):
         size = 8 * level.shape[1]
         extra = (np.empty(size, np.int8), np.empty(size, np.int64), np.empty(size))
@@ -720,7 +721,10 @@ def _write_table(frame, path, fmt, engine=None):
         frame = frame.assign(name=[neutralize(str(v)) for v in frame["name"]])
     with atomic_path(path) as temporary:
         if fmt == "parquet":
-            frame.to_parquet(temporary, index=False)
+            # dictionary pages only for text columns: on doubles they never
+            # pay off and cost pyarrow ~4x the write time
+            text = [name for name in frame.columns if frame[name].dtype.kind not in "biuf"]
+            frame.to_parquet(temporary, index=False, use_dictionary=text)
         elif engine == "arrow":
             from pyarrow import Table
             from pyarrow.csv import write_csv

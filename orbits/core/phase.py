@@ -45,7 +45,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from .elliptic import cel, cel_pair
+from .elliptic import cel, cel_lanes, cel_pair, cel_passes
 from .exact import separatrix_gap_exact
 
 TWO_PI = 2.0 * math.pi
@@ -306,25 +306,210 @@ def parts_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing):
     return two_e, m_sq, m_param, branch, period, two_e * period / momentum, total
 
 
+# lanes per batch of the SIMD path (its state stays in L1), and batches per
+# parallel task (the scratch rows are allocated once per task)
+LANES = 256
+BATCHES = 16
+_ROWS = 10
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _lane_setup(work, j, i1, i2, i3, constants, angle, from_offset):
+    """Fill lane ``j`` of ``work`` for one angle; returns the status code.
+
+    Rows: 0 ``kc``, 1 ``p``, 2 ``a = 1``, 3 ``b``, 4 the factor
+    ``4 M / (I1 D)`` and 5 the shift (``2 pi`` on SAM), as in
+    :func:`total_from_spin`.  Lanes off the phase's domain get harmless
+    values and an infinite factor.
+    """
+    code, _, _, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
+        constants, angle, from_offset)
+    branch = BRANCH_SEPARATRIX
+    if code == STATUS_OK:
+        branch, _, m_sq, _, _, k_c, q, p, b = orbit_constants(
+            i1, i2, i3, w1, w2, w3, scale, offset, closing)
+    work[2, j] = 1.0
+    if branch == BRANCH_SEPARATRIX:
+        work[0, j] = 1.0
+        work[1, j] = 1.0
+        work[3, j] = 1.0
+        work[4, j] = np.inf
+        work[5, j] = 0.0
+    else:
+        work[0, j] = k_c
+        work[1, j] = p
+        work[3, j] = b
+        work[4, j] = 4.0 * math.sqrt(m_sq * i2 * i3 / (i1 * q))
+        work[5, j] = TWO_PI if branch == BRANCH_SAM else 0.0
+    return code
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _lane_finish(work, count, out, lo):
+    """``cel`` of the filled lanes, then ``out[lo + j]``."""
+    smallest = 1.0
+    for j in range(count):
+        smallest = min(smallest, work[0, j])
+    cel_lanes(work[0], work[1], work[2], work[3], work[6], count,
+              cel_passes(smallest), work[7], work[8], work[9])
+    for j in range(count):
+        out[lo + j] = work[4, j] * work[6, j] - work[5, j]
+
+
+# Taylor coefficients (-1)^k / (2k+1)! and (-1)^k / (2k)!: on |x| <= pi/4 the
+# first omitted terms are below 1e-19, so the polynomials are good to ~1 ulp
+_S3, _S5, _S7, _S9 = (-0.16666666666666666, 0.008333333333333333,
+                      -0.0001984126984126984, 2.7557319223985893e-06)
+_S11, _S13, _S15, _S17 = (-2.505210838544172e-08, 1.6059043836821613e-10,
+                          -7.647163731819816e-13, 2.8114572543455206e-15)
+_C4, _C6, _C8, _C10 = (0.041666666666666664, -0.001388888888888889,
+                       2.48015873015873e-05, -2.755731922398589e-07)
+_C12, _C14, _C16, _C18 = (2.08767569878681e-09, -1.1470745597729725e-11,
+                          4.779477332387385e-14, -1.5619206968586225e-16)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _sin_small(x):
+    """``sin x`` for ``|x| <= pi/4`` (Taylor, Horner in ``x^2``): SIMD-friendly."""
+    z = x * x
+    return x + x * z * (_S3 + z * (_S5 + z * (_S7 + z * (_S9 + z * (
+        _S11 + z * (_S13 + z * (_S15 + z * _S17)))))))
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _cos_small(x):
+    """``cos x`` for ``|x| <= pi/4`` (Taylor, Horner in ``x^2``)."""
+    z = x * x
+    return 1.0 - 0.5 * z + z * z * (_C4 + z * (_C6 + z * (_C8 + z * (_C10 + z * (
+        _C12 + z * (_C14 + z * (_C16 + z * _C18)))))))
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _one_body_setup(i1, i2, i3, constants, theta, dtheta, co_theta, work, count):
+    """Rows 0-5 of ``work`` (see :func:`_lane_setup`) for valid lanes, SIMD form.
+
+    The arithmetic of :func:`spin_gap`, :func:`orbit_constants` and
+    :func:`total_from_spin` with selects instead of branches and with
+    ``sin``/``cos`` by polynomials on ``[0, pi/4]`` (the reduction uses the
+    accurately known complement ``co_theta``), so that LLVM vectorises the
+    loop.  Lanes must be valid (status OK); ``kc`` is formed as
+    ``sqrt(r) sqrt(|sin dtheta|)``, which cannot underflow.
+    """
+    cphi, sphi, _, _, root_a, root_b, scale = constants
+    d21 = i2 - i1
+    d31 = i3 - i1
+    d32 = i3 - i2
+    p_sam = i2 * d31 / (i1 * d32)
+    b_sam = d31 / d32
+    inv_i1 = 1.0 / i1
+    i23_i1 = i2 * i3 / i1
+    for j in range(count):
+        t = theta[j]
+        c = co_theta[j]
+        low = t <= QUARTER_PI
+        x = t if low else c
+        sx = _sin_small(x)
+        cx = _cos_small(x)
+        st = sx if low else cx
+        w3 = cx if low else sx
+        dt = dtheta[j]
+        mag = abs(dt)
+        near = mag <= QUARTER_PI
+        y = mag if near else (HALF_PI - mag) + HALF_PI_LOW
+        offset = _sin_small(y) if near else _cos_small(y)     # |sin dtheta|
+        closing = st * root_b + w3 * root_a
+        w1 = st * cphi
+        w2 = st * sphi
+        s1 = w1 * w1
+        s2 = w2 * w2
+        s3 = w3 * w3
+        two_e = i1 * s1 + i2 * s2 + i3 * s3
+        m_sq = i1 * i1 * s1 + i2 * i2 * s2 + i3 * i3 * s3
+        gap_m1 = i2 * d21 * s2 + i3 * d31 * s3
+        gap_3m = i1 * d31 * s1 + i2 * d32 * s2
+        sam = dt < 0.0
+        inv_q = 1.0 / (d32 * gap_m1 if sam else d21 * gap_3m)
+        # d31 / gap_3m: only the LAM lanes use it (two divisions per lane in all)
+        ratio = d31 / gap_3m
+        work[0, j] = math.sqrt(d31 * scale * closing * inv_q) * math.sqrt(offset)
+        work[1, j] = p_sam if sam else m_sq * ratio * inv_i1
+        work[2, j] = 1.0
+        work[3, j] = b_sam if sam else two_e * ratio
+        work[4, j] = 4.0 * math.sqrt(m_sq * i23_i1 * inv_q)
+        work[5, j] = TWO_PI if sam else 0.0
+
+
 @njit(cache=True, nogil=True, parallel=True)
 def total_phase_one_body(i1, i2, i3, phi, angles, from_offset, out, status):
     """Total phase of one body at many polar angles (scalar ``phi``).
 
     Per-body constants are computed once.  ``status`` receives one of the
     ``STATUS_*`` codes per point; ``out`` is inf where it is not OK.
+    Batches of :data:`LANES` angles run through SIMD loops: the set-up of
+    :func:`_one_body_setup` and the ``cel`` of
+    :func:`orbits.core.elliptic.cel_lanes`, with the pass count of ``cel``
+    for the smallest ``kc`` of the batch, which is enough for every lane
+    (:func:`orbits.core.elliptic.cel_passes`): the same values as
+    :func:`total_from_spin` to a few ulps.
     """
     constants = body_constants(i1, i2, i3, phi)
-    for k in prange(angles.shape[0]):
-        code, _, _, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
-            constants, angles[k], from_offset)
-        status[k] = code
-        out[k] = (total_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing)
-                  if code == STATUS_OK else np.inf)
+    theta_c = constants[2]
+    co_theta_c = constants[3]
+    # a valid stand-in for lanes off the domain (their result is replaced)
+    safe = 0.5 * theta_c if theta_c > 0.0 else 0.5 * co_theta_c
+    n = angles.shape[0]
+    task = LANES * BATCHES
+    for t in prange((n + task - 1) // task):
+        work = np.empty((_ROWS, LANES))
+        lane = np.empty((3, LANES))
+        for lo in range(t * task, min(n, (t + 1) * task), LANES):
+            count = min(n, lo + LANES) - lo
+            bad = 0
+            for j in range(count):
+                theta, dtheta, co_theta, code = angle_triplet(
+                    angles[lo + j], from_offset, theta_c, co_theta_c)
+                status[lo + j] = code
+                if code != STATUS_OK:
+                    bad += 1
+                    theta, dtheta, co_theta, _ = angle_triplet(safe, False, theta_c,
+                                                               co_theta_c)
+                lane[0, j] = theta
+                lane[1, j] = dtheta
+                lane[2, j] = co_theta
+            _one_body_setup(i1, i2, i3, constants, lane[0], lane[1], lane[2], work,
+                            count)
+            if bad:
+                for j in range(count):
+                    if status[lo + j] != STATUS_OK:
+                        work[4, j] = np.inf
+                        work[5, j] = 0.0
+            _lane_finish(work, count, out, lo)
 
 
 @njit(cache=True, nogil=True, parallel=True)
 def total_phase_many(i1, i2, i3, phi, angles, from_offset, out, status):
-    """Total phase with every input an array of the same length."""
+    """Total phase with every input an array of the same length (SIMD path)."""
+    n = angles.shape[0]
+    task = LANES * BATCHES
+    for t in prange((n + task - 1) // task):
+        work = np.empty((_ROWS, LANES))
+        for lo in range(t * task, min(n, (t + 1) * task), LANES):
+            count = min(n, lo + LANES) - lo
+            for j in range(count):
+                k = lo + j
+                status[k] = _lane_setup(
+                    work, j, i1[k], i2[k], i3[k],
+                    body_constants(i1[k], i2[k], i3[k], phi[k]), angles[k],
+                    from_offset)
+            _lane_finish(work, count, out, lo)
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def total_phase_many_scalar(i1, i2, i3, phi, angles, from_offset, out, status):
+    """The scalar path of :func:`total_phase_many` (one ``cel`` loop per point).
+
+    Kept as the reference of the SIMD path in the tests.
+    """
     for k in prange(angles.shape[0]):
         code, _, _, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
             body_constants(i1[k], i2[k], i3[k], phi[k]), angles[k], from_offset)

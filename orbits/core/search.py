@@ -30,7 +30,17 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from .phase import STATUS_OK, body_constants, spin_from_angle, total_from_spin
+from .elliptic import cel_dual
+from .phase import (
+    BRANCH_SAM,
+    BRANCH_SEPARATRIX,
+    STATUS_OK,
+    TWO_PI,
+    body_constants,
+    orbit_constants,
+    spin_from_angle,
+    total_from_spin,
+)
 
 SMALLEST_OFFSET = 2.2250738585072014e-308
 LOG_POINTS = 64
@@ -41,20 +51,28 @@ _GOLDEN = 0.3819660112501051
 # relative size of rounding noise in the scanned phase
 _NOISE = 16.0 * 2.220446049250313e-16
 
-INFO_SIZE = 10
+INFO_SIZE = 12
 (INFO_MIN_SAM, INFO_MIN_AT_SAM, INFO_MIN_LAM, INFO_MIN_AT_LAM,
  INFO_TOP_SAM, INFO_TOP_LAM, INFO_UNREACHED_SAM, INFO_UNREACHED_LAM,
- INFO_WIDTH_SAM, INFO_WIDTH_LAM) = range(INFO_SIZE)
+ INFO_WIDTH_SAM, INFO_WIDTH_LAM, INFO_EVALUATIONS, INFO_FALLBACKS) = range(INFO_SIZE)
 
 BRANCH_INFO_SIZE = 4     # minimum, where, value at the smallest offset, unreached
+
+
+# params: I1, I2, I3, sign, the 7 body constants, the evaluation counter
+PARAMS_SIZE = 12
+_COUNTER = 11
 
 
 @njit(cache=True, nogil=True)
 def phase_of_offset(d, params):
     """Total phase at ``dtheta = params[3] * d`` (phi = 0).
 
-    ``params = (I1, I2, I3, sign, *body_constants(I1, I2, I3, 0))``.
+    ``params = (I1, I2, I3, sign, *body_constants(I1, I2, I3, 0), count)``;
+    ``count`` (when present) is incremented: kernel evaluations of a search.
     """
+    if params.shape[0] > _COUNTER:
+        params[_COUNTER] += 1.0
     constants = (params[4], params[5], params[6], params[7], params[8], params[9],
                  params[10])
     code, _, _, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
@@ -329,8 +347,325 @@ def search_branch(kind, params, width, levels, root_level, root_offset, found,
 
 
 @njit(cache=True, nogil=True)
+def phase_slope_of_offset(d, params):
+    """Total phase at ``dtheta = params[3] * d`` and its slope ``d Delta alpha / d ln d``.
+
+    The value is bit-for-bit :func:`phase_of_offset`'s.  The slope is the
+    chain rule through the set-up (``dtheta/d ln d = dtheta``) and
+    :func:`orbits.core.elliptic.cel_dual` for the elliptic part, i.e. the
+    analytic ``dK/dm``, ``dPi/dm`` and ``dPi/dn`` in the combination of
+    eqn:GeometricPhase.  Returns ``(nan, nan)`` off the domain.
+    """
+    params[_COUNTER] += 1.0
+    i1 = params[0]
+    i2 = params[1]
+    i3 = params[2]
+    cphi = params[4]
+    sphi = params[5]
+    root_a = params[8]
+    root_b = params[9]
+    constants = (cphi, sphi, params[6], params[7], root_a, root_b, params[10])
+    code, theta, dtheta, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
+        constants, params[3] * d, True)
+    if code != STATUS_OK:
+        return np.nan, np.nan
+    branch, two_e, m_sq, gap_m1, gap_3m, kc, q, p, b = orbit_constants(
+        i1, i2, i3, w1, w2, w3, scale, offset, closing)
+    if branch == BRANCH_SEPARATRIX:
+        return np.inf, np.nan
+    d21 = i2 - i1
+    d31 = i3 - i1
+    d32 = i3 - i2
+    # derivatives along x = ln d: d theta / dx = dtheta
+    st_dot = w3 * dtheta
+    w1_dot = cphi * st_dot
+    w2_dot = sphi * st_dot
+    w3_dot = -math.sin(theta) * dtheta
+    s1_dot = 2.0 * w1 * w1_dot
+    s2_dot = 2.0 * w2 * w2_dot
+    s3_dot = 2.0 * w3 * w3_dot
+    two_e_dot = i1 * s1_dot + i2 * s2_dot + i3 * s3_dot
+    m_sq_dot = i1 * i1 * s1_dot + i2 * i2 * s2_dot + i3 * i3 * s3_dot
+    closing_dot = st_dot * root_b + w3_dot * root_a
+    if branch == BRANCH_SAM:
+        q_rate = (i2 * d21 * s2_dot + i3 * d31 * s3_dot) / gap_m1
+        p_dot = 0.0
+        b_dot = 0.0
+        shift = TWO_PI
+    else:
+        q_rate = (i1 * d31 * s1_dot + i2 * d32 * s2_dot) / gap_3m
+        p_dot = p * (m_sq_dot / m_sq - q_rate)
+        b_dot = b * (two_e_dot / two_e - q_rate)
+        shift = 0.0
+    # kc^2 = d31 scale sin(dtheta) closing / q (orbit_constants), in logs
+    kc_dot = 0.5 * kc * (math.cos(dtheta) * dtheta / offset + closing_dot / closing
+                         - q_rate)
+    integral, integral_dot = cel_dual(kc, kc_dot, p, p_dot, 1.0, 0.0, b, b_dot)
+    factor = 4.0 * math.sqrt(m_sq * i2 * i3 / (i1 * q))
+    factor_dot = 0.5 * factor * (m_sq_dot / m_sq - q_rate)
+    return (factor * integral - shift,
+            factor_dot * integral + factor * integral_dot)
+
+
+@njit(cache=True, nogil=True)
+def separatrix_expansion(params):
+    """``a, b`` of ``Delta alpha(d) = a ln(1/d) + b + O(d ln d)`` on one branch.
+
+    Near the separatrix ``kc^2 = kappa d (1 + O(d))`` with ``kappa =
+    (I3-I1) sqrt(A + B_phi) c / q`` (:func:`orbits.core.phase.orbit_constants`,
+    ``c`` the closing factor at ``theta_c``), and Bulirsch's integral has
+    ``cel(kc, p, 1, b) = (b/p) ln(4/kc) + (1 - b/p) J(p) + O(kc^2 ln kc)``
+    with ``J(p) = int_0^1 du / (1 + (p-1) u^2)`` (the divergent part comes
+    from ``phi -> pi/2``, where the integrand is ``b / (p sqrt(cos^2 + kc^2))``).
+    With the prefactor ``F = 4 M / (I1 D)`` at ``theta_c``: ``a = F b / (2p)``
+    (``b/p = I1/I2`` on both branches) and ``b = F ((b/p)(ln 4 - ln(kappa)/2)
+    + (1 - b/p) J(p)) - 2 pi [SAM]``.
+    """
+    i1 = params[0]
+    i2 = params[1]
+    i3 = params[2]
+    cphi = params[4]
+    sphi = params[5]
+    theta_c = params[6]
+    co_theta_c = params[7]
+    root_a = params[8]
+    root_b = params[9]
+    scale = params[10]
+    st = math.sin(theta_c)
+    w3 = math.sin(co_theta_c) if co_theta_c < theta_c else math.cos(theta_c)
+    w1 = st * cphi
+    w2 = st * sphi
+    closing = st * root_b + w3 * root_a
+    d21 = i2 - i1
+    d31 = i3 - i1
+    d32 = i3 - i2
+    s1 = w1 * w1
+    s2 = w2 * w2
+    s3 = w3 * w3
+    two_e = i1 * s1 + i2 * s2 + i3 * s3
+    m_sq = i1 * i1 * s1 + i2 * i2 * s2 + i3 * i3 * s3
+    if params[3] < 0.0:                          # SAM
+        q = d32 * (i2 * d21 * s2 + i3 * d31 * s3)
+        p = i2 * d31 / (i1 * d32)
+        b = d31 / d32
+        shift = TWO_PI
+    else:
+        gap_3m = i1 * d31 * s1 + i2 * d32 * s2
+        q = d21 * gap_3m
+        p = d31 * m_sq / (i1 * gap_3m)
+        b = two_e * d31 / gap_3m
+        shift = 0.0
+    kappa = d31 * scale * closing / q
+    if p > 1.0:
+        r = math.sqrt(p - 1.0)
+        j = math.atan(r) / r
+    elif p < 1.0:
+        r = math.sqrt(1.0 - p)
+        j = math.atanh(r) / r
+    else:
+        j = 1.0
+    factor = 4.0 * math.sqrt(m_sq * i2 * i3 / (i1 * q))
+    ratio = b / p
+    slope = 0.5 * factor * ratio
+    return slope, factor * (ratio * (math.log(4.0) - 0.5 * math.log(kappa))
+                            + (1.0 - ratio) * j) - shift
+
+
+# Newton in ln d: stop once a step is below this (the next would be ~its
+# square); give up (and fall back to the bracketing search) after _NEWTON_MAX
+_STEP_DONE = 1.0e-9
+_NEWTON_MAX = 60
+_EPS = 2.220446049250313e-16
+# a slope this far above zero (relative to the phase) is taken as real
+_SLOPE_NOISE = 64.0 * _EPS
+
+
+@njit(cache=True, nogil=True)
+def newton_branch(params, width, levels, root_level, root_offset, found, branch_info):
+    """Roots of one branch by expansion + safeguarded Newton in ``ln d``.
+
+    Assumes ``Delta alpha`` decreases in ``d`` on ``(0, width]`` and checks it
+    at every point it evaluates (the slope must be negative, beyond
+    rounding).  Levels in ``(Delta alpha(width), Delta alpha(2.2e-308))``
+    each have one root, placed by the separatrix expansion
+    (:func:`separatrix_expansion`, ``ln d = (b - L)/a``), then Newton steps
+    ``d <- d exp(-(f - L)/f')`` with the slope ``f'`` of
+    :func:`phase_slope_of_offset`, kept inside the bracket that the
+    evaluated points give (bisection in ``ln d`` otherwise).  Each root
+    depends only on its own level, not on the others asked for (the same
+    spin whether a level is solved alone or in a catalog).  Stepping ``d``
+    by ``exp(step)`` rather than ``ln d`` keeps ``d``'s full relative
+    precision down to 1e-308.
+
+    Returns the new count, ``-1`` if the output is too short, or ``-2`` when
+    the assumption fails or Newton does not converge: the caller then
+    uses the bracketing search for this branch.
+    """
+    capacity = root_offset.shape[0]
+    f_end = phase_of_offset(width, params)
+    top = phase_of_offset(SMALLEST_OFFSET, params)
+    if not (math.isfinite(f_end) and math.isfinite(top)) or not (top > f_end):
+        return -2
+    unreached = 0
+    for j in range(levels.shape[0]):
+        if levels[j] > top:
+            unreached += 1
+    branch_info[0] = f_end
+    branch_info[1] = width
+    branch_info[2] = top
+    branch_info[3] = unreached
+    slope, intercept = separatrix_expansion(params)
+    if not (slope > 0.0):
+        return -2
+    log_width = math.log(width)
+    j = np.searchsorted(levels, top, side="left") - 1
+    first = found
+    while j >= 0 and levels[j] > f_end:
+        level = levels[j]
+        if found >= capacity:
+            return -1
+        x_guess = (intercept - level) / slope
+        lo = SMALLEST_OFFSET
+        hi = width
+        r_lo = top - level         # > 0
+        r_hi = f_end - level       # < 0
+        x_lo = math.log(lo)
+        x_hi = log_width
+        if not (x_lo < x_guess < x_hi):
+            x_guess = 0.5 * (x_lo + x_hi)
+        d = math.exp(x_guess)
+        last_step = math.inf
+        done = False
+        for _ in range(_NEWTON_MAX):
+            value, rate = phase_slope_of_offset(d, params)
+            if not (rate < _SLOPE_NOISE * abs(value)):
+                return -2
+            residual = value - level
+            if residual == 0.0:
+                done = True
+                break
+            if residual > 0.0:
+                lo = d
+                r_lo = residual
+            else:
+                hi = d
+                r_hi = residual
+            step = -residual / rate
+            if rate < 0.0 and abs(step) <= _STEP_DONE:
+                d = d * math.exp(step)
+                d = min(max(d, lo), hi)
+                done = True
+                break
+            x = math.log(d)
+            x_lo = math.log(lo)
+            x_hi = math.log(hi)
+            if rate < 0.0 and x_lo < x + step < x_hi and abs(step) < 0.5 * last_step:
+                d = d * math.exp(step)
+                last_step = abs(step)
+            else:
+                # Newton left the bracket or did not halve its step (it can
+                # cycle where the phase flattens towards the far end): a
+                # false-position step in ln d, kept off the bracket's ends
+                t = min(max(r_hi / (r_hi - r_lo), 0.02), 0.98)
+                x_new = x_hi - t * (x_hi - x_lo)
+                last_step = abs(x_new - x)
+                d = math.exp(x_new)
+            if hi <= lo * (1.0 + 4.0 * _EPS):
+                done = True
+                break
+        if not done:
+            return -2
+        root_level[found] = j
+        root_offset[found] = d
+        found += 1
+        j -= 1
+    # ascending levels within the branch, as the bracketing search stores them
+    count = found - first
+    for k in range(count // 2):
+        a = first + k
+        b = found - 1 - k
+        root_level[a], root_level[b] = root_level[b], root_level[a]
+        root_offset[a], root_offset[b] = root_offset[b], root_offset[a]
+    return found
+
+
+@njit(cache=True, nogil=True)
 def search_body(i1, i2, i3, levels, root_branch, root_level, root_offset, info):
     """All roots of ``Delta alpha = levels[j]`` on both branches of one body.
+
+    Parameters
+    ----------
+    i1, i2, i3 : float
+        Principal moments, ascending.
+    levels : ndarray
+        Target phases, ascending (``2 pi p / q``).
+    root_branch, root_level, root_offset : ndarray
+        Receive, per root, the branch (+1 SAM, -1 LAM), the index into
+        ``levels`` and ``dtheta``.
+    info : ndarray (INFO_SIZE,)
+        Per branch: the minimum of the phase and its ``dtheta``, the phase
+        at ``|dtheta| = 2.2e-308``, the number of levels above it (roots
+        that would lie closer to the separatrix than a double can say),
+        and the branch width; then the number of phase evaluations and of
+        branches that fell back to the bracketing search.
+
+    Returns
+    -------
+    int
+        Number of roots found, or ``-1`` if the output arrays are too short.
+
+    Notes
+    -----
+    Each branch is solved by :func:`newton_branch` (separatrix expansion,
+    then Newton in ``ln d`` with the analytic slope); where its
+    monotonicity check fails, by the scan-and-bracket
+    :func:`search_branch` (see :func:`search_body_bracketing`).
+    """
+    constants = body_constants(i1, i2, i3, 0.0)
+    params = np.zeros(PARAMS_SIZE)
+    params[0] = i1
+    params[1] = i2
+    params[2] = i3
+    for k in range(7):
+        params[4 + k] = constants[k]
+    branch_info = np.empty(BRANCH_INFO_SIZE)
+    found = 0
+    fallbacks = 0
+    for branch_index in range(2):
+        sign = -1.0 if branch_index == 0 else 1.0
+        params[3] = sign
+        width = constants[2] if branch_index == 0 else constants[3]
+        start = found
+        found = newton_branch(params, width, levels, root_level, root_offset, found,
+                              branch_info)
+        if found == -2:
+            fallbacks += 1
+            found = search_branch(KIND_PHASE, params, width, levels, root_level,
+                                  root_offset, start, branch_info)
+        if found < 0:
+            return -1
+        for k in range(start, found):
+            root_branch[k] = 1 if branch_index == 0 else -1
+            root_offset[k] *= sign
+        info[INFO_MIN_SAM + 2 * branch_index] = branch_info[0]
+        info[INFO_MIN_AT_SAM + 2 * branch_index] = sign * branch_info[1]
+        info[INFO_TOP_SAM + branch_index] = branch_info[2]
+        info[INFO_UNREACHED_SAM + branch_index] = branch_info[3]
+        info[INFO_WIDTH_SAM + branch_index] = width
+    info[INFO_EVALUATIONS] = params[_COUNTER]
+    info[INFO_FALLBACKS] = fallbacks
+    return found
+
+
+@njit(cache=True, nogil=True)
+def search_body_bracketing(i1, i2, i3, levels, root_branch, root_level, root_offset,
+                           info):
+    """The scan-and-bracket search of both branches (the reference).
+
+    Every branch is scanned and split into monotone pieces
+    (:func:`search_branch`); kept as the reference of :func:`search_body`
+    in the tests and as its fallback.  Arguments and results as for
+    :func:`search_body`.
 
     Parameters
     ----------
@@ -353,7 +688,7 @@ def search_body(i1, i2, i3, levels, root_branch, root_level, root_offset, info):
         Number of roots found, or ``-1`` if the output arrays are too short.
     """
     constants = body_constants(i1, i2, i3, 0.0)
-    params = np.empty(11)
+    params = np.zeros(PARAMS_SIZE)
     params[0] = i1
     params[1] = i2
     params[2] = i3
@@ -378,6 +713,8 @@ def search_body(i1, i2, i3, levels, root_branch, root_level, root_offset, info):
         info[INFO_TOP_SAM + branch_index] = branch_info[2]
         info[INFO_UNREACHED_SAM + branch_index] = branch_info[3]
         info[INFO_WIDTH_SAM + branch_index] = width
+    info[INFO_EVALUATIONS] = params[_COUNTER]
+    info[INFO_FALLBACKS] = 0
     return found
 
 
@@ -391,3 +728,35 @@ def search_many(moments, levels, root_branch, root_level, root_offset, counts, i
     for b in prange(moments.shape[0]):
         counts[b] = search_body(moments[b, 0], moments[b, 1], moments[b, 2], levels,
                                 root_branch[b], root_level[b], root_offset[b], info[b])
+
+
+@njit(cache=True, nogil=True)
+def flatten_roots(level, offset, counts):
+    """Rows ``[b, :counts[b]]`` of the per-body root arrays, as flat arrays.
+
+    Returns ``body, level, offset`` ordered by body, then by ``offset``
+    (``dtheta``, a stable insertion sort within each body's few roots).
+    Rows with ``counts[b] < 0`` (overflowed) are skipped.
+    """
+    total = 0
+    for b in range(counts.shape[0]):
+        total += max(counts[b], 0)
+    body_out = np.empty(total, dtype=np.int64)
+    level_out = np.empty(total, dtype=np.int64)
+    offset_out = np.empty(total)
+    k = 0
+    for b in range(counts.shape[0]):
+        start = k
+        for j in range(max(counts[b], 0)):
+            value = offset[b, j]
+            index = level[b, j]
+            i = k
+            while i > start and offset_out[i - 1] > value:
+                offset_out[i] = offset_out[i - 1]
+                level_out[i] = level_out[i - 1]
+                i -= 1
+            offset_out[i] = value
+            level_out[i] = index
+            body_out[k] = b
+            k += 1
+    return body_out, level_out, offset_out

@@ -1,0 +1,193 @@
+"""The Newton search (separatrix expansion + analytic slope) against the bracketing search."""
+
+import math
+from pathlib import Path
+
+import mpmath as mp
+import numpy as np
+import pandas as pd
+import pytest
+
+from orbits.bodies import region_grid
+from orbits.core import search as kernels
+from orbits.search import phase_levels
+
+EPS = np.finfo(float).eps
+REFERENCE = Path(__file__).parent / "reference" / "phase_reference.csv"
+
+
+def _params(moments, sign):
+    params = np.zeros(kernels.PARAMS_SIZE)
+    params[:3] = moments
+    params[3] = sign
+    params[4:11] = kernels.body_constants(*moments, 0.0)
+    return params
+
+
+def _run(function, moments, levels):
+    capacity = 4 * levels.size + 16
+    branch = np.empty(capacity, np.int8)
+    level = np.empty(capacity, np.int64)
+    offset = np.empty(capacity)
+    info = np.empty(kernels.INFO_SIZE)
+    count = function(*moments, levels, branch, level, offset, info)
+    return branch[:count], level[:count], offset[:count], info
+
+
+def _bodies():
+    rng = np.random.default_rng(11)
+    grid = region_grid(40)
+    # extremes: nearly symmetric (either pair), nearly flat, tiny and huge scales
+    extra = [(0.05, 1.0, 1.049), (1.0, 1.0 + 1e-9, 1.5), (1.0, 1.5, 1.5 + 1e-9),
+             (0.5, 0.5000001, 0.9999), (1e-3, 1.3e-3, 1.9e-3), (3e5, 4e5, 6e5),
+             (0.26, 0.55, 0.793662)]
+    random = np.sort(rng.uniform(0.1, 1.0, (200, 3)), axis=1)
+    random = random[random[:, 2] < random[:, 0] + random[:, 1]]
+    return np.concatenate([grid, np.array(extra), random])
+
+
+def _bound(moments, level, d):
+    """1e-14, or the root's conditioning: 16 ulp of the level over the slope."""
+    _, slope = kernels.phase_slope_of_offset(abs(d), _params(moments, math.copysign(1.0, d)))
+    return max(1e-14, 16 * EPS * level / abs(slope))
+
+
+@pytest.fixture(scope="module")
+def compared():
+    levels = phase_levels(10)[2]
+    rows = []
+    evaluations = np.zeros(2)
+    fallbacks = 0
+    for moments in _bodies():
+        new = _run(kernels.search_body, moments, levels)
+        old = _run(kernels.search_body_bracketing, moments, levels)
+        rows.append((moments, new, old))
+        evaluations += (new[3][kernels.INFO_EVALUATIONS], old[3][kernels.INFO_EVALUATIONS])
+        fallbacks += new[3][kernels.INFO_FALLBACKS]
+    return levels, rows, evaluations, fallbacks
+
+
+def test_same_roots_as_the_bracketing_search(compared):
+    """Same (branch, level) set; offsets within 1e-14 relative, or within the
+    root's own conditioning where the phase is flatter than that allows.
+
+    A root in ``d`` is only defined to ``|delta f| / |df/d ln d|`` with
+    ``|delta f|`` a few ulps of the level (the computed phase is flat over
+    that range, and both searches stop anywhere on it).
+    """
+    levels, rows, _, _ = compared
+    relative = []
+    total = 0
+    for moments, new, old in rows:
+        assert np.array_equal(new[0], old[0]) and np.array_equal(new[1], old[1])
+        total += new[2].size
+        for j, d_new, d_old in zip(new[1], new[2], old[2]):
+            error = abs(d_new / d_old - 1.0)
+            assert error <= _bound(moments, levels[j], d_old), (moments, j)
+            relative.append(error)
+        # the rest of the per-branch summary agrees too
+        for slot in range(kernels.INFO_EVALUATIONS):
+            assert new[3][slot] == pytest.approx(old[3][slot], rel=1e-12, abs=0)
+    relative = np.array(relative)
+    assert total > 5000
+    assert np.mean(relative <= 1e-14) >= 0.99
+
+
+def test_five_times_fewer_evaluations_and_no_fallback(compared):
+    _, rows, evaluations, fallbacks = compared
+    roots = sum(new[2].size for _, new, _ in rows)
+    assert evaluations[0] / roots <= 5.0
+    assert evaluations[1] >= 5 * evaluations[0]
+    assert fallbacks == 0
+
+
+def test_deep_levels_near_the_smallest_double():
+    """n up to 300 on the paper's body: roots down to ~6e-240, same as bracketing."""
+    levels = phase_levels(300)[2]
+    moments = np.array([0.26, 0.55, 0.793662])
+    new = _run(kernels.search_body, moments, levels)
+    old = _run(kernels.search_body_bracketing, moments, levels)
+    assert np.array_equal(new[1], old[1]) and np.array_equal(new[0], old[0])
+    assert np.abs(new[2]).min() < 1e-200
+    for j, d_new, d_old in zip(new[1], new[2], old[2]):
+        assert abs(d_new / d_old - 1) <= _bound(moments, levels[j], d_old)
+    # unreachable levels are counted the same way
+    body = np.array([0.05, 1.0, 1.049])
+    new = _run(kernels.search_body, body, levels)
+    old = _run(kernels.search_body_bracketing, body, levels)
+    assert new[3][kernels.INFO_UNREACHED_SAM] == old[3][kernels.INFO_UNREACHED_SAM] > 0
+    assert np.array_equal(new[1], old[1])
+
+
+def test_slope_against_mpmath_reference():
+    """d Delta alpha / d ln d = dtheta * d Delta alpha / d theta (reference table).
+
+    The table's ``dalpha_dtheta`` (theta rows) is a central difference in
+    mpmath at half the working digits.
+    """
+    rows = pd.read_csv(REFERENCE, comment="#")
+    rows = rows[(rows["mode"] == "theta") & (rows["phi"] == 0.0) & (rows["dtheta"] != 0.0)]
+    assert len(rows) > 100
+    for _, row in rows.iterrows():
+        moments = np.sort([row.m1, row.m2, row.m3])
+        d = abs(row.dtheta)
+        value, slope = kernels.phase_slope_of_offset(
+            d, _params(moments, math.copysign(1.0, row.dtheta)))
+        want = row.dalpha_dtheta * row.dtheta
+        assert value == pytest.approx(row.total_phase, rel=1e-13)
+        # the slope is a difference of O(Delta alpha) terms near the far end;
+        # it only sets Newton's steps (the roots come from the residual), and
+        # on near-rods (I2 ~ I3, I1 -> 0) next to theta = pi/2 it keeps ~11 digits
+        loose = 100.0 if row.kind == "rod" else 1.0
+        assert abs(slope - want) <= loose * (1e-12 * abs(want) + 1e-13 * abs(row.total_phase))
+
+
+@pytest.mark.parametrize("moments", [(0.26, 0.55, 0.793662), (1.0, 1.9, 2.3),
+                                     (0.2, 0.9, 1.05)])
+@pytest.mark.parametrize("sign", [-1.0, 1.0])
+def test_separatrix_expansion(moments, sign):
+    """``a ln(1/d) + b`` matches the phase to O(d ln d), and exactly at 1e-300 (mpmath)."""
+    params = _params(np.array(moments), sign)
+    slope, intercept = kernels.separatrix_expansion(params)
+    for d in (1e-4, 1e-6, 1e-8):
+        gap = kernels.phase_of_offset(d, params) - (slope * math.log(1 / d) + intercept)
+        assert abs(gap) <= 50 * d * math.log(1 / d)
+    # the slope in ln d tends to -a
+    _, rate = kernels.phase_slope_of_offset(1e-12, params)
+    assert rate == pytest.approx(-slope, rel=1e-9)
+    # against eqn:GeometricPhase in mpmath at d = 1e-300
+    with mp.workdps(400):
+        i1, i2, i3 = (mp.mpf(v) for v in moments)
+        theta = mp.atan2(mp.sqrt(i3 * (i3 - i2)), mp.sqrt(i1 * (i2 - i1))) + sign * mp.mpf(1e-300)
+        w1, w3 = mp.sin(theta), mp.cos(theta)
+        two_e, m_sq = i1 * w1**2 + i3 * w3**2, i1**2 * w1**2 + i3**2 * w3**2
+        if sign < 0:
+            k2 = (i2 - i1) * (two_e * i3 - m_sq) / ((i3 - i2) * (m_sq - two_e * i1))
+            rate = mp.sqrt((i3 - i2) * (m_sq - two_e * i1) / (i1 * i2 * i3))
+            n, shift = -i3 * (i2 - i1) / (i1 * (i3 - i2)), 2 * mp.pi
+        else:
+            k2 = (i3 - i2) * (m_sq - two_e * i1) / ((i2 - i1) * (two_e * i3 - m_sq))
+            rate = mp.sqrt((i2 - i1) * (two_e * i3 - m_sq) / (i1 * i2 * i3))
+            n, shift = -i3 * (m_sq - two_e * i1) / (i1 * (two_e * i3 - m_sq)), 0
+        mom = mp.sqrt(m_sq)
+        exact = (mom * 4 * mp.ellipk(k2) / rate / i3
+                 + 4 * mom * (i3 - i1) * mp.ellippi(n, k2) / (i1 * i3 * rate) - shift)
+    assert slope * math.log(1e300) + intercept == pytest.approx(float(exact), rel=1e-13)
+
+
+def test_flatten_roots_matches_a_stable_lexsort():
+    """The survey's compaction: rows by body, then dtheta, ties in stored order."""
+    rng = np.random.default_rng(5)
+    n, capacity = 3000, 12
+    level = rng.integers(0, 9, (n, capacity))
+    offset = rng.normal(size=(n, capacity))
+    offset[5, :4] = 0.5                       # ties
+    found = rng.integers(0, capacity + 1, n)
+    found[7] = -1                             # an overflowed row is skipped
+    body, rows_level, rows_offset = kernels.flatten_roots(level, offset, found)
+    mask = np.arange(capacity)[None, :] < np.maximum(found, 0)[:, None]
+    want_body, want_level, want_offset = np.nonzero(mask)[0], level[mask], offset[mask]
+    order = np.lexsort((want_offset, want_body))
+    assert np.array_equal(body, want_body[order])
+    assert np.array_equal(rows_level, want_level[order])
+    assert np.array_equal(rows_offset, want_offset[order])
