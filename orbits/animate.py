@@ -44,7 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from .atomic import atomic_path, ensure_writable
-from .bodies import Body
+from .bodies import Body, cylinder_moments
 from .errors import InputError
 from .motion import Motion, _as_body
 
@@ -151,9 +151,12 @@ def solid_faces(body, solid="auto"):
     body : Body
     solid : "auto", "ellipsoid", or a tuple
         ``("t-handle", l1, l2, w)``, ``("box", a, b, c)`` (full side
-        lengths along the caller's x, y, z) or ``("mesh", vertices,
-        faces)`` (caller's axes, centred at the centre of mass).  ``"auto"``
-        uses ``body.shape`` when the body carries one (same tuples), the
+        lengths along the caller's x, y, z), ``("cylinder", a, length, b)``
+        (along z, section semi-axes a along x and b along y) or ``("mesh",
+        vertices, faces)`` (caller's axes, centred at the centre of mass).  ``"auto"``
+        uses ``body.shape`` when the body carries one (same tuples: set by
+        :meth:`Body.t_handle`, :meth:`Body.box`, :meth:`Body.cylinder` and
+        :meth:`Body.from_mesh`), the
         T-handle when the moments are those of :meth:`Body.t_handle` (8, 4,
         1) (the ``t-handle`` preset), and else the equivalent ellipsoid
         (:meth:`Body.equivalent_ellipsoid`).
@@ -190,14 +193,18 @@ def solid_faces(body, solid="auto"):
         a, b, c = (float(v) for v in spec[1:4])
         faces = _box_faces((-a / 2, -b / 2, -c / 2), (a / 2, b / 2, c / 2))
         frame = Body((b * b + c * c, a * a + c * c, a * a + b * b)).frame
+    elif kind == "cylinder":
+        a, length, b = (float(v) for v in spec[1:4])
+        faces = _cylinder_faces(a, b, length)
+        frame = Body(cylinder_moments(a, length, radius_y=b)).frame
     elif kind == "mesh":
         vertices = np.asarray(spec[1], dtype=float)
         faces = [vertices[np.asarray(f)] for f in spec[2]]
         frame = body.frame
     else:
         raise InputError(f"unknown solid {solid!r}; use 'auto', 'ellipsoid', "
-                         "('t-handle', l1, l2, w), ('box', a, b, c) or "
-                         "('mesh', vertices, faces)")
+                         "('t-handle', l1, l2, w), ('box', a, b, c), "
+                         "('cylinder', a, length, b) or ('mesh', vertices, faces)")
     # caller's axes -> sorted principal axes: v_principal = frame @ v
     return kind, [face @ frame.T for face in faces]
 
@@ -220,6 +227,16 @@ def t_handle_boxes(l1, l2, w):
     com_y = (l2 / (l1 + l2)) * 0.5 * (w + l2)
     return [((-l1 / 2, -w / 2 - com_y, -w / 2), (l1 / 2, w / 2 - com_y, w / 2)),
             ((-w / 2, w / 2 - com_y, -w / 2), (w / 2, w / 2 + l2 - com_y, w / 2))]
+
+
+def _cylinder_faces(a, b, length, sides=24):
+    """An elliptic cylinder along z (semi-axes a along x, b along y) as a prism."""
+    u = np.linspace(0.0, 2.0 * np.pi, sides + 1)[:-1]
+    rim = np.stack([a * np.cos(u), b * np.sin(u)], axis=-1)
+    bottom = np.column_stack([rim, np.full(sides, -0.5 * length)])
+    top = np.column_stack([rim, np.full(sides, 0.5 * length)])
+    walls = [np.array([bottom[i], bottom[i - 1], top[i - 1], top[i]]) for i in range(sides)]
+    return [bottom, top] + walls
 
 
 def _t_handle_faces(l1, l2, w):
@@ -323,7 +340,7 @@ class PoinsotAnimation:
     """
 
     def __init__(self, motion, times, *, fps=20, solid="auto", title=None,
-                 size=(9.0, 4.6), dpi=80, pyplot=False, subsamples=8):
+                 size=(9.0, 4.0), dpi=80, pyplot=False, subsamples=8):
         self.motion = motion
         self.times = np.asarray(times, dtype=float)
         self.fps = int(fps)
@@ -347,9 +364,10 @@ class PoinsotAnimation:
         self._wire = inertia_ellipsoid_lines(moments)
         self.solid_kind, faces = solid_faces(body, solid)
         semi = 1.0 / np.sqrt(moments)
-        extent = np.max(np.abs(np.concatenate(faces)), axis=0)
-        # the solid fits inside the inertia ellipsoid (both long along I1)
-        self.solid_scale = 0.8 / float(np.max(extent / semi))
+        # the whole solid (every vertex) fits inside the inertia ellipsoid
+        vertices = np.concatenate(faces)
+        reach = float(np.max(np.sqrt(np.sum((vertices / semi) ** 2, axis=1))))
+        self.solid_scale = 0.95 / reach
         self._faces = [face * self.solid_scale for face in faces]
         self._build_figure(title, size, pyplot)
         self._animation = None
@@ -366,9 +384,11 @@ class PoinsotAnimation:
             figure = Figure(figsize=size, dpi=self.dpi)
             FigureCanvasAgg(figure)
         self.figure = figure
-        space = figure.add_subplot(1, 2, 1, projection="3d", computed_zorder=False)
-        body_ax = figure.add_subplot(1, 2, 2, projection="3d", computed_zorder=False)
-        figure.subplots_adjust(left=0.0, right=1.0, bottom=0.02, top=0.86, wspace=0.02)
+        # explicit panels under two lines of titles (3-D axes leave wide margins)
+        space = figure.add_axes((0.0, 0.0, 0.5, 0.84), projection="3d",
+                                computed_zorder=False)
+        body_ax = figure.add_axes((0.5, 0.0, 0.5, 0.84), projection="3d",
+                                  computed_zorder=False)
         self.space_axes, self.body_axes = space, body_ax
         h = self.plane_height
         semi = 1.0 / np.sqrt(self.motion.body.moments)
@@ -405,8 +425,9 @@ class PoinsotAnimation:
                                        zorder=6)
         artists["contact"], = space.plot([], [], [], "o", color=COLOURS["omega"],
                                          markersize=5, zorder=7)
-        _cube(space, half, (-half, half))
-        space.view_init(elev=18, azim=-60)
+        # the inertia ellipsoid lies between its two tangent planes z = +-h
+        _cube(space, half, (-1.08 * h, 1.4 * h), zoom=1.75)
+        space.view_init(elev=24, azim=-60)
         # body panel: the fixed inertia ellipsoid, the solid, the polhode
         for curve in self._wire:
             body_ax.plot(*curve.T, color=COLOURS["ellipsoid"], linewidth=0.5, alpha=0.5)
@@ -422,21 +443,21 @@ class PoinsotAnimation:
                                            linewidth=1.6)
         artists["body_contact"], = body_ax.plot([], [], [], "o", color=COLOURS["omega"],
                                                 markersize=5)
-        _cube(body_ax, reach, (-reach, reach))
+        _cube(body_ax, reach, (-reach, reach), zoom=1.6)
         body_ax.view_init(elev=22, azim=-50)
         self.artists = artists
         body = self.motion.body
         name = body.name or "body"
         heading = title or (f"{name}: Poinsot construction, {self.motion.branch}, "
                             f"T = {self.motion.period:.4g}")
-        self._title = figure.suptitle(heading, fontsize="medium")
-        space.set_title("space frame (L fixed, along z): inertia ellipsoid rolling\n"
-                        "on the invariable plane; herpolhode (purple), "
-                        r"$\omega$ (red)", fontsize="x-small")
-        body_ax.set_title(f"body frame: polhode on the inertia ellipsoid\n"
-                          f"{self.solid_kind} drawn x{self.solid_scale:.3g}",
-                          fontsize="x-small")
-        self._clock = figure.text(0.02, 0.03, "", fontsize="small")
+        self._title = figure.suptitle(heading, fontsize="medium", y=0.985)
+        figure.text(0.25, 0.905, "space frame (L fixed, along z): inertia ellipsoid rolling\n"
+                    "on the invariable plane; herpolhode (purple), "
+                    r"$\omega$ (red)", fontsize="x-small", ha="center", va="center")
+        figure.text(0.75, 0.905, f"body frame: polhode (orange) on the inertia ellipsoid\n"
+                    f"{self.solid_kind} drawn x{self.solid_scale:.3g}",
+                    fontsize="x-small", ha="center", va="center")
+        self._clock = figure.text(0.01, 0.02, "", fontsize="small")
 
     def frame(self, k):
         """Draw frame ``k`` and return its :class:`FrameData`."""
@@ -567,11 +588,11 @@ class PoinsotAnimation:
         writer.close()
 
 
-def _cube(ax, half, zrange):
+def _cube(ax, half, zrange, zoom=1.45):
     ax.set_xlim(-half, half)
     ax.set_ylim(-half, half)
     ax.set_zlim(*zrange)
-    ax.set_box_aspect((1, 1, (zrange[1] - zrange[0]) / (2 * half)), zoom=1.45)
+    ax.set_box_aspect((1, 1, (zrange[1] - zrange[0]) / (2 * half)), zoom=zoom)
     ax.set_axis_off()
 
 
@@ -613,7 +634,7 @@ def poinsot_animation(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0,
         The solid drawn; see :func:`solid_faces`.
     title : str, optional
     dpi : float
-        Pixel density of the frames (figure 9 x 4.6 in).
+        Pixel density of the frames (figure 9 x 4 in).
     pyplot : bool
         Create the figure through ``matplotlib.pyplot`` (for notebooks and
         sphinx-gallery's animation scraper); default headless Agg.

@@ -606,7 +606,7 @@ def _add_animate(subparsers):
     parser.add_argument("--fps", type=_positive_int, default=20,
                         help="frames per second (default 20)")
     parser.add_argument("--dpi", type=_positive_int, default=80,
-                        help="pixels per inch of the 9 x 4.6 in frames (default 80)")
+                        help="pixels per inch of the 9 x 4 in frames (default 80)")
     parser.add_argument("--solid", choices=["auto", "ellipsoid"], default="auto",
                         help="the solid drawn: auto (the body's shape when known, "
                              "else its equivalent ellipsoid) or ellipsoid")
