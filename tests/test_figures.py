@@ -67,8 +67,7 @@ def test_fig6_insets_are_closed_catalog_orbits(paper):
     assert len(insets) >= 6
     for inset, row in insets:
         assert row.dtheta in set(catalog["dtheta"])
-        (line,) = inset.get_lines()
-        xy = line.get_xydata()
+        xy = inset.get_lines()[0].get_xydata()
         assert np.abs(xy[-1] - xy[0]).max() <= 1e-9
 
 
@@ -92,11 +91,42 @@ def test_herpolhode_set_files_order_and_closure(tmp_path):
             assert_not_blank(path)
     sheet = figures.contact_sheet(FIG6, catalog)
     drawn = [ax for ax in sheet.get_axes() if ax.get_lines()]
-    thetas = [float(ax.get_title().split("=")[-1]) for ax in drawn]
-    assert thetas == sorted(thetas)              # the paper's left-to-right order
-    for ax in drawn:
+    ordered = figures._paper_order(catalog)
+    assert len(drawn) == len(ordered)
+    assert list(ordered["dtheta"]) == sorted(ordered["dtheta"])   # left to right in theta
+    for ax, row in zip(drawn, ordered.itertuples()):
+        multiple = f"{row.n}" if row.q == 1 else f"{row.n}/{row.q}"
+        assert rf"{row.branch} $2\pi\cdot{multiple}$" in ax.get_title()
         xy = ax.get_lines()[0].get_xydata()
-        assert np.abs(xy[-1] - xy[0]).max() <= 1e-9      # p/q drawn over q periods
+        assert np.abs(xy[-1] - xy[0]).max() <= 1e-9      # closed over closes_after
+        # one common scale on every panel
+        assert ax.get_xlim() == (-sheet.limit, sheet.limit)
+        assert ax.get_ylim() == (-sheet.limit, sheet.limit)
+
+
+def test_fig6_leader_lines_do_not_cross(paper):
+    """Leader segments (inset bottom -> dot), in figure pixels, pairwise disjoint."""
+    _, built = paper
+    figure = built["fig6"]
+    figure.canvas.draw()
+    segments = []
+    for inset, row in figure.insets:
+        a = inset.transAxes.transform((0.5, 0.0))
+        b = figure.main_axes.transData.transform((row.theta, row.total_phase))
+        segments.append((a, b))
+
+    def cross(p, q, r):
+        return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+
+    for i, (p1, p2) in enumerate(segments):
+        for p3, p4 in segments[i + 1:]:
+            d1, d2 = cross(p3, p4, p1), cross(p3, p4, p2)
+            d3, d4 = cross(p1, p2, p3), cross(p1, p2, p4)
+            assert not (d1 * d2 < 0 and d3 * d4 < 0)
+    # the insets sit above the main axes: they cover no data, level name or the spike
+    top = figure.main_axes.get_window_extent().y1
+    for inset, _ in figure.insets:
+        assert inset.get_window_extent().y0 >= top
 
 
 def test_output_is_deterministic(tmp_path):
