@@ -384,10 +384,12 @@ class PoinsotAnimation:
             figure = Figure(figsize=size, dpi=self.dpi)
             FigureCanvasAgg(figure)
         self.figure = figure
-        # explicit panels under two lines of titles (3-D axes leave wide margins)
-        space = figure.add_axes((0.0, 0.0, 0.5, 0.84), projection="3d",
+        # explicit panels under the titles (3-D axes leave wide margins); each extra
+        # line of the heading takes ~0.045 of the 4 in figure's height
+        extra = 0.045 * (title.count("\n") if title else 0)
+        space = figure.add_axes((0.0, 0.0, 0.5, 0.84 - extra), projection="3d",
                                 computed_zorder=False)
-        body_ax = figure.add_axes((0.5, 0.0, 0.5, 0.84), projection="3d",
+        body_ax = figure.add_axes((0.5, 0.0, 0.5, 0.84 - extra), projection="3d",
                                   computed_zorder=False)
         self.space_axes, self.body_axes = space, body_ax
         h = self.plane_height
@@ -449,12 +451,14 @@ class PoinsotAnimation:
         body = self.motion.body
         name = body.name or "body"
         heading = title or (f"{name}: Poinsot construction, {self.motion.branch}, "
-                            f"T = {self.motion.period:.4g}")
+                            f"T = {self.motion.period:.4g} s")
         self._title = figure.suptitle(heading, fontsize="medium", y=0.985)
-        figure.text(0.25, 0.905, "space frame (L fixed, along z): inertia ellipsoid rolling\n"
+        figure.text(0.25, 0.905 - extra,
+                    "space frame (L fixed, along z): inertia ellipsoid rolling\n"
                     "on the invariable plane; herpolhode (purple), "
                     r"$\omega$ (red)", fontsize="x-small", ha="center", va="center")
-        figure.text(0.75, 0.905, f"body frame: polhode (orange) on the inertia ellipsoid\n"
+        figure.text(0.75, 0.905 - extra,
+                    "body frame: polhode (orange) on the inertia ellipsoid\n"
                     f"{self.solid_kind} drawn x{self.solid_scale:.3g}",
                     fontsize="x-small", ha="center", va="center")
         self._clock = figure.text(0.01, 0.02, "", fontsize="small")
@@ -605,7 +609,7 @@ def mp4_available():
 # ----------------------------------------------------------------- the entry point
 def poinsot_animation(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0,
                       periods=None, frames=120, fps=20, out=None, solid="auto",
-                      title=None, dpi=80, pyplot=False):
+                      title=None, dpi=80, pyplot=False, body=None):
     """The Poinsot animation of a body's torque-free motion.
 
     Parameters
@@ -638,6 +642,10 @@ def poinsot_animation(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0,
     pyplot : bool
         Create the figure through ``matplotlib.pyplot`` (for notebooks and
         sphinx-gallery's animation scraper); default headless Agg.
+    body : Body, optional
+        With a catalog row: the row's body as built (e.g. :meth:`Body.box`),
+        so that its solid and its units are drawn; its normalised moments
+        must be the row's ``I1, I2, I3``.
 
     Returns
     -------
@@ -664,7 +672,7 @@ def poinsot_animation(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0,
         raise InputError(f"frames must be an integer >= 2, got {frames!r}")
     if isinstance(fps, bool) or int(fps) != fps or not 1 <= fps <= 100:
         raise InputError(f"fps must be an integer in 1..100, got {fps!r}")
-    motion, default_periods, label = _motion_from(source, theta, dtheta, phi, speed)
+    motion, default_periods, label = _motion_from(source, theta, dtheta, phi, speed, body)
     periods = default_periods if periods is None else periods
     if not (np.isfinite(periods) and periods > 0):
         raise InputError(f"periods must be positive, got {periods!r}")
@@ -682,25 +690,42 @@ def poinsot_animation(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0,
     return animation
 
 
-def _motion_from(source, theta, dtheta, phi, speed):
+def _motion_from(source, theta, dtheta, phi, speed, row_body=None):
     """(Motion, default periods, title) from a body, a Motion or a catalog row."""
     if isinstance(source, Motion):
         return source, 1.0, None
     row = _as_row(source)
     if row is not None:
-        body = Body((row["I1"], row["I2"], row["I3"]), name=row.get("body"))
+        moments = np.array([row["I1"], row["I2"], row["I3"]], dtype=float)
+        if row_body is None:
+            body = Body(moments, name=row.get("body"))
+        else:
+            body = _as_body(row_body)
+            if not np.allclose(body.normalized_moments, moments, rtol=1e-12, atol=0.0):
+                raise InputError("the catalog row is not of the given body: its moments "
+                                 f"{moments.tolist()} differ from the body's normalised "
+                                 f"{body.normalized_moments.tolist()}")
         motion = Motion.from_spin(body, dtheta=float(row["dtheta"]))
         p, q = int(row["n"]), int(row["q"])
         multiple = f"{p}" if q == 1 else f"{p}/{q}"
         name = row.get("body") or "body"
         label = (rf"{name}: closed orbit $\Delta\alpha = 2\pi\cdot{multiple}$, "
-                 rf"{row['branch']}, $\theta-\theta_c$ = {float(row['dtheta']):.3e}; "
-                 f"back at its start after {q} T")
+                 rf"{row['branch']}, $\theta-\theta_c$ = {float(row['dtheta']):.3e}"
+                 + "\n" + _closure_text(row, q))
         return motion, float(q), label
     body = _as_body(source)
     if theta is None and dtheta is None:
         raise InputError("give the spin: theta or dtheta (or pass a Motion or a catalog row)")
     return Motion.from_spin(body, theta, dtheta=dtheta, phi=phi, speed=speed), 1.0, None
+
+
+def _closure_text(row, q):
+    """When the herpolhode and the body come back (closes_after; search.closes_after)."""
+    closes = row.get("closes_after")
+    body_back = f"the body back at its start after {q} T"
+    if closes is None or str(closes) == str(q):
+        return f"herpolhode closed and {body_back}"
+    return f"herpolhode closed after {closes} T, {body_back}"
 
 
 def _as_row(source):

@@ -552,9 +552,16 @@ def _cmd_animate(args):
     else:
         from .motion import Motion
         source = Motion.from_spin(body, args.theta, dtheta=args.dtheta, phi=args.phi)
+    title = None
+    if args.flip is not None:
+        title = (f"{body.name or 'body'}: the Dzhanibekov (tennis-racket) flip, spin "
+                 f"{args.flip:g} rad from the intermediate axis $I_2$, "
+                 f"T = {source.period:.4g} s")
     drawn = animate.poinsot_animation(source, periods=args.periods, frames=args.frames,
                                       fps=args.fps, dpi=args.dpi, solid=solid,
-                                      out=args.out)
+                                      out=args.out, title=title,
+                                      body=body if args.n is not None or args.p is not None
+                                      else None)
     print(f"orbits animate: {len(drawn.times)} frames over "
           f"{drawn.times[-1] / drawn.motion.period:.4g} periods written to {args.out} "
           f"in {time.perf_counter() - start:.1f} s", file=sys.stderr)

@@ -187,6 +187,23 @@ def test_real_bodies_are_drawn_as_their_solids(tmp_path):
         assert form.max() == pytest.approx(0.95**2, rel=1e-12)
 
 
+def test_catalog_row_of_a_real_body_keeps_its_solid_and_units(tmp_path):
+    phone = Body.box(0.071, 0.147, 0.0078, 0.17, name="phone")
+    row = animate.orbit_row(phone, n=3, branch="SAM")
+    anim = animate.poinsot_animation(row, frames=3, dpi=20, body=phone)
+    assert anim.solid_kind == "box" and anim.motion.body is phone
+    # the same orbit in the body's own units: the phase and closure are scale-free
+    np.testing.assert_allclose(anim.motion.total_phase(), 2 * np.pi * 3, rtol=1e-12)
+    assert "closed after 1/2 T" in anim._title.get_text()
+    with pytest.raises(InputError, match="not of the given body"):
+        animate.poinsot_animation(row, frames=3, body=FIG6)
+    out = tmp_path / "phone_n3.gif"
+    assert main(["animate", "--box", "0.071", "0.147", "0.0078", "--mass", "0.17",
+                 "--n", "3", "--branch", "SAM", "--frames", "3", "--dpi", "20",
+                 "--out", str(out)]) == 0
+    assert out.stat().st_size > 0
+
+
 def test_flip_turns_the_intermediate_axis_over():
     motion = animate.flip_motion()
     assert motion.body == T_HANDLE
