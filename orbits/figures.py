@@ -99,11 +99,7 @@ def herpolhode_set(body, n_max, out_dir, *, q_max=1, formats=("png", "svg"),
     limit = _common_limit(radii)
     written = []
     for row, bounds in zip(orbits.itertuples(), radii):
-        figure = new_figure(5.2, 5.9)
-        ax = figure.add_subplot()
-        draw_closed_herpolhode(ax, body, row, limit=limit, radii=bounds)
-        ax.set_title(plotting.orbit_label(row, name), fontsize="small")
-        _marks_legend(figure)
+        figure = closed_herpolhode_figure(body, row, name, limit=limit, radii=bounds)
         written += save_figure(figure, out_dir / _stem(row), formats)
         if progress is not None:
             progress(1)
@@ -113,6 +109,16 @@ def herpolhode_set(body, n_max, out_dir, *, q_max=1, formats=("png", "svg"),
     if progress is not None:
         progress(1)
     return written
+
+
+def closed_herpolhode_figure(body, row, name=None, *, limit=None, radii=None):
+    """One closed orbit's herpolhode figure (as written by :func:`herpolhode_set`)."""
+    figure = new_figure(5.2, 5.9)
+    ax = figure.add_subplot()
+    draw_closed_herpolhode(ax, body, row, limit=limit, radii=radii)
+    ax.set_title(plotting.orbit_label(row, name or body.name or "body"), fontsize="small")
+    _marks_legend(figure)
+    return figure
 
 
 def _common_limit(radii):
