@@ -193,7 +193,8 @@ def plot_phase_curves(ax, body, *, points=1500, period_axis=True):
     """Total, dynamic and geometric phase against theta (Fig. 5).
 
     The period goes on a twin y axis (dashed black); the critical angle is
-    a gray vertical line.
+    a gray vertical line.  Each curve is broken (a NaN point) at theta_c,
+    where the geometric phase jumps: no segment joins the two branches.
 
     Returns
     -------
@@ -203,13 +204,19 @@ def plot_phase_curves(ax, body, *, points=1500, period_axis=True):
     """
     body = _as_body(body)
     theta_c = critical_angle(body)
-    theta = _theta_grid(theta_c, points)
-    table = phases(body, theta)
+    grid = _theta_grid(theta_c, points)
+    table = phases(body, grid)
+    split = int(np.searchsorted(grid, theta_c))
+    theta = np.insert(grid, split, np.nan)
+
+    def broken(column):
+        return np.insert(np.asarray(table[column], dtype=float), split, np.nan)
+
     lines = {}
     for name, column, label in (("total", "total_phase", r"total $\Delta\alpha$"),
                                 ("dynamic", "dynamic_phase", r"dynamic $2ET/M$"),
                                 ("geometric", "geometric_phase", r"geometric $\Omega$")):
-        (lines[name],) = ax.plot(theta, table[column], label=label, **STYLES[name])
+        (lines[name],) = ax.plot(theta, broken(column), label=label, **STYLES[name])
     ax.axvline(theta_c, color="0.6", linewidth=1.0)
     ax.set_xlabel(r"polar angle of $\omega_0$ from the body $z$ axis, $\theta$ (rad)")
     ax.set_ylabel("phase (rad)")
@@ -219,7 +226,7 @@ def plot_phase_curves(ax, body, *, points=1500, period_axis=True):
     handles = list(lines.values())
     if period_axis:
         twin = ax.twinx()
-        (lines["period"],) = twin.plot(theta, table["period"], label="period $T$",
+        (lines["period"],) = twin.plot(theta, broken("period"), label="period $T$",
                                        **STYLES["period"])
         twin.set_ylabel(r"period $T$ (s, for $|\omega_0| = 1$ rad/s)")
         twin.set_ylim(0.0, float(np.nanpercentile(table["period"], 90)))
@@ -376,9 +383,9 @@ def plot_body_space(ax, grid=None, *, resolution=300, levels=None, colorbar=True
     boundaries = {}
     for name, (x, y) in region_boundaries().items():
         (boundaries[name],) = ax.plot(x, y, color="tab:red", linewidth=1.5)
-    label_at = {"prolate": (0.18, 0.71), "oblate": (0.47, 0.45), "flat": (0.12, 0.6)}
+    label_at = {"prolate": (0.2, 0.697), "oblate": (0.47, 0.45), "flat": (0.12, 0.6)}
     for name, (x, y) in label_at.items():
-        ax.annotate(name, (x, y), color="tab:red", fontsize="small")
+        ax.annotate(name, (x, y), color="tab:red", fontsize="small", va="bottom")
     x, y = kink_locus()
     (kink,) = ax.plot(x, y, color="white", linestyle="--", linewidth=1.0,
                       label=r"kinks: $\Delta\alpha_{\theta\to0} = \Delta\alpha_{\theta\to\pi/2}$")
@@ -387,7 +394,7 @@ def plot_body_space(ax, grid=None, *, resolution=300, levels=None, colorbar=True
     ax.set_aspect("equal")
     (lo1, hi1), (lo2, hi2) = REGION_BOX
     ax.set_xlim(lo1, hi1 + 0.01)
-    ax.set_ylim(lo2 - 0.01, hi2 + 0.01)
+    ax.set_ylim(lo2 - 0.01, hi2 + 0.025)
     ax.legend(loc="lower right", fontsize="x-small", facecolor="0.3", labelcolor="white")
     bar = None
     if colorbar:
