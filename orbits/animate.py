@@ -414,9 +414,12 @@ class PoinsotAnimation:
         artists["ellipsoid"] = [space.plot([], [], [], color=COLOURS["ellipsoid"],
                                            linewidth=0.5, alpha=0.6, zorder=2)[0]
                                 for _ in self._wire]
-        artists["solid"] = Poly3DCollection([], facecolor=COLOURS["solid"],
-                                            edgecolor="darkgreen", linewidths=0.4,
-                                            alpha=0.55, zorder=3)
+        # a fine mesh's edges would paint it solid dark: draw them faint
+        fine = len(self._faces) > 200
+        edge = dict(edgecolor=(0.0, 0.39, 0.0, 0.12) if fine else "darkgreen",
+                    linewidths=0.2 if fine else 0.4)
+        artists["solid"] = Poly3DCollection([], facecolor=COLOURS["solid"], alpha=0.55,
+                                            zorder=3, **edge)
         space.add_collection3d(artists["solid"])
         artists["axes"] = [space.plot([], [], [], color=c, linewidth=1.0, zorder=4)[0]
                            for c in COLOURS["axes"]]
@@ -434,8 +437,7 @@ class PoinsotAnimation:
         for curve in self._wire:
             body_ax.plot(*curve.T, color=COLOURS["ellipsoid"], linewidth=0.5, alpha=0.5)
         body_ax.add_collection3d(Poly3DCollection(self._faces, facecolor=COLOURS["solid"],
-                                                  edgecolor="darkgreen", linewidths=0.3,
-                                                  alpha=0.25))
+                                                  alpha=0.25, **edge))
         for k, colour in enumerate(COLOURS["axes"]):
             tip = np.zeros(3)
             tip[k] = 1.15 * semi[k]
