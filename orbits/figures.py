@@ -121,6 +121,14 @@ def closed_herpolhode_figure(body, row, name=None, *, limit=None, radii=None):
     return figure
 
 
+def _periods_text(row):
+    """``T/2``, ``3T/2``...: the time a row's herpolhode closes in (closes_after)."""
+    from fractions import Fraction
+    periods = Fraction(str(row.closes_after))
+    head = "" if periods.numerator == 1 else f"{periods.numerator}"
+    return f"{head}T/{periods.denominator}" if periods.denominator > 1 else f"{head}T"
+
+
 def _common_limit(radii):
     """Half-width of the common square view: the largest r_max plus a margin."""
     return 1.1 * max(r_max for _, r_max in radii)
@@ -184,7 +192,7 @@ def contact_sheet(body, orbits, columns=None):
         draw_closed_herpolhode(ax, body, row, limit=limit, radii=bounds, label_axes=False,
                                centre_label=False, linewidth=0.6)
         multiple = f"{row.n}" if row.q == 1 else f"{row.n}/{row.q}"
-        half = " (T/2)" if plotting.drawn_periods(row) != row.q else ""
+        half = f" ({_periods_text(row)})" if plotting.drawn_periods(row) != row.q else ""
         ax.set_title(rf"{row.branch} $2\pi\cdot{multiple}${half}" + "\n"
                      + plotting.theta_text(row.theta, row.dtheta), fontsize="x-small")
         ax.tick_params(labelsize="xx-small")
@@ -312,7 +320,7 @@ def figure6(n_inset=3):
                                centre_label=False, linewidth=0.6)
         inset.set_xticks([])
         inset.set_yticks([])
-        half = ", T/2" if plotting.drawn_periods(row) != row.q else ""
+        half = f", {_periods_text(row)}" if plotting.drawn_periods(row) != row.q else ""
         inset.set_title(rf"{row.branch} $n$={row.n}{half}" + "\n"
                         + rf"$\theta$={row.theta:.4f}", fontsize="x-small")
         leader = ConnectionPatch(xyA=(0.5, 0.0), coordsA=inset.transAxes,

@@ -163,3 +163,19 @@ class TestCli:
         code = main(argv)
         err = capsys.readouterr().err.strip().splitlines()
         assert code == 2 and len(err) == 1 and fragment in err[0], err
+
+
+def test_contact_sheet_titles_state_the_closure_time():
+    """p/q with p and q odd close after q/2 periods: 3T/2 for q = 3, T/2 for odd n."""
+    catalog = orbits.closed_orbits(FIG6, n_max=3, q_max=3)
+    sheet = figures.contact_sheet(FIG6, catalog)
+    titles = [ax.get_title() for ax in sheet.get_axes() if ax.get_lines()]
+    expected = {1: "(T/2)", 3: "(3T/2)"}
+    seen = set()
+    for title, row in zip(titles, figures._paper_order(catalog).itertuples()):
+        if row.n % 2 and row.q % 2:
+            assert expected[row.q] in title, title
+            seen.add(row.q)
+        else:
+            assert "T/2" not in title, title
+    assert seen == {1, 3}
