@@ -179,3 +179,62 @@ def test_contact_sheet_titles_state_the_closure_time():
         else:
             assert "T/2" not in title, title
     assert seen == {1, 3}
+
+
+def _inside(inner, outer, slack=1.0):
+    return (inner.x0 >= outer.x0 - slack and inner.y0 >= outer.y0 - slack
+            and inner.x1 <= outer.x1 + slack and inner.y1 <= outer.y1 + slack)
+
+
+@pytest.mark.parametrize("name", list(figures.PAPER_FIGURES))
+def test_no_label_or_title_is_clipped(paper, name):
+    """Every axis label, title and legend lies wholly inside the figure (Fig. 1's
+    x label was cut to '...length uni')."""
+    _, built = paper
+    figure = built[name]
+    renderer = figure.canvas.get_renderer()
+    figure.canvas.draw()
+    page = figure.bbox
+    texts = [t for t in figure.texts if t.get_text()]
+    if figure._suptitle is not None:
+        texts.append(figure._suptitle)
+    for ax in figure.get_axes():
+        texts.append(ax.title)
+        if ax.axison:                        # Fig. 4 draws its own labelled axes instead
+            texts += [ax.xaxis.label, ax.yaxis.label]
+            if hasattr(ax, "zaxis"):
+                texts.append(ax.zaxis.label)
+        if ax.get_legend() is not None:
+            texts.append(ax.get_legend())
+    checked = 0
+    for text in texts:
+        if not text.get_visible() or (hasattr(text, "get_text") and not text.get_text()):
+            continue
+        extent = text.get_window_extent(renderer)
+        assert _inside(extent, page), (name, getattr(text, "get_text", str)(), extent, page)
+        checked += 1
+    assert checked >= 2
+
+
+def test_fig3_period_label_and_legend_clear_of_curves_and_axis(paper):
+    _, built = paper
+    figure = built["fig3"]
+    figure.canvas.draw()
+    renderer = figure.canvas.get_renderer()
+    ax = next(a for a in figure.get_axes() if not hasattr(a, "zaxis"))
+    label = next(t for t in ax.texts if t.get_text().startswith("T = "))
+    box = label.get_window_extent(renderer)
+    # not on the time axis: above its tick labels, inside the plot
+    ticks = ax.xaxis.get_tightbbox(renderer)
+    assert box.y0 > ticks.y1
+    assert _inside(box, ax.bbox)
+    # no curve passes under the label (its drawn points, in pixels)
+    for line in ax.get_lines():
+        xy = ax.transData.transform(line.get_xydata())
+        under = ((xy[:, 0] > box.x0) & (xy[:, 0] < box.x1)
+                 & (xy[:, 1] > box.y0) & (xy[:, 1] < box.y1))
+        if len(set(line.get_xdata())) > 1:          # the period's own vertical line aside
+            assert not under.any(), line.get_label()
+    # the legend sits outside the data area
+    legend = ax.get_legend().get_window_extent(renderer)
+    assert legend.y1 <= ax.bbox.y0
