@@ -531,7 +531,8 @@ def plot_omega_components(ax, body, theta=None, *, dtheta=None, phi=0.0, periods
     -------
     dict
         ``lines`` (three Line2D: x solid red, y dashed green, z dot-dashed
-        blue, as the paper) and ``period`` (the gray vertical line's x).
+        blue, as the paper), ``period`` (the gray vertical line's x) and
+        ``period_axis`` (the top axis whose one tick names T).
     """
     body = _as_body(body)
     motion = Motion.from_spin(body, theta, dtheta=dtheta, phi=phi)
@@ -544,20 +545,18 @@ def plot_omega_components(ax, body, theta=None, *, dtheta=None, phi=0.0, periods
                                                                    "intermediate $I$",
                                                                    "largest $I$"), styles))]
     ax.axvline(motion.period, color="0.6", linewidth=1.2)
-    # the period's label sits right of its line, low, where the curves leave room
-    # (omega_y and omega_z are positive near t = T for a spin near I2)
-    ax.annotate(f"T = {motion.period:.4f} s", (motion.period, 0.3),
-                xycoords=("data", "axes fraction"), xytext=(4, 0),
-                textcoords="offset points", fontsize="small", color="0.3",
-                ha="left", va="center",
-                bbox=dict(boxstyle="round,pad=0.2", facecolor="white", edgecolor="none"))
+    # the period is named by a tick on a top axis: outside the data (the curves
+    # fill the box) and away from the time axis
+    marker = ax.secondary_xaxis("top")
+    marker.set_xticks([motion.period], [f"T = {motion.period:.4f} s"])
+    marker.tick_params(labelsize="small", colors="0.35")
     ax.set_xlabel("time t (s)")
     ax.set_ylabel(r"body angular velocity $\omega_i$ (rad/s)")
     ax.set_xlim(0.0, t[-1])
     # the legend goes under the axes: the curves fill the whole box
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncols=3,
               fontsize="x-small", frameon=False)
-    return {"lines": lines, "period": motion.period}
+    return {"lines": lines, "period": motion.period, "period_axis": marker}
 
 
 def plot_polhode_foliation(ax3d, body, *, count=28, energy=0.5, cmap="twilight",

@@ -217,24 +217,29 @@ def test_no_label_or_title_is_clipped(paper, name):
 
 
 def test_fig3_period_label_and_legend_clear_of_curves_and_axis(paper):
+    """T is named above the plot (not on the time axis, no curve under it, clear of
+    the panel title); the legend sits under the time axis (it covered the curves)."""
     _, built = paper
     figure = built["fig3"]
     figure.canvas.draw()
     renderer = figure.canvas.get_renderer()
-    ax = next(a for a in figure.get_axes() if not hasattr(a, "zaxis"))
-    label = next(t for t in ax.texts if t.get_text().startswith("T = "))
-    box = label.get_window_extent(renderer)
-    # not on the time axis: above its tick labels, inside the plot
-    ticks = ax.xaxis.get_tightbbox(renderer)
-    assert box.y0 > ticks.y1
-    assert _inside(box, ax.bbox)
-    # no curve passes under the label (its drawn points, in pixels)
-    for line in ax.get_lines():
-        xy = ax.transData.transform(line.get_xydata())
-        under = ((xy[:, 0] > box.x0) & (xy[:, 0] < box.x1)
-                 & (xy[:, 1] > box.y0) & (xy[:, 1] < box.y1))
-        if len(set(line.get_xdata())) > 1:          # the period's own vertical line aside
-            assert not under.any(), line.get_label()
-    # the legend sits outside the data area
+    ax = next(a for a in figure.get_axes() if a.get_xlabel().startswith("time"))
+    labels = [t for child in ax.child_axes for t in child.get_xticklabels()
+              if t.get_text().startswith("T = ")]
+    assert len(labels) == 1
+    box = labels[0].get_window_extent(renderer)
+    assert box.y0 >= ax.bbox.y1                      # above the data area
+    title = ax.title.get_window_extent(renderer)
+    assert box.y1 <= title.y0 or box.x1 <= title.x0 or box.x0 >= title.x1
+    # the label is centred on the period's vertical line
+    period = ax.transData.transform((_period(ax), 0.0))[0]
+    assert abs(0.5 * (box.x0 + box.x1) - period) < 1.0
     legend = ax.get_legend().get_window_extent(renderer)
-    assert legend.y1 <= ax.bbox.y0
+    assert legend.y1 <= ax.xaxis.get_tightbbox(renderer).y0 + 1.0
+
+
+def _period(ax):
+    verticals = [line.get_xdata()[0] for line in ax.get_lines()
+                 if len(set(line.get_xdata())) == 1]
+    assert len(verticals) == 1
+    return verticals[0]
