@@ -105,6 +105,12 @@ def test_total_phase_plot_marks_the_catalog_roots():
     np.testing.assert_allclose(marked[:, 1], 2 * np.pi * table["n"], rtol=1e-14)
     assert [line.get_ydata()[0] for line in drawn["levels"]] == pytest.approx(
         2 * np.pi * np.arange(1, 9))
+    # the levels are named on the right-hand axis, outside the data
+    named = drawn["level_axis"]
+    np.testing.assert_allclose(named.get_yticks(), 2 * np.pi * np.arange(1, 9), rtol=1e-15)
+    assert [t.get_text() for t in named.get_yticklabels()] == [
+        rf"$2\pi\cdot{n}$" for n in range(1, 9)]
+    assert not [t for t in ax.texts if "2\\pi" in t.get_text()]
 
 
 def test_omega_components_are_the_exact_motion():
