@@ -96,7 +96,7 @@ def herpolhode_set(body, n_max, out_dir, *, q_max=1, formats=("png", "svg"),
     orbits = _paper_order(orbits)
     name = body.name or "body"
     radii = [plotting.herpolhode_radii(body, dtheta=row.dtheta) for row in orbits.itertuples()]
-    limit = _common_limit(radii)
+    limit = _common_limit(radii) if radii else None
     written = []
     for row, bounds in zip(orbits.itertuples(), radii):
         figure = closed_herpolhode_figure(body, row, name, limit=limit, radii=bounds)
@@ -180,6 +180,8 @@ def contact_sheet(body, orbits, columns=None):
     """
     orbits = _paper_order(orbits)
     count = len(orbits)
+    if count == 0:
+        raise InputError("the contact sheet needs at least one closed orbit")
     columns = columns or max(1, min(8, math.ceil(math.sqrt(count * 1.5))))
     rows = math.ceil(count / columns)
     figure = new_figure(2.0 * columns, 2.2 * rows + 1.0)

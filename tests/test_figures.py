@@ -243,3 +243,11 @@ def _period(ax):
                  if len(set(line.get_xdata())) == 1]
     assert len(verticals) == 1
     return verticals[0]
+
+
+def test_a_body_without_closed_orbits_writes_no_figure(tmp_path):
+    # Delta alpha > 2 pi for every spin: no orbit with n = 1
+    assert figures.herpolhode_set(FIG6, 1, tmp_path, formats=("png",)) == []
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(orbits.errors.InputError, match="at least one"):
+        figures.contact_sheet(FIG6, orbits.closed_orbits(FIG6, n_max=1))
