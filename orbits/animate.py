@@ -44,7 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from .atomic import atomic_path, ensure_writable
-from .bodies import Body
+from .bodies import Body, cylinder_moments
 from .errors import InputError
 from .motion import Motion, _as_body
 
@@ -151,9 +151,12 @@ def solid_faces(body, solid="auto"):
     body : Body
     solid : "auto", "ellipsoid", or a tuple
         ``("t-handle", l1, l2, w)``, ``("box", a, b, c)`` (full side
-        lengths along the caller's x, y, z) or ``("mesh", vertices,
-        faces)`` (caller's axes, centred at the centre of mass).  ``"auto"``
-        uses ``body.shape`` when the body carries one (same tuples), the
+        lengths along the caller's x, y, z), ``("cylinder", a, length, b)``
+        (along z, section semi-axes a along x and b along y) or ``("mesh",
+        vertices, faces)`` (caller's axes, centred at the centre of mass).  ``"auto"``
+        uses ``body.shape`` when the body carries one (same tuples: set by
+        :meth:`Body.t_handle`, :meth:`Body.box`, :meth:`Body.cylinder` and
+        :meth:`Body.from_mesh`), the
         T-handle when the moments are those of :meth:`Body.t_handle` (8, 4,
         1) (the ``t-handle`` preset), and else the equivalent ellipsoid
         (:meth:`Body.equivalent_ellipsoid`).
@@ -190,14 +193,18 @@ def solid_faces(body, solid="auto"):
         a, b, c = (float(v) for v in spec[1:4])
         faces = _box_faces((-a / 2, -b / 2, -c / 2), (a / 2, b / 2, c / 2))
         frame = Body((b * b + c * c, a * a + c * c, a * a + b * b)).frame
+    elif kind == "cylinder":
+        a, length, b = (float(v) for v in spec[1:4])
+        faces = _cylinder_faces(a, b, length)
+        frame = Body(cylinder_moments(a, length, radius_y=b)).frame
     elif kind == "mesh":
         vertices = np.asarray(spec[1], dtype=float)
         faces = [vertices[np.asarray(f)] for f in spec[2]]
         frame = body.frame
     else:
         raise InputError(f"unknown solid {solid!r}; use 'auto', 'ellipsoid', "
-                         "('t-handle', l1, l2, w), ('box', a, b, c) or "
-                         "('mesh', vertices, faces)")
+                         "('t-handle', l1, l2, w), ('box', a, b, c), "
+                         "('cylinder', a, length, b) or ('mesh', vertices, faces)")
     # caller's axes -> sorted principal axes: v_principal = frame @ v
     return kind, [face @ frame.T for face in faces]
 
@@ -220,6 +227,16 @@ def t_handle_boxes(l1, l2, w):
     com_y = (l2 / (l1 + l2)) * 0.5 * (w + l2)
     return [((-l1 / 2, -w / 2 - com_y, -w / 2), (l1 / 2, w / 2 - com_y, w / 2)),
             ((-w / 2, w / 2 - com_y, -w / 2), (w / 2, w / 2 + l2 - com_y, w / 2))]
+
+
+def _cylinder_faces(a, b, length, sides=24):
+    """An elliptic cylinder along z (semi-axes a along x, b along y) as a prism."""
+    u = np.linspace(0.0, 2.0 * np.pi, sides + 1)[:-1]
+    rim = np.stack([a * np.cos(u), b * np.sin(u)], axis=-1)
+    bottom = np.column_stack([rim, np.full(sides, -0.5 * length)])
+    top = np.column_stack([rim, np.full(sides, 0.5 * length)])
+    walls = [np.array([bottom[i], bottom[i - 1], top[i - 1], top[i]]) for i in range(sides)]
+    return [bottom, top] + walls
 
 
 def _t_handle_faces(l1, l2, w):
@@ -323,7 +340,7 @@ class PoinsotAnimation:
     """
 
     def __init__(self, motion, times, *, fps=20, solid="auto", title=None,
-                 size=(9.0, 4.6), dpi=80, pyplot=False, subsamples=8):
+                 size=(9.0, 4.0), dpi=80, pyplot=False, subsamples=8):
         self.motion = motion
         self.times = np.asarray(times, dtype=float)
         self.fps = int(fps)
@@ -347,9 +364,10 @@ class PoinsotAnimation:
         self._wire = inertia_ellipsoid_lines(moments)
         self.solid_kind, faces = solid_faces(body, solid)
         semi = 1.0 / np.sqrt(moments)
-        extent = np.max(np.abs(np.concatenate(faces)), axis=0)
-        # the solid fits inside the inertia ellipsoid (both long along I1)
-        self.solid_scale = 0.8 / float(np.max(extent / semi))
+        # the whole solid (every vertex) fits inside the inertia ellipsoid
+        vertices = np.concatenate(faces)
+        reach = float(np.max(np.sqrt(np.sum((vertices / semi) ** 2, axis=1))))
+        self.solid_scale = 0.95 / reach
         self._faces = [face * self.solid_scale for face in faces]
         self._build_figure(title, size, pyplot)
         self._animation = None
@@ -366,9 +384,13 @@ class PoinsotAnimation:
             figure = Figure(figsize=size, dpi=self.dpi)
             FigureCanvasAgg(figure)
         self.figure = figure
-        space = figure.add_subplot(1, 2, 1, projection="3d", computed_zorder=False)
-        body_ax = figure.add_subplot(1, 2, 2, projection="3d", computed_zorder=False)
-        figure.subplots_adjust(left=0.0, right=1.0, bottom=0.02, top=0.86, wspace=0.02)
+        # explicit panels under the titles (3-D axes leave wide margins); each extra
+        # line of the heading takes ~0.045 of the 4 in figure's height
+        extra = 0.045 * (title.count("\n") if title else 0)
+        space = figure.add_axes((0.0, 0.0, 0.5, 0.84 - extra), projection="3d",
+                                computed_zorder=False)
+        body_ax = figure.add_axes((0.5, 0.0, 0.5, 0.84 - extra), projection="3d",
+                                  computed_zorder=False)
         self.space_axes, self.body_axes = space, body_ax
         h = self.plane_height
         semi = 1.0 / np.sqrt(self.motion.body.moments)
@@ -392,9 +414,12 @@ class PoinsotAnimation:
         artists["ellipsoid"] = [space.plot([], [], [], color=COLOURS["ellipsoid"],
                                            linewidth=0.5, alpha=0.6, zorder=2)[0]
                                 for _ in self._wire]
-        artists["solid"] = Poly3DCollection([], facecolor=COLOURS["solid"],
-                                            edgecolor="darkgreen", linewidths=0.4,
-                                            alpha=0.55, zorder=3)
+        # a fine mesh's edges would paint it solid dark: draw them faint
+        fine = len(self._faces) > 200
+        edge = dict(edgecolor=(0.0, 0.39, 0.0, 0.12) if fine else "darkgreen",
+                    linewidths=0.2 if fine else 0.4)
+        artists["solid"] = Poly3DCollection([], facecolor=COLOURS["solid"], alpha=0.55,
+                                            zorder=3, **edge)
         space.add_collection3d(artists["solid"])
         artists["axes"] = [space.plot([], [], [], color=c, linewidth=1.0, zorder=4)[0]
                            for c in COLOURS["axes"]]
@@ -405,14 +430,14 @@ class PoinsotAnimation:
                                        zorder=6)
         artists["contact"], = space.plot([], [], [], "o", color=COLOURS["omega"],
                                          markersize=5, zorder=7)
-        _cube(space, half, (-half, half))
-        space.view_init(elev=18, azim=-60)
+        # the inertia ellipsoid lies between its two tangent planes z = +-h
+        _cube(space, half, (-1.08 * h, 1.4 * h), zoom=1.75)
+        space.view_init(elev=24, azim=-60)
         # body panel: the fixed inertia ellipsoid, the solid, the polhode
         for curve in self._wire:
             body_ax.plot(*curve.T, color=COLOURS["ellipsoid"], linewidth=0.5, alpha=0.5)
         body_ax.add_collection3d(Poly3DCollection(self._faces, facecolor=COLOURS["solid"],
-                                                  edgecolor="darkgreen", linewidths=0.3,
-                                                  alpha=0.25))
+                                                  alpha=0.25, **edge))
         for k, colour in enumerate(COLOURS["axes"]):
             tip = np.zeros(3)
             tip[k] = 1.15 * semi[k]
@@ -422,21 +447,23 @@ class PoinsotAnimation:
                                            linewidth=1.6)
         artists["body_contact"], = body_ax.plot([], [], [], "o", color=COLOURS["omega"],
                                                 markersize=5)
-        _cube(body_ax, reach, (-reach, reach))
+        _cube(body_ax, reach, (-reach, reach), zoom=1.6)
         body_ax.view_init(elev=22, azim=-50)
         self.artists = artists
         body = self.motion.body
         name = body.name or "body"
         heading = title or (f"{name}: Poinsot construction, {self.motion.branch}, "
-                            f"T = {self.motion.period:.4g}")
-        self._title = figure.suptitle(heading, fontsize="medium")
-        space.set_title("space frame (L fixed, along z): inertia ellipsoid rolling\n"
-                        "on the invariable plane; herpolhode (purple), "
-                        r"$\omega$ (red)", fontsize="x-small")
-        body_ax.set_title(f"body frame: polhode on the inertia ellipsoid\n"
-                          f"{self.solid_kind} drawn x{self.solid_scale:.3g}",
-                          fontsize="x-small")
-        self._clock = figure.text(0.02, 0.03, "", fontsize="small")
+                            f"T = {self.motion.period:.4g} s")
+        self._title = figure.suptitle(heading, fontsize="medium", y=0.985)
+        figure.text(0.25, 0.905 - extra,
+                    "space frame (L fixed, along z): inertia ellipsoid rolling\n"
+                    "on the invariable plane; herpolhode (purple), "
+                    r"$\omega$ (red)", fontsize="x-small", ha="center", va="center")
+        figure.text(0.75, 0.905 - extra,
+                    "body frame: polhode (orange) on the inertia ellipsoid\n"
+                    f"{self.solid_kind} drawn x{self.solid_scale:.3g}",
+                    fontsize="x-small", ha="center", va="center")
+        self._clock = figure.text(0.01, 0.02, "", fontsize="small")
 
     def frame(self, k):
         """Draw frame ``k`` and return its :class:`FrameData`."""
@@ -567,11 +594,11 @@ class PoinsotAnimation:
         writer.close()
 
 
-def _cube(ax, half, zrange):
+def _cube(ax, half, zrange, zoom=1.45):
     ax.set_xlim(-half, half)
     ax.set_ylim(-half, half)
     ax.set_zlim(*zrange)
-    ax.set_box_aspect((1, 1, (zrange[1] - zrange[0]) / (2 * half)), zoom=1.45)
+    ax.set_box_aspect((1, 1, (zrange[1] - zrange[0]) / (2 * half)), zoom=zoom)
     ax.set_axis_off()
 
 
@@ -584,7 +611,7 @@ def mp4_available():
 # ----------------------------------------------------------------- the entry point
 def poinsot_animation(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0,
                       periods=None, frames=120, fps=20, out=None, solid="auto",
-                      title=None, dpi=80, pyplot=False):
+                      title=None, dpi=80, pyplot=False, body=None):
     """The Poinsot animation of a body's torque-free motion.
 
     Parameters
@@ -613,10 +640,14 @@ def poinsot_animation(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0,
         The solid drawn; see :func:`solid_faces`.
     title : str, optional
     dpi : float
-        Pixel density of the frames (figure 9 x 4.6 in).
+        Pixel density of the frames (figure 9 x 4 in).
     pyplot : bool
         Create the figure through ``matplotlib.pyplot`` (for notebooks and
         sphinx-gallery's animation scraper); default headless Agg.
+    body : Body, optional
+        With a catalog row: the row's body as built (e.g. :meth:`Body.box`),
+        so that its solid and its units are drawn; its normalised moments
+        must be the row's ``I1, I2, I3``.
 
     Returns
     -------
@@ -643,7 +674,7 @@ def poinsot_animation(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0,
         raise InputError(f"frames must be an integer >= 2, got {frames!r}")
     if isinstance(fps, bool) or int(fps) != fps or not 1 <= fps <= 100:
         raise InputError(f"fps must be an integer in 1..100, got {fps!r}")
-    motion, default_periods, label = _motion_from(source, theta, dtheta, phi, speed)
+    motion, default_periods, label = _motion_from(source, theta, dtheta, phi, speed, body)
     periods = default_periods if periods is None else periods
     if not (np.isfinite(periods) and periods > 0):
         raise InputError(f"periods must be positive, got {periods!r}")
@@ -661,25 +692,42 @@ def poinsot_animation(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0,
     return animation
 
 
-def _motion_from(source, theta, dtheta, phi, speed):
+def _motion_from(source, theta, dtheta, phi, speed, row_body=None):
     """(Motion, default periods, title) from a body, a Motion or a catalog row."""
     if isinstance(source, Motion):
         return source, 1.0, None
     row = _as_row(source)
     if row is not None:
-        body = Body((row["I1"], row["I2"], row["I3"]), name=row.get("body"))
+        moments = np.array([row["I1"], row["I2"], row["I3"]], dtype=float)
+        if row_body is None:
+            body = Body(moments, name=row.get("body"))
+        else:
+            body = _as_body(row_body)
+            if not np.allclose(body.normalized_moments, moments, rtol=1e-12, atol=0.0):
+                raise InputError("the catalog row is not of the given body: its moments "
+                                 f"{moments.tolist()} differ from the body's normalised "
+                                 f"{body.normalized_moments.tolist()}")
         motion = Motion.from_spin(body, dtheta=float(row["dtheta"]))
         p, q = int(row["n"]), int(row["q"])
         multiple = f"{p}" if q == 1 else f"{p}/{q}"
         name = row.get("body") or "body"
         label = (rf"{name}: closed orbit $\Delta\alpha = 2\pi\cdot{multiple}$, "
-                 rf"{row['branch']}, $\theta-\theta_c$ = {float(row['dtheta']):.3e}; "
-                 f"back at its start after {q} T")
+                 rf"{row['branch']}, $\theta-\theta_c$ = {float(row['dtheta']):.3e}"
+                 + "\n" + _closure_text(row, q))
         return motion, float(q), label
     body = _as_body(source)
     if theta is None and dtheta is None:
         raise InputError("give the spin: theta or dtheta (or pass a Motion or a catalog row)")
     return Motion.from_spin(body, theta, dtheta=dtheta, phi=phi, speed=speed), 1.0, None
+
+
+def _closure_text(row, q):
+    """When the herpolhode and the body come back (closes_after; search.closes_after)."""
+    closes = row.get("closes_after")
+    body_back = f"the body back at its start after {q} T"
+    if closes is None or str(closes) == str(q):
+        return f"herpolhode closed and {body_back}"
+    return f"herpolhode closed after {closes} T, {body_back}"
 
 
 def _as_row(source):

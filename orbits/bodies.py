@@ -274,6 +274,10 @@ class Body:
         self._frame = frame
         self._frame.setflags(write=False)
         self.name = name
+        # the solid the moments came from, for drawing (orbits.animate.solid_faces):
+        # ("t-handle", l1, l2, w), ("box", a, b, c), ("cylinder", a, length, b) or
+        # ("mesh", vertices about the centre of mass, faces); None when unknown
+        self.shape = None
 
     # -- constructors --------------------------------------------------
     @classmethod
@@ -307,7 +311,9 @@ class Body:
         iy = ((l1 + 2 * l2) * w**2 + l1**3) / (12 * total)
         iz = (l1 * l2 * (l1**2 + 5 * w**2 + 4 * l2**2) + l1**2 * (l1**2 + w**2)
               + l2**2 * w * (6 * l1 + w) + l2**4) / (12 * total**2)
-        return cls((ix, iy, iz), name=name)
+        body = cls((ix, iy, iz), name=name)
+        body.shape = ("t-handle", float(l1), float(l2), float(w))
+        return body
 
     @classmethod
     def ellipsoid(cls, b, c, *, name=None):
@@ -482,8 +488,10 @@ class Body:
         a, b, c = _positive_lengths("box edge", a=a, b=b, c=c)
         mass = _positive_mass(mass)
         a2, b2, c2 = a * a, b * b, c * c
-        return cls((mass * (b2 + c2) / 12.0, mass * (a2 + c2) / 12.0,
+        body = cls((mass * (b2 + c2) / 12.0, mass * (a2 + c2) / 12.0,
                     mass * (a2 + b2) / 12.0), name=name)
+        body.shape = ("box", a, b, c)
+        return body
 
     @classmethod
     def cylinder(cls, radius, length, mass=1.0, *, radius_y=None, name=None):
@@ -512,7 +520,9 @@ class Body:
                 "a symmetric top, which has no separatrix and no total-phase "
                 "formula; give radius_y (an elliptic section) for an asymmetric "
                 "body")
-        return cls(moments, name=name)
+        body = cls(moments, name=name)
+        body.shape = ("cylinder", float(radius), float(length), float(radius_y))
+        return body
 
     @classmethod
     def from_point_masses(cls, masses, positions, *, name=None):
@@ -593,8 +603,11 @@ class Body:
             raise InputError(f"mesh {path} is inside out or inconsistently "
                              "wound (its volume is not positive)")
         mesh.density = density
-        return cls.from_inertia_tensor(np.asarray(mesh.moment_inertia, dtype=float),
+        body = cls.from_inertia_tensor(np.asarray(mesh.moment_inertia, dtype=float),
                                        name=name)
+        body.shape = ("mesh", np.asarray(mesh.vertices - mesh.center_mass, dtype=float),
+                      np.asarray(mesh.faces))
+        return body
 
     @classmethod
     def from_rotational_constants(cls, a, b, c, unit="cm-1", *, defect="error",

@@ -589,9 +589,16 @@ def _cmd_animate(args):
     else:
         from .motion import Motion
         source = Motion.from_spin(body, args.theta, dtheta=args.dtheta, phi=args.phi)
+    title = None
+    if args.flip is not None:
+        title = (f"{body.name or 'body'}: the Dzhanibekov (tennis-racket) flip, spin "
+                 f"{args.flip:g} rad from the intermediate axis $I_2$, "
+                 f"T = {source.period:.4g} s")
     drawn = animate.poinsot_animation(source, periods=args.periods, frames=args.frames,
                                       fps=args.fps, dpi=args.dpi, solid=solid,
-                                      out=args.out)
+                                      out=args.out, title=title,
+                                      body=body if args.n is not None or args.p is not None
+                                      else None)
     print(f"orbits animate: {len(drawn.times)} frames over "
           f"{drawn.times[-1] / drawn.motion.period:.4g} periods written to {args.out} "
           f"in {time.perf_counter() - start:.1f} s", file=sys.stderr)
@@ -643,7 +650,7 @@ def _add_animate(subparsers):
     parser.add_argument("--fps", type=_positive_int, default=20,
                         help="frames per second (default 20)")
     parser.add_argument("--dpi", type=_positive_int, default=80,
-                        help="pixels per inch of the 9 x 4.6 in frames (default 80)")
+                        help="pixels per inch of the 9 x 4 in frames (default 80)")
     parser.add_argument("--solid", choices=["auto", "ellipsoid"], default="auto",
                         help="the solid drawn: auto (the body's shape when known, "
                              "else its equivalent ellipsoid) or ellipsoid")

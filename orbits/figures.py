@@ -65,6 +65,11 @@ def herpolhode_set(body, n_max, out_dir, *, q_max=1, formats=("png", "svg"),
                    progress=None, orbits=None):
     """One figure per closed orbit of ``body`` and a contact sheet.
 
+    Each curve is drawn over the time in which it closes (the catalog's
+    ``closes_after``: half a period for odd ``n``), with its start (dot),
+    direction (arrow), the L axis (+) and its bounding circles r_min and
+    r_max (dashed); all figures of a set share one scale.
+
     Parameters
     ----------
     body : Body
@@ -90,12 +95,11 @@ def herpolhode_set(body, n_max, out_dir, *, q_max=1, formats=("png", "svg"),
         orbits = closed_orbits(body, n_max=n_max, q_max=q_max)
     orbits = _paper_order(orbits)
     name = body.name or "body"
+    radii = [plotting.herpolhode_radii(body, dtheta=row.dtheta) for row in orbits.itertuples()]
+    limit = _common_limit(radii) if radii else None
     written = []
-    for row in orbits.itertuples():
-        figure = new_figure(5.2, 5.4)
-        ax = figure.add_subplot()
-        plotting.plot_herpolhode(ax, body, dtheta=row.dtheta, periods=row.q)
-        ax.set_title(plotting.orbit_label(row, name), fontsize="small")
+    for row, bounds in zip(orbits.itertuples(), radii):
+        figure = closed_herpolhode_figure(body, row, name, limit=limit, radii=bounds)
         written += save_figure(figure, out_dir / _stem(row), formats)
         if progress is not None:
             progress(1)
@@ -107,24 +111,105 @@ def herpolhode_set(body, n_max, out_dir, *, q_max=1, formats=("png", "svg"),
     return written
 
 
+def closed_herpolhode_figure(body, row, name=None, *, limit=None, radii=None):
+    """One closed orbit's herpolhode figure (as written by :func:`herpolhode_set`)."""
+    figure = new_figure(5.2, 5.9)
+    ax = figure.add_subplot()
+    draw_closed_herpolhode(ax, body, row, limit=limit, radii=radii)
+    ax.set_title(plotting.orbit_label(row, name or body.name or "body"), fontsize="small")
+    _marks_legend(figure)
+    return figure
+
+
+def _periods_text(row):
+    """``T/2``, ``3T/2``...: the time a row's herpolhode closes in (closes_after)."""
+    from fractions import Fraction
+    periods = Fraction(str(row.closes_after))
+    head = "" if periods.numerator == 1 else f"{periods.numerator}"
+    return f"{head}T/{periods.denominator}" if periods.denominator > 1 else f"{head}T"
+
+
+def _common_limit(radii):
+    """Half-width of the common square view: the largest r_max plus a margin."""
+    return 1.1 * max(r_max for _, r_max in radii)
+
+
+def draw_closed_herpolhode(ax, body, row, *, limit=None, radii=None, label_axes=True,
+                           centre_label=True, **line):
+    """A catalog row's herpolhode over the time it closes in, with its marks.
+
+    Returns the dict of :func:`orbits.plotting.mark_herpolhode` plus
+    ``curve`` (Line2D) and ``periods`` (the duration drawn, in T).
+    """
+    periods = plotting.drawn_periods(row)
+    curve = plotting.plot_herpolhode(ax, body, dtheta=row.dtheta, periods=periods,
+                                     label_axes=label_axes, **line)
+    radii = radii or plotting.herpolhode_radii(body, dtheta=row.dtheta)
+    marks = plotting.mark_herpolhode(ax, curve, radii, centre_label=centre_label)
+    limit = limit or _common_limit([radii])
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_xlim(-limit, limit)
+    ax.set_ylim(-limit, limit)
+    marks.update(curve=curve, periods=periods)
+    return marks
+
+
+def _marks_legend(figure, fontsize="x-small"):
+    """A legend of the herpolhode marks under the figure."""
+    from matplotlib.lines import Line2D
+    handles = [Line2D([], [], color="tab:purple", marker="o", markersize=4, linestyle="none",
+                      label="start (t = 0)"),
+               Line2D([], [], color="tab:purple", marker=r"$\rightarrow$", markersize=9,
+                      linestyle="none", label="direction"),
+               Line2D([], [], color="black", marker="+", markersize=6, linestyle="none",
+                      label="centre: the L axis"),
+               Line2D([], [], color="0.55", linestyle=(0, (4, 3)), linewidth=0.8,
+                      label=r"$r_{min}$, $r_{max}$")]
+    return figure.legend(handles=handles, loc="outside lower center", ncols=4,
+                         fontsize=fontsize, frameon=False, handlelength=1.6,
+                         columnspacing=1.0)
+
+
 def contact_sheet(body, orbits, columns=None):
-    """All closed herpolhodes of a body in one grid, in Fig. 6's order."""
+    """All closed herpolhodes of a body in one grid, in Fig. 6's order.
+
+    One common scale (shared axes, |omega0| = 1 rad/s); each curve drawn
+    over the time in which it closes, with start, direction, L axis and
+    its r_min, r_max circles; a title with theta, or theta - theta_c in
+    scientific notation when theta rounds to theta_c.
+    """
     orbits = _paper_order(orbits)
     count = len(orbits)
+    if count == 0:
+        raise InputError("the contact sheet needs at least one closed orbit")
     columns = columns or max(1, min(8, math.ceil(math.sqrt(count * 1.5))))
     rows = math.ceil(count / columns)
-    figure = new_figure(2.0 * columns, 2.15 * rows + 0.6)
-    grid = figure.subplots(rows, columns, squeeze=False)
-    for ax in grid.ravel():
+    figure = new_figure(2.0 * columns, 2.2 * rows + 1.0)
+    grid = figure.subplots(rows, columns, squeeze=False, sharex=True, sharey=True)
+    radii = [plotting.herpolhode_radii(body, dtheta=row.dtheta) for row in orbits.itertuples()]
+    limit = _common_limit(radii)
+    for ax in grid.ravel()[count:]:
         ax.set_axis_off()
-    for ax, row in zip(grid.ravel(), orbits.itertuples()):
-        plotting.plot_herpolhode(ax, body, dtheta=row.dtheta, periods=row.q,
-                                 label_axes=False, linewidth=0.5)
+    for ax, row, bounds in zip(grid.ravel(), orbits.itertuples(), radii):
+        draw_closed_herpolhode(ax, body, row, limit=limit, radii=bounds, label_axes=False,
+                               centre_label=False, linewidth=0.6)
         multiple = f"{row.n}" if row.q == 1 else f"{row.n}/{row.q}"
-        ax.set_title(rf"{row.branch} $2\pi\cdot{multiple}$, $\theta$={row.theta:.5f}",
-                     fontsize="x-small")
-    figure.suptitle(f"Closed herpolhodes of {body.name or 'the body'} "
-                    "(invariable plane; left to right in theta)", fontsize="medium")
+        half = f" ({_periods_text(row)})" if plotting.drawn_periods(row) != row.q else ""
+        ax.set_title(rf"{row.branch} $2\pi\cdot{multiple}${half}" + "\n"
+                     + plotting.theta_text(row.theta, row.dtheta), fontsize="x-small")
+        ax.tick_params(labelsize="xx-small")
+    for column in range(columns):
+        lowest = (count - 1 - column) // columns          # last drawn row of the column
+        if lowest >= 0:
+            grid[lowest, column].set_xlabel(r"$\omega_x$ (rad/s)", fontsize="x-small")
+            grid[lowest, column].xaxis.set_tick_params(labelbottom=True)
+    for ax in grid[:, 0]:
+        ax.set_ylabel(r"$\omega_y$ (rad/s)", fontsize="x-small")
+    figure.suptitle(f"Closed herpolhodes of {body.name or 'the body'} in the invariable plane, "
+                    r"one scale ($|\omega_0|$ = 1 rad/s), left to right in $\theta$; "
+                    "odd n close after T/2", fontsize="medium")
+    _marks_legend(figure, fontsize="small")
+    figure.limit = limit
     return figure
 
 
@@ -140,13 +225,25 @@ T_HANDLE_SPIN = dict(theta=0.5 * np.pi - 0.15, phi=0.5 * np.pi - 0.2)   # Fig. 3
 
 
 def figure1():
-    """Fig. 1: the T-handle (8, 4, 1) and its equivalent ellipsoid."""
-    figure = new_figure(6.0, 5.6)
-    ax = figure.add_subplot(projection="3d")
-    drawn = plotting.plot_t_handle(ax, 8.0, 4.0, 1.0)
+    """Fig. 1: the T-handle (8, 4, 1) and its equivalent ellipsoid.
+
+    (a) the T-handle; (b) the equivalent ellipsoid at full size, on the same
+    scale, with the T's outline: the paper's 1/4 shrink hid it inside the T.
+    """
+    figure = new_figure(10.0, 3.9)
+    # constrained layout does not see the 3-D z labels: keep a right margin for them
+    figure.get_layout_engine().set(rect=(0.0, 0.0, 0.965, 1.0))
+    left = figure.add_subplot(1, 2, 1, projection="3d")
+    right = figure.add_subplot(1, 2, 2, projection="3d")
+    plotting.plot_t_handle(left, 8.0, 4.0, 1.0, ellipsoid=False)
+    drawn = plotting.plot_t_handle(right, 8.0, 4.0, 1.0, shrink=1.0, bars="outline")
     a, b, c = drawn["semi_axes"]
-    ax.set_title("Fig. 1: T-handle $l_1$ = 8, $l_2$ = 4, $w$ = 1 and the equivalent ellipsoid\n"
-                 f"(a, b, c) = ({a:.5f}, {b:.5f}, {c:.6f}), shrunk by 1/4", fontsize="small")
+    left.set_title("(a) T-handle $l_1$ = 8, $l_2$ = 4, $w$ = 1 (length units)",
+                   fontsize="small")
+    right.set_title(f"(b) equivalent solid ellipsoid, full size (T outlined)\n"
+                    f"(a, b, c) = ({a:.5f}, {b:.5f}, {c:.6f})", fontsize="small")
+    figure.suptitle("Fig. 1: two bodies with the same principal moments of inertia",
+                    fontsize="medium")
     return figure
 
 
@@ -179,11 +276,11 @@ def figure3():
 
 def figure4():
     """Fig. 4: polhodes on the Binet ellipsoid coloured by Delta alpha mod 2 pi."""
-    figure = new_figure(6.6, 5.8)
+    figure = new_figure(6.6, 5.4)
     ax = figure.add_subplot(projection="3d")
     plotting.plot_polhode_foliation(ax, Body.preset("t-handle"))
-    ax.set_title("Fig. 4: T-handle polhodes, coloured by total phase mod $2\\pi$",
-                 fontsize="small")
+    ax.set_title("Fig. 4: T-handle polhodes on the Binet ellipsoid ($E$ = 1/2 J),\n"
+                 "coloured by total phase mod $2\\pi$; far side faint", fontsize="small")
     return figure
 
 
@@ -198,30 +295,54 @@ def figure5():
 
 
 def figure6(n_inset=3):
-    """Fig. 6: total phase of the Fig. 6 body, 2 pi n levels, roots, herpolhode insets."""
+    """Fig. 6: total phase of the Fig. 6 body, 2 pi n levels, roots, herpolhode insets.
+
+    The herpolhodes of the orbits with ``n <= n_inset + 1`` stand in a row
+    above the plot, in the dots' left-to-right order, joined to their dots
+    by leader lines that do not cross; the levels are named on the right
+    axis and the legend sits under the plot, so nothing covers the curve,
+    the level names or the spike at theta_c.
+    """
+    from matplotlib.patches import ConnectionPatch
     body = Body.preset("fig6")
     orbits = closed_orbits(body, n_max=8)
-    figure = new_figure(9.0, 6.6)
-    ax = figure.add_subplot()
-    plotting.plot_total_phase(ax, body, orbits, n_levels=8)
-    ax.set_title("Fig. 6: I = (0.26, 0.55, 0.793662) J s$^2$; closed herpolhodes at "
-                 r"$\Delta\alpha = 2\pi n$", fontsize="small")
-    insets = []
-    shown = orbits[orbits["n"] <= n_inset + 1].sort_values("dtheta")
-    slots = np.linspace(0.05, 0.80, len(shown))
-    for x, row in zip(slots, shown.itertuples()):
-        inset = ax.inset_axes([x, 0.55, 0.15, 0.28])
-        plotting.plot_herpolhode(inset, body, dtheta=row.dtheta, label_axes=False,
-                                 linewidth=0.5)
+    shown = orbits[orbits["n"] <= n_inset + 1].sort_values("theta").reset_index(drop=True)
+    count = len(shown)
+    figure = new_figure(9.0, 8.0)
+    grid = figure.add_gridspec(2, count, height_ratios=(1.0, 3.2))
+    ax = figure.add_subplot(grid[1, :])
+    drawn = plotting.plot_total_phase(ax, body, orbits, n_levels=8, legend=False)
+    ax.set_title("")
+    radii = [plotting.herpolhode_radii(body, dtheta=row.dtheta) for row in shown.itertuples()]
+    limit = _common_limit(radii)
+    insets, leaders = [], []
+    for k, (row, bounds) in enumerate(zip(shown.itertuples(), radii)):
+        inset = figure.add_subplot(grid[0, k])
+        draw_closed_herpolhode(inset, body, row, limit=limit, radii=bounds, label_axes=False,
+                               centre_label=False, linewidth=0.6)
         inset.set_xticks([])
         inset.set_yticks([])
-        inset.set_title(rf"{row.branch} $n$={row.n}" + "\n" + rf"$\theta$={row.theta:.4f}",
-                        fontsize="xx-small")
-        ax.annotate("", xy=(row.theta, row.total_phase), xytext=(x + 0.075, 0.55),
-                    textcoords="axes fraction",
-                    arrowprops=dict(arrowstyle="-", color="0.5", linewidth=0.5))
+        half = f", {_periods_text(row)}" if plotting.drawn_periods(row) != row.q else ""
+        inset.set_title(rf"{row.branch} $n$={row.n}{half}" + "\n"
+                        + rf"$\theta$={row.theta:.4f}", fontsize="x-small")
+        leader = ConnectionPatch(xyA=(0.5, 0.0), coordsA=inset.transAxes,
+                                 xyB=(row.theta, row.total_phase), coordsB=ax.transData,
+                                 color="0.55", linewidth=0.6, zorder=1)
+        figure.add_artist(leader)
         insets.append((inset, row))
+        leaders.append(leader)
+    theta_c = float(plotting.critical_angle(body))
+    ax.annotate(rf"$\theta_c$ = {theta_c:.5f}", (theta_c, 0.0), xytext=(4, 4),
+                textcoords="offset points", fontsize="small", color="0.35")
+    ax.legend(handles=[drawn["curve"], drawn["roots"]], loc="upper center",
+              bbox_to_anchor=(0.5, -0.11), ncols=2, fontsize="small", frameon=False)
+    figure.suptitle("Fig. 6: I = (0.26, 0.55, 0.793662) J s$^2$; closed herpolhodes at "
+                    r"$\Delta\alpha = 2\pi n$ (one scale; odd $n$ close after T/2)",
+                    fontsize="medium")
     figure.insets = insets
+    figure.inset_axes_list = [inset for inset, _ in insets]
+    figure.leaders = leaders
+    figure.main_axes = ax
     return figure
 
 

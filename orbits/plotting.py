@@ -13,6 +13,8 @@ that motion with its moments and spin as given, so a body in kg m^2 spun
 in rad/s is drawn in s, rad/s and J s (the axis labels).
 """
 
+import math
+
 import numpy as np
 
 from .bodies import Body, REGION_BOX, region_moments
@@ -77,20 +79,132 @@ def plot_herpolhode(ax, body, theta=None, *, dtheta=None, phi=0.0, periods=1,
     return curve
 
 
+def herpolhode_radii(body, theta=None, *, dtheta=None, phi=0.0):
+    """The radii of the two circles that bound a herpolhode, ``|omega0| = 1``.
+
+    In the invariable plane the herpolhode point is at distance
+    ``r = sqrt(|omega|^2 - (2E/M)^2)`` from the L axis (``omega . M/M = 2E/M``
+    is constant).  ``|omega|^2 = sum M_k^2 / I_k^2`` is extreme where the
+    polhode crosses a principal plane (one ``M_k = 0``; those crossings are
+    the turning points of the Jacobi functions, eqns. Omegas): ``M_1 = 0``
+    or ``M_2 = 0`` on SAM (the polhode circles I3), ``M_2 = 0`` or
+    ``M_3 = 0`` on LAM (it circles I1).  With ``M_k = 0`` the other two
+    follow from the invariants ``M_i^2 + M_j^2 = M^2`` (eqn:MM) and
+    ``M_i^2/I_i + M_j^2/I_j = 2E`` (eqn:EM).  The herpolhode touches both
+    circles (Landau & Lifshitz, Mechanics, Sec. 37).
+
+    Parameters
+    ----------
+    body, theta, dtheta, phi : as :func:`orbits.herpolhode`
+
+    Returns
+    -------
+    r_min, r_max : float
+        In rad/s for ``|omega0| = 1``.  The subtraction loses about
+        ``1e-16 / r`` relative accuracy for tiny radii (drawing only).
+    """
+    motion = Motion.from_spin(_as_body(body), theta, dtheta=dtheta, phi=phi)
+    moments = motion.body.moments
+    two_e, m2 = 2.0 * motion.energy, motion.momentum**2
+    zeros = (0, 1) if motion.branch == "SAM" else (1, 2)
+    radii = []
+    for zero in zeros:
+        i, j = (k for k in range(3) if k != zero)
+        mi2 = (two_e - m2 / moments[j]) / (1.0 / moments[i] - 1.0 / moments[j])
+        mj2 = m2 - mi2
+        omega2 = max(mi2, 0.0) / moments[i] ** 2 + max(mj2, 0.0) / moments[j] ** 2
+        radii.append(math.sqrt(max(omega2 - two_e**2 / m2, 0.0)))
+    return min(radii), max(radii)
+
+
+def mark_herpolhode(ax, curve, radii, *, arrow_length=0.18, color=None, centre_label=True):
+    """Start marker, direction arrow, the L axis and the bounding circles.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+    curve : Line2D
+        A herpolhode drawn by :func:`plot_herpolhode`.
+    radii : (float, float)
+        ``r_min, r_max`` from :func:`herpolhode_radii`: drawn dashed.
+    arrow_length : float
+        The arrow follows the curve from its start for this fraction of
+        ``r_max`` (arc length), pointing along the motion.
+    centre_label : bool
+        Write "L" by the centre mark.
+
+    Returns
+    -------
+    dict
+        ``start`` (Line2D marker at t = 0), ``arrow`` (Annotation from the
+        start along the curve), ``centre`` (Line2D at the origin: the L
+        axis), ``circles`` (two Circle patches, r_min and r_max).
+    """
+    from matplotlib.patches import Circle
+    color = color or curve.get_color()
+    xy = curve.get_xydata()
+    circles = []
+    for radius in radii:
+        circle = Circle((0.0, 0.0), radius, fill=False, linestyle=(0, (4, 3)),
+                        linewidth=0.6, edgecolor="0.55", zorder=1)
+        ax.add_patch(circle)
+        circles.append(circle)
+    (centre,) = ax.plot([0.0], [0.0], marker="+", color="black", markersize=6,
+                        markeredgewidth=0.9, linestyle="none", zorder=3)
+    if centre_label:
+        ax.annotate("L", (0.0, 0.0), xytext=(3, 3), textcoords="offset points",
+                    fontsize="x-small")
+    (start,) = ax.plot(xy[:1, 0], xy[:1, 1], marker="o", color=color, markersize=4,
+                       linestyle="none", zorder=4)
+    steps = np.hypot(*np.diff(xy, axis=0).T)
+    travelled = np.concatenate([[0.0], np.cumsum(steps)])
+    end = int(np.searchsorted(travelled, arrow_length * max(radii[1], 1e-300)))
+    end = min(max(end, 1), len(xy) - 1)
+    arrow = ax.annotate("", xy=tuple(xy[end]), xytext=tuple(xy[0]),
+                        arrowprops=dict(arrowstyle="-|>", color=color, linewidth=1.0,
+                                        mutation_scale=9, shrinkA=0, shrinkB=0),
+                        zorder=4)
+    return {"start": start, "arrow": arrow, "centre": centre, "circles": circles}
+
+
+def drawn_periods(row):
+    """Periods over which a catalog row's herpolhode closes (``closes_after``, else q)."""
+    from fractions import Fraction
+    value = getattr(row, "closes_after", None)
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return float(row.q)
+    return float(Fraction(str(value)))
+
+
+def theta_text(theta, dtheta, precision=5):
+    """``theta = ...``, or ``theta - theta_c`` in scientific notation when theta
+    rounds to theta_c at ``precision`` decimals (so near-separatrix rows differ)."""
+    theta_c = theta - dtheta
+    if round(theta, precision) == round(theta_c, precision):
+        return rf"$\theta-\theta_c$ = {dtheta:.3e}"
+    return rf"$\theta$ = {theta:.{precision}f}"
+
+
 def orbit_label(row, body_name=None, precision=6):
-    """A figure title for a catalog row: multiple, branch, theta, body."""
+    """A figure title for a catalog row: multiple, branch, theta, body, closure."""
     multiple = f"{row.n}" if row.q == 1 else f"{row.n}/{row.q}"
     name = f"{body_name}: " if body_name else ""
-    return (rf"{name}$\Delta\alpha = 2\pi\cdot{multiple}$, {row.branch}, "
+    text = (rf"{name}$\Delta\alpha = 2\pi\cdot{multiple}$, {row.branch}, "
             rf"$\theta$ = {row.theta:.{precision}f}" + "\n"
             + rf"$\theta-\theta_c$ = {row.dtheta:.3e} rad")
+    periods = drawn_periods(row)
+    if periods != row.q:
+        closes = getattr(row, "closes_after", periods)
+        text += f"; closes after {closes} T (drawn once)"
+    return text
 
 
 def plot_phase_curves(ax, body, *, points=1500, period_axis=True):
     """Total, dynamic and geometric phase against theta (Fig. 5).
 
     The period goes on a twin y axis (dashed black); the critical angle is
-    a gray vertical line.
+    a gray vertical line.  Each curve is broken (a NaN point) at theta_c,
+    where the geometric phase jumps: no segment joins the two branches.
 
     Returns
     -------
@@ -100,13 +214,19 @@ def plot_phase_curves(ax, body, *, points=1500, period_axis=True):
     """
     body = _as_body(body)
     theta_c = critical_angle(body)
-    theta = _theta_grid(theta_c, points)
-    table = phases(body, theta)
+    grid = _theta_grid(theta_c, points)
+    table = phases(body, grid)
+    split = int(np.searchsorted(grid, theta_c))
+    theta = np.insert(grid, split, np.nan)
+
+    def broken(column):
+        return np.insert(np.asarray(table[column], dtype=float), split, np.nan)
+
     lines = {}
     for name, column, label in (("total", "total_phase", r"total $\Delta\alpha$"),
                                 ("dynamic", "dynamic_phase", r"dynamic $2ET/M$"),
                                 ("geometric", "geometric_phase", r"geometric $\Omega$")):
-        (lines[name],) = ax.plot(theta, table[column], label=label, **STYLES[name])
+        (lines[name],) = ax.plot(theta, broken(column), label=label, **STYLES[name])
     ax.axvline(theta_c, color="0.6", linewidth=1.0)
     ax.set_xlabel(r"polar angle of $\omega_0$ from the body $z$ axis, $\theta$ (rad)")
     ax.set_ylabel("phase (rad)")
@@ -116,7 +236,7 @@ def plot_phase_curves(ax, body, *, points=1500, period_axis=True):
     handles = list(lines.values())
     if period_axis:
         twin = ax.twinx()
-        (lines["period"],) = twin.plot(theta, table["period"], label="period $T$",
+        (lines["period"],) = twin.plot(theta, broken("period"), label="period $T$",
                                        **STYLES["period"])
         twin.set_ylabel(r"period $T$ (s, for $|\omega_0| = 1$ rad/s)")
         twin.set_ylim(0.0, float(np.nanpercentile(table["period"], 90)))
@@ -135,7 +255,7 @@ def _theta_grid(theta_c, points):
     return grid[grid != theta_c]
 
 
-def plot_total_phase(ax, body, orbits=None, *, n_levels=None, points=2000):
+def plot_total_phase(ax, body, orbits=None, *, n_levels=None, points=2000, legend=True):
     """Total phase against theta with the 2 pi n levels and roots (Fig. 6).
 
     Parameters
@@ -149,7 +269,8 @@ def plot_total_phase(ax, body, orbits=None, *, n_levels=None, points=2000):
     -------
     dict
         ``curve`` (Line2D), ``levels`` (list of Line2D), ``roots``
-        (PathCollection or None).
+        (PathCollection or None), ``level_axis`` (the right-hand axis that
+        names the levels).
     """
     body = _as_body(body)
     theta_c = critical_angle(body)
@@ -161,10 +282,14 @@ def plot_total_phase(ax, body, orbits=None, *, n_levels=None, points=2000):
     ax.set_ylim(0.0, top)
     ax.set_xlim(0.0, 0.5 * np.pi)
     levels = []
-    for n in range(1, int(top / TWO_PI) + 1):
+    count = int(top / TWO_PI)
+    for n in range(1, count + 1):
         levels.append(ax.axhline(TWO_PI * n, color="0.75", linewidth=0.6, zorder=0))
-        ax.annotate(rf"$2\pi\cdot{n}$", (0.01, TWO_PI * n), xycoords=("axes fraction", "data"),
-                    va="bottom", fontsize="x-small", color="0.4")
+    # the levels are named on a right-hand axis, outside the data (nothing covers them)
+    named = ax.secondary_yaxis("right")
+    named.set_yticks(TWO_PI * np.arange(1, count + 1),
+                     [rf"$2\pi\cdot{n}$" for n in range(1, count + 1)])
+    named.tick_params(labelsize="small", colors="0.3")
     ax.axvline(theta_c, color="0.6", linewidth=1.0)
     roots = None
     if orbits is not None and len(orbits):
@@ -173,8 +298,9 @@ def plot_total_phase(ax, body, orbits=None, *, n_levels=None, points=2000):
                            zorder=3, label=r"closed orbits, $\Delta\alpha = 2\pi n$")
     ax.set_xlabel(r"polar angle of $\omega_0$ from the body $z$ axis, $\theta$ (rad)")
     ax.set_ylabel(r"total phase $\Delta\alpha$ (rad)")
-    ax.legend(loc="upper left", fontsize="small")
-    return {"curve": curve, "levels": levels, "roots": roots}
+    if legend:
+        ax.legend(loc="upper left", fontsize="small")
+    return {"curve": curve, "levels": levels, "roots": roots, "level_axis": named}
 
 
 def body_space_grid(resolution=300):
@@ -267,9 +393,9 @@ def plot_body_space(ax, grid=None, *, resolution=300, levels=None, colorbar=True
     boundaries = {}
     for name, (x, y) in region_boundaries().items():
         (boundaries[name],) = ax.plot(x, y, color="tab:red", linewidth=1.5)
-    label_at = {"prolate": (0.18, 0.71), "oblate": (0.47, 0.45), "flat": (0.12, 0.6)}
+    label_at = {"prolate": (0.2, 0.697), "oblate": (0.47, 0.45), "flat": (0.12, 0.6)}
     for name, (x, y) in label_at.items():
-        ax.annotate(name, (x, y), color="tab:red", fontsize="small")
+        ax.annotate(name, (x, y), color="tab:red", fontsize="small", va="bottom")
     x, y = kink_locus()
     (kink,) = ax.plot(x, y, color="white", linestyle="--", linewidth=1.0,
                       label=r"kinks: $\Delta\alpha_{\theta\to0} = \Delta\alpha_{\theta\to\pi/2}$")
@@ -278,7 +404,7 @@ def plot_body_space(ax, grid=None, *, resolution=300, levels=None, colorbar=True
     ax.set_aspect("equal")
     (lo1, hi1), (lo2, hi2) = REGION_BOX
     ax.set_xlim(lo1, hi1 + 0.01)
-    ax.set_ylim(lo2 - 0.01, hi2 + 0.01)
+    ax.set_ylim(lo2 - 0.01, hi2 + 0.025)
     ax.legend(loc="lower right", fontsize="x-small", facecolor="0.3", labelcolor="white")
     bar = None
     if colorbar:
@@ -308,13 +434,21 @@ def _box_faces(lo, hi):
     return [corners[f] for f in faces]
 
 
-def plot_t_handle(ax3d, l1=8.0, l2=4.0, w=1.0, *, shrink=0.25):
+def plot_t_handle(ax3d, l1=8.0, l2=4.0, w=1.0, *, shrink=0.25, bars="solid",
+                  ellipsoid=True):
     """The T-handle and its equivalent ellipsoid, in 3-D (Fig. 1).
 
     The cross piece lies along x, the shaft along y (from the cross piece's
     edge), both of square section w; the ellipsoid with the same principal
     moments (semi-axes from :meth:`Body.equivalent_ellipsoid`) is drawn at
-    the centre of mass, shrunk by ``shrink`` as in the paper.
+    the centre of mass, shrunk by ``shrink`` (the paper: 1/4).
+
+    Parameters
+    ----------
+    bars : {"solid", "outline"}
+        Shaded bars, or their edges only (to show the ellipsoid inside).
+    ellipsoid : bool
+        Draw the equivalent ellipsoid.
 
     Returns
     -------
@@ -329,23 +463,35 @@ def plot_t_handle(ax3d, l1=8.0, l2=4.0, w=1.0, *, shrink=0.25):
     boxes = [((-l1 / 2, -w / 2 - com_y, -w / 2), (l1 / 2, w / 2 - com_y, w / 2)),
              ((-w / 2, w / 2 - com_y, -w / 2), (w / 2, w / 2 + l2 - com_y, w / 2))]
     faces = _box_faces(*boxes[0]) + _box_faces(*boxes[1])
-    bars = Poly3DCollection(faces, facecolor="tab:green", edgecolor="darkgreen",
-                            alpha=0.1, linewidths=0.8)
-    ax3d.add_collection3d(bars)
+    if bars == "outline":
+        drawn = Poly3DCollection(faces, facecolor=(0, 0, 0, 0), edgecolor="darkgreen",
+                                 linewidths=0.6)
+    else:
+        drawn = Poly3DCollection(faces, facecolor="tab:green", edgecolor="darkgreen",
+                                 alpha=0.35, linewidths=0.8)
+    ax3d.add_collection3d(drawn)
     semi = Body.t_handle(l1, l2, w).equivalent_ellipsoid()
-    x, y, z = _ellipsoid_surface(np.array(semi) * shrink, resolution=60)
-    surface = ax3d.plot_surface(x, y, z, color="tab:orange", alpha=0.95, linewidth=0,
-                                shade=True)
-    ax3d.view_init(elev=35, azim=-55)
-    span = 0.55 * max(l1, l2 + w)
+    surface = None
+    if ellipsoid:
+        x, y, z = _ellipsoid_surface(np.array(semi) * shrink, resolution=60)
+        surface = ax3d.plot_surface(x, y, z, color="tab:orange", alpha=0.55, linewidth=0,
+                                    shade=True)
+    ax3d.view_init(elev=30, azim=-58)
+    # the box fits the larger of the T and the drawn ellipsoid, z kept to scale
+    span_x = 0.52 * max(l1, 2.0 * shrink * semi[0] if ellipsoid else 0.0)
+    span_y = 0.52 * max(l2 + w, 2.0 * shrink * semi[1] if ellipsoid else 0.0)
+    span = max(span_x, span_y)
+    span_z = 0.52 * max(w, 2.0 * shrink * semi[2] if ellipsoid else 0.0, 0.25 * span)
     ax3d.set_xlim(-span, span)
     ax3d.set_ylim(-span, span)
-    ax3d.set_zlim(-span, span)
-    ax3d.set_box_aspect((1, 1, 1))
-    ax3d.set_xlabel("x (cross piece, $I_1$ axis; length units)")
-    ax3d.set_ylabel("y (shaft, $I_2$ axis)")
-    ax3d.set_zlabel("z ($I_3$ axis)")
-    return {"bars": bars, "boxes": boxes, "ellipsoid": surface, "semi_axes": semi}
+    ax3d.set_zlim(-span_z, span_z)
+    ax3d.set_box_aspect((1, 1, span_z / span), zoom=1.1)
+    ax3d.set_zticks([-0.5, 0.0, 0.5])
+    ax3d.set_xlabel("x ($I_1$ axis)", labelpad=2)
+    ax3d.set_ylabel("y ($I_2$ axis)", labelpad=2)
+    ax3d.set_zlabel("z ($I_3$)", labelpad=-2)
+    ax3d.tick_params(labelsize="x-small", pad=0)
+    return {"bars": drawn, "boxes": boxes, "ellipsoid": surface, "semi_axes": semi}
 
 
 def _momentum_axes(ax3d, limit):
@@ -402,7 +548,8 @@ def plot_omega_components(ax, body, theta=None, *, dtheta=None, phi=0.0, periods
     -------
     dict
         ``lines`` (three Line2D: x solid red, y dashed green, z dot-dashed
-        blue, as the paper) and ``period`` (the gray vertical line's x).
+        blue, as the paper), ``period`` (the gray vertical line's x) and
+        ``period_axis`` (the top axis whose one tick names T).
     """
     if isinstance(body, Motion):
         motion = body
@@ -417,28 +564,37 @@ def plot_omega_components(ax, body, theta=None, *, dtheta=None, phi=0.0, periods
                                                                    "intermediate $I$",
                                                                    "largest $I$"), styles))]
     ax.axvline(motion.period, color="0.6", linewidth=1.2)
-    ax.annotate(f"T = {motion.period:.4f} s", (motion.period, 0.02),
-                xycoords=("data", "axes fraction"), fontsize="small", color="0.35",
-                ha="left")
+    # the period is named by a tick on a top axis: outside the data (the curves
+    # fill the box) and away from the time axis
+    marker = ax.secondary_xaxis("top")
+    marker.set_xticks([motion.period], [f"T = {motion.period:.4f} s"])
+    marker.tick_params(labelsize="small", colors="0.35")
     ax.set_xlabel("time t (s)")
     ax.set_ylabel(r"body angular velocity $\omega_i$ (rad/s)")
     ax.set_xlim(0.0, t[-1])
-    ax.legend(loc="upper right", fontsize="x-small", framealpha=0.9)
-    return {"lines": lines, "period": motion.period}
+    # the legend goes under the axes: the curves fill the whole box
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncols=3,
+              fontsize="x-small", frameon=False)
+    return {"lines": lines, "period": motion.period, "period_axis": marker}
 
 
-def plot_polhode_foliation(ax3d, body, *, count=48, energy=0.5, cmap="twilight"):
+def plot_polhode_foliation(ax3d, body, *, count=28, energy=0.5, cmap="twilight",
+                           elev=22.0, azim=-62.0):
     """The Binet ellipsoid foliated by polhodes coloured by Delta alpha mod 2 pi (Fig. 4).
 
     Polhodes for ``count`` spins over both branches, each scaled to the
     same energy (the phase does not depend on ``|omega|``), drawn with
-    their mirror images so that they cover the ellipsoid.
+    their mirror images so that they cover the ellipsoid.  Depth cue: the
+    parts on the far side of the ellipsoid (outward normal ``M / I``
+    pointing away from the viewer at ``elev``, ``azim``) are drawn thin
+    and faint.  The 3-D box is replaced by the three principal axes.
 
     Returns
     -------
     dict
-        ``polhodes`` (list of (Line3D, phase mod 2 pi)), ``colorbar``,
-        ``ellipsoid``.
+        ``polhodes`` (list of (Line3D, phase mod 2 pi); near and far parts
+        are separate lines, gaps as NaN), ``colorbar``, ``ellipsoid``,
+        ``view`` (unit vector towards the viewer).
     """
     import matplotlib as mpl
     body = _as_body(body)
@@ -451,8 +607,11 @@ def plot_polhode_foliation(ax3d, body, *, count=48, energy=0.5, cmap="twilight")
     colormap = mpl.colormaps[cmap]
     norm = mpl.colors.Normalize(0.0, TWO_PI)
     semi = np.sqrt(2.0 * energy * unit)
+    ax3d.view_init(elev=elev, azim=azim)
+    e, a = np.radians(elev), np.radians(azim)
+    view = np.array([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)])
     x, y, z = _ellipsoid_surface(semi, resolution=50)
-    ellipsoid = ax3d.plot_surface(x, y, z, color="0.85", alpha=0.25, linewidth=0)
+    ellipsoid = ax3d.plot_surface(x, y, z, color="0.62", alpha=0.4, linewidth=0)
     drawn = []
     for theta, row in zip(thetas, table.itertuples()):
         _, momentum = polhode(unit, theta, points=600)
@@ -465,15 +624,36 @@ def plot_polhode_foliation(ax3d, body, *, count=48, energy=0.5, cmap="twilight")
                 mirrored[:, 2] *= flip
             else:
                 mirrored[:, 0] *= flip
-            (line,) = ax3d.plot(*mirrored.T, color=color, linewidth=1.2)
-            drawn.append((line, phase))
+            near = (mirrored / semi**2) @ view > 0.0
+            for side, width, alpha in ((near, 1.3, 1.0), (~near, 0.5, 0.22)):
+                if not side.any():
+                    continue
+                # keep one neighbour on each side so that the pieces join
+                shown = side | np.roll(side, 1) | np.roll(side, -1)
+                piece = np.where(shown[:, None], mirrored, np.nan)
+                (line,) = ax3d.plot(*piece.T, color=color, linewidth=width, alpha=alpha,
+                                    zorder=3 if alpha == 1.0 else 1)
+                drawn.append((line, phase))
+    for k, name in enumerate(("$M_1$", "$M_2$", "$M_3$")):
+        tip = np.zeros(3)
+        tip[k] = 1.3 * semi[k]
+        ax3d.plot(*np.stack([-tip, tip]).T, color="0.3", linewidth=0.7)
+        ax3d.text(*(1.08 * tip), name, fontsize="small", color="0.2")
     bar = ax3d.figure.colorbar(mpl.cm.ScalarMappable(norm=norm, cmap=colormap), ax=ax3d,
-                               shrink=0.7, pad=0.1)
+                               shrink=0.7, pad=0.02)
     bar.set_label(r"total phase $\Delta\alpha$ mod $2\pi$ (rad)")
     bar.set_ticks([0, np.pi / 2, np.pi, 1.5 * np.pi, TWO_PI])
     bar.set_ticklabels(["0", r"$\pi/2$", r"$\pi$", r"$3\pi/2$", r"$2\pi$"])
-    _momentum_axes(ax3d, 1.05 * semi.max())
-    return {"polhodes": drawn, "colorbar": bar, "ellipsoid": ellipsoid}
+    reach = 1.3 * semi
+    ax3d.set_xlim(-reach[0], reach[0])
+    ax3d.set_ylim(-reach[1], reach[1])
+    ax3d.set_zlim(-reach[2], reach[2])
+    ax3d.set_box_aspect(tuple(reach), zoom=1.25)
+    ax3d.set_xlabel("$M_1$ (J s)")
+    ax3d.set_ylabel("$M_2$ (J s)")
+    ax3d.set_zlabel("$M_3$ (J s)")
+    ax3d.set_axis_off()
+    return {"polhodes": drawn, "colorbar": bar, "ellipsoid": ellipsoid, "view": view}
 
 
 def limits_field(i1, i2):

@@ -151,6 +151,59 @@ def test_t_handle_solid_has_the_body_moments():
     np.testing.assert_allclose(extent, [3.0, 2.0, 1.0], rtol=1e-15)
 
 
+def _principal_extent(faces):
+    return np.ptp(np.concatenate(faces), axis=0)
+
+
+def test_real_bodies_are_drawn_as_their_solids(tmp_path):
+    # a phone-like box: the drawn box has the body's moments (about its centre)
+    phone = Body.box(0.071, 0.147, 0.0078, 0.17, name="phone")
+    kind, faces = animate.solid_faces(phone)
+    assert kind == "box"
+    a, b, c = _principal_extent(faces)
+    np.testing.assert_allclose(0.17 / 12 * np.array([b * b + c * c, a * a + c * c,
+                                                     a * a + b * b]),
+                               phone.moments, rtol=1e-13)
+    # an elliptic cylinder (a = 0.3 along x, b = 0.2 along y, length 1 along z):
+    # I_z < I_x < I_y, so the length lies along I1, 2a along I2, 2b along I3
+    rod = Body.cylinder(0.3, 1.0, 2.0, radius_y=0.2)
+    kind, faces = animate.solid_faces(rod)
+    assert kind == "cylinder"
+    np.testing.assert_allclose(_principal_extent(faces), [1.0, 0.6, 0.4], rtol=1e-13)
+    # a closed mesh (a box 3 x 1 x 2): drawn from its own vertices, principal axes
+    trimesh = pytest.importorskip("trimesh")
+    path = tmp_path / "brick.stl"
+    trimesh.creation.box(extents=(3.0, 1.0, 2.0)).export(path)
+    brick = Body.from_mesh(path)
+    kind, faces = animate.solid_faces(brick)
+    assert kind == "mesh"
+    np.testing.assert_allclose(_principal_extent(faces), [3.0, 2.0, 1.0], rtol=1e-12)
+    # the animation scales every solid to lie inside the inertia ellipsoid x.I.x = 1
+    for body in (phone, rod, brick, T_HANDLE):
+        anim = animate.poinsot_animation(animate.flip_motion(body), frames=2, dpi=20)
+        vertices = np.concatenate(anim._faces)
+        assert anim.solid_kind == body.shape[0]
+        form = np.einsum("ni,i,ni->n", vertices, body.moments, vertices)
+        assert form.max() == pytest.approx(0.95**2, rel=1e-12)
+
+
+def test_catalog_row_of_a_real_body_keeps_its_solid_and_units(tmp_path):
+    phone = Body.box(0.071, 0.147, 0.0078, 0.17, name="phone")
+    row = animate.orbit_row(phone, n=3, branch="SAM")
+    anim = animate.poinsot_animation(row, frames=3, dpi=20, body=phone)
+    assert anim.solid_kind == "box" and anim.motion.body is phone
+    # the same orbit in the body's own units: the phase and closure are scale-free
+    np.testing.assert_allclose(anim.motion.total_phase(), 2 * np.pi * 3, rtol=1e-12)
+    assert "closed after 1/2 T" in anim._title.get_text()
+    with pytest.raises(InputError, match="not of the given body"):
+        animate.poinsot_animation(row, frames=3, body=FIG6)
+    out = tmp_path / "phone_n3.gif"
+    assert main(["animate", "--box", "0.071", "0.147", "0.0078", "--mass", "0.17",
+                 "--n", "3", "--branch", "SAM", "--frames", "3", "--dpi", "20",
+                 "--out", str(out)]) == 0
+    assert out.stat().st_size > 0
+
+
 def test_flip_turns_the_intermediate_axis_over():
     motion = animate.flip_motion()
     assert motion.body == T_HANDLE

@@ -67,8 +67,7 @@ def test_fig6_insets_are_closed_catalog_orbits(paper):
     assert len(insets) >= 6
     for inset, row in insets:
         assert row.dtheta in set(catalog["dtheta"])
-        (line,) = inset.get_lines()
-        xy = line.get_xydata()
+        xy = inset.get_lines()[0].get_xydata()
         assert np.abs(xy[-1] - xy[0]).max() <= 1e-9
 
 
@@ -92,11 +91,42 @@ def test_herpolhode_set_files_order_and_closure(tmp_path):
             assert_not_blank(path)
     sheet = figures.contact_sheet(FIG6, catalog)
     drawn = [ax for ax in sheet.get_axes() if ax.get_lines()]
-    thetas = [float(ax.get_title().split("=")[-1]) for ax in drawn]
-    assert thetas == sorted(thetas)              # the paper's left-to-right order
-    for ax in drawn:
+    ordered = figures._paper_order(catalog)
+    assert len(drawn) == len(ordered)
+    assert list(ordered["dtheta"]) == sorted(ordered["dtheta"])   # left to right in theta
+    for ax, row in zip(drawn, ordered.itertuples()):
+        multiple = f"{row.n}" if row.q == 1 else f"{row.n}/{row.q}"
+        assert rf"{row.branch} $2\pi\cdot{multiple}$" in ax.get_title()
         xy = ax.get_lines()[0].get_xydata()
-        assert np.abs(xy[-1] - xy[0]).max() <= 1e-9      # p/q drawn over q periods
+        assert np.abs(xy[-1] - xy[0]).max() <= 1e-9      # closed over closes_after
+        # one common scale on every panel
+        assert ax.get_xlim() == (-sheet.limit, sheet.limit)
+        assert ax.get_ylim() == (-sheet.limit, sheet.limit)
+
+
+def test_fig6_leader_lines_do_not_cross(paper):
+    """Leader segments (inset bottom -> dot), in figure pixels, pairwise disjoint."""
+    _, built = paper
+    figure = built["fig6"]
+    figure.canvas.draw()
+    segments = []
+    for inset, row in figure.insets:
+        a = inset.transAxes.transform((0.5, 0.0))
+        b = figure.main_axes.transData.transform((row.theta, row.total_phase))
+        segments.append((a, b))
+
+    def cross(p, q, r):
+        return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+
+    for i, (p1, p2) in enumerate(segments):
+        for p3, p4 in segments[i + 1:]:
+            d1, d2 = cross(p3, p4, p1), cross(p3, p4, p2)
+            d3, d4 = cross(p1, p2, p3), cross(p1, p2, p4)
+            assert not (d1 * d2 < 0 and d3 * d4 < 0)
+    # the insets sit above the main axes: they cover no data, level name or the spike
+    top = figure.main_axes.get_window_extent().y1
+    for inset, _ in figure.insets:
+        assert inset.get_window_extent().y0 >= top
 
 
 def test_output_is_deterministic(tmp_path):
@@ -133,3 +163,91 @@ class TestCli:
         code = main(argv)
         err = capsys.readouterr().err.strip().splitlines()
         assert code == 2 and len(err) == 1 and fragment in err[0], err
+
+
+def test_contact_sheet_titles_state_the_closure_time():
+    """p/q with p and q odd close after q/2 periods: 3T/2 for q = 3, T/2 for odd n."""
+    catalog = orbits.closed_orbits(FIG6, n_max=3, q_max=3)
+    sheet = figures.contact_sheet(FIG6, catalog)
+    titles = [ax.get_title() for ax in sheet.get_axes() if ax.get_lines()]
+    expected = {1: "(T/2)", 3: "(3T/2)"}
+    seen = set()
+    for title, row in zip(titles, figures._paper_order(catalog).itertuples()):
+        if row.n % 2 and row.q % 2:
+            assert expected[row.q] in title, title
+            seen.add(row.q)
+        else:
+            assert "T/2" not in title, title
+    assert seen == {1, 3}
+
+
+def _inside(inner, outer, slack=1.0):
+    return (inner.x0 >= outer.x0 - slack and inner.y0 >= outer.y0 - slack
+            and inner.x1 <= outer.x1 + slack and inner.y1 <= outer.y1 + slack)
+
+
+@pytest.mark.parametrize("name", list(figures.PAPER_FIGURES))
+def test_no_label_or_title_is_clipped(paper, name):
+    """Every axis label, title and legend lies wholly inside the figure (Fig. 1's
+    x label was cut to '...length uni')."""
+    _, built = paper
+    figure = built[name]
+    renderer = figure.canvas.get_renderer()
+    figure.canvas.draw()
+    page = figure.bbox
+    texts = [t for t in figure.texts if t.get_text()]
+    if figure._suptitle is not None:
+        texts.append(figure._suptitle)
+    for ax in figure.get_axes():
+        texts.append(ax.title)
+        if ax.axison:                        # Fig. 4 draws its own labelled axes instead
+            texts += [ax.xaxis.label, ax.yaxis.label]
+            if hasattr(ax, "zaxis"):
+                texts.append(ax.zaxis.label)
+        if ax.get_legend() is not None:
+            texts.append(ax.get_legend())
+    checked = 0
+    for text in texts:
+        if not text.get_visible() or (hasattr(text, "get_text") and not text.get_text()):
+            continue
+        extent = text.get_window_extent(renderer)
+        assert _inside(extent, page), (name, getattr(text, "get_text", str)(), extent, page)
+        checked += 1
+    assert checked >= 2
+
+
+def test_fig3_period_label_and_legend_clear_of_curves_and_axis(paper):
+    """T is named above the plot (not on the time axis, no curve under it, clear of
+    the panel title); the legend sits under the time axis (it covered the curves)."""
+    _, built = paper
+    figure = built["fig3"]
+    figure.canvas.draw()
+    renderer = figure.canvas.get_renderer()
+    ax = next(a for a in figure.get_axes() if a.get_xlabel().startswith("time"))
+    labels = [t for child in ax.child_axes for t in child.get_xticklabels()
+              if t.get_text().startswith("T = ")]
+    assert len(labels) == 1
+    box = labels[0].get_window_extent(renderer)
+    assert box.y0 >= ax.bbox.y1                      # above the data area
+    title = ax.title.get_window_extent(renderer)
+    assert box.y1 <= title.y0 or box.x1 <= title.x0 or box.x0 >= title.x1
+    # the label is centred on the period's vertical line
+    period = ax.transData.transform((_period(ax), 0.0))[0]
+    assert abs(0.5 * (box.x0 + box.x1) - period) < 1.0
+    legend = ax.get_legend().get_window_extent(renderer)
+    assert legend.y1 <= ax.xaxis.get_tightbbox(renderer).y0 + 1.0
+
+
+def _period(ax):
+    verticals = [line.get_xdata()[0] for line in ax.get_lines()
+                 if len(set(line.get_xdata())) == 1]
+    assert len(verticals) == 1
+    return verticals[0]
+
+
+def test_a_body_without_closed_orbits_writes_no_figure(tmp_path):
+    # Delta alpha > 2 pi for every spin: no orbit with n = 1
+    assert figures.herpolhode_set(FIG6, 1, tmp_path, formats=("png",)) == []
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(orbits.errors.InputError, match="at least one"):
+        figures.contact_sheet(FIG6, orbits.closed_orbits(FIG6, n_max=1))

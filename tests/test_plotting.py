@@ -78,11 +78,20 @@ def test_phase_curves_are_the_closed_form():
     ax = new_figure().add_subplot()
     lines = plotting.plot_phase_curves(ax, T_HANDLE)
     theta, total = lines["total"].get_data()
+    # one break (NaN) at theta_c, so no segment joins the two branches
+    gap = np.flatnonzero(np.isnan(theta))
+    theta_c = orbits.critical_angle(T_HANDLE)
+    assert gap.size == 1 and theta[gap[0] - 1] < theta_c < theta[gap[0] + 1]
+    for line in lines.values():
+        if hasattr(line, "get_ydata"):
+            assert np.isnan(line.get_ydata()[gap[0]])
+    keep = np.isfinite(theta)
+    theta, total = theta[keep], total[keep]
     table = orbits.phases(T_HANDLE, theta)
     np.testing.assert_array_equal(total, table["total_phase"])
-    np.testing.assert_allclose(lines["geometric"].get_ydata(),
-                               lines["dynamic"].get_ydata() - total, atol=1e-12)
-    np.testing.assert_array_equal(lines["period"].get_ydata(), table["period"])
+    np.testing.assert_allclose(lines["geometric"].get_ydata()[keep],
+                               lines["dynamic"].get_ydata()[keep] - total, atol=1e-12)
+    np.testing.assert_array_equal(lines["period"].get_ydata()[keep], table["period"])
     assert lines["period_axes"].get_ylabel().startswith("period")
     assert orbits.critical_angle(T_HANDLE) not in theta
 
@@ -96,6 +105,12 @@ def test_total_phase_plot_marks_the_catalog_roots():
     np.testing.assert_allclose(marked[:, 1], 2 * np.pi * table["n"], rtol=1e-14)
     assert [line.get_ydata()[0] for line in drawn["levels"]] == pytest.approx(
         2 * np.pi * np.arange(1, 9))
+    # the levels are named on the right-hand axis, outside the data
+    named = drawn["level_axis"]
+    np.testing.assert_allclose(named.get_yticks(), 2 * np.pi * np.arange(1, 9), rtol=1e-15)
+    assert [t.get_text() for t in named.get_yticklabels()] == [
+        rf"$2\pi\cdot{n}$" for n in range(1, 9)]
+    assert not [t for t in ax.texts if "2\\pi" in t.get_text()]
 
 
 def test_omega_components_are_the_exact_motion():
@@ -126,12 +141,23 @@ def test_foliation_colours_are_the_phase():
     drawn = plotting.plot_polhode_foliation(ax, T_HANDLE, count=12)
     cmap = mpl.colormaps["twilight"]
     unit = T_HANDLE.normalized_moments
+    semi2 = unit                       # semi-axes^2 of the Binet ellipsoid at E = 1/2
     for line, phase in drawn["polhodes"]:
         assert line.get_color() == pytest.approx(cmap(phase / (2 * np.pi)))
-        x, y, z = line.get_data_3d()
+        x, y, z = (np.asarray(v, dtype=float) for v in line.get_data_3d())
+        shown = np.isfinite(x)
+        assert shown.sum() >= 2
+        points = np.stack([x, y, z], axis=-1)
         # all polhodes on the one Binet ellipsoid of energy 1/2
-        np.testing.assert_allclose(x**2 / unit[0] + y**2 / unit[1] + z**2 / unit[2], 1.0,
+        np.testing.assert_allclose(np.sum(points[shown] ** 2 / unit, axis=1), 1.0,
                                    rtol=1e-12)
+        # depth cue: every point of a full-strength piece faces the viewer (outward
+        # normal M / I towards it) or joins one that does; faint pieces face away
+        facing = (points / semi2) @ drawn["view"]
+        near = facing > 0 if line.get_alpha() in (None, 1.0) else facing <= 0
+        near &= shown
+        neighbour = near | np.roll(near, 1) | np.roll(near, -1)
+        assert neighbour[shown].all()
     assert drawn["colorbar"].ax.get_ylabel()
 
 
@@ -182,3 +208,62 @@ def test_plots_take_a_motion_in_real_units():
     x, y, z = drawn["polhode"].get_data_3d()
     np.testing.assert_allclose(np.sqrt(x**2 + y**2 + z**2), drawn["momentum"], rtol=1e-13)
     assert "J s" in ax.get_xlabel()
+
+
+def test_herpolhode_radii_bound_the_curve_and_are_reached():
+    """r_min, r_max (closed form from the invariants) against the exact motion.
+
+    Reference: the exact motion's |omega_xy(t)| minimised/maximised by a
+    bounded scalar search (xatol 1e-13 s) from the best of 20001 samples;
+    the motion is accurate to ~1e-15, the search's radius error is ~1e-16
+    at a smooth extremum, so 1e-11 leaves 100x margin.
+    """
+    from scipy.optimize import minimize_scalar
+    for body, kwargs in ((FIG6, dict(theta=0.6)), (FIG6, dict(theta=1.3)),
+                         (T_HANDLE, SPIN), (FIG6, dict(dtheta=-3e-4))):
+        r_min, r_max = plotting.herpolhode_radii(body, **kwargs)
+        motion = orbits.Motion.from_spin(body, **kwargs)
+        t = np.linspace(0.0, motion.period, 20001)
+        radius = np.hypot(*motion.omega_space(t)[:, :2].T)
+        assert radius.min() >= r_min - 1e-12 and radius.max() <= r_max + 1e-12
+        step = t[1]
+        for sign, target in ((1.0, r_min), (-1.0, r_max)):
+            k = int(np.argmin(sign * radius))
+
+            def f(s, sign=sign):
+                return sign * np.hypot(*motion.omega_space(np.array([s]))[0, :2])
+
+            found = minimize_scalar(f, bounds=(t[k] - step, t[k] + step), method="bounded",
+                                    options={"xatol": 1e-13})
+            assert sign * found.fun == pytest.approx(target, abs=1e-11)
+
+
+def test_theta_text_switches_to_dtheta_near_the_separatrix():
+    theta_c = orbits.critical_angle(FIG6)
+    assert plotting.theta_text(theta_c - 8.371e-7, -8.371e-7) == (
+        r"$\theta-\theta_c$ = -8.371e-07")
+    assert plotting.theta_text(0.95625, 0.95625 - theta_c) == r"$\theta$ = 0.95625"
+
+
+def test_closed_herpolhode_marks():
+    """Start, arrow along the motion, L axis at the origin, dashed r_min/r_max circles;
+    odd n drawn over T/2 (closes_after), in which the curve already closes."""
+    from orbits.figures import draw_closed_herpolhode
+    table = orbits.closed_orbits(FIG6, n_max=4)
+    for row in table.itertuples():
+        ax = new_figure().add_subplot()
+        marks = draw_closed_herpolhode(ax, FIG6, row, limit=0.6)
+        xy = marks["curve"].get_xydata()
+        assert marks["periods"] == (0.5 if row.n % 2 else 1.0)
+        assert np.abs(xy[-1] - xy[0]).max() <= 1e-9
+        np.testing.assert_array_equal(marks["start"].get_xydata()[0], xy[0])
+        assert tuple(marks["centre"].get_xydata()[0]) == (0.0, 0.0)
+        radii = sorted(c.get_radius() for c in marks["circles"])
+        assert radii == list(plotting.herpolhode_radii(FIG6, dtheta=row.dtheta))
+        assert all(c.get_linestyle() not in ("-", "solid") for c in marks["circles"])
+        # the arrow runs from the start to a later point of the curve
+        tail, head = np.array(marks["arrow"].xyann), np.array(marks["arrow"].xy)
+        np.testing.assert_array_equal(tail, xy[0])
+        later = np.flatnonzero((xy == head).all(axis=1))
+        assert later.size and 0 < later[0] < len(xy) // 4
+        assert ax.get_xlim() == (-0.6, 0.6) and ax.get_ylim() == (-0.6, 0.6)
