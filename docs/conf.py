@@ -18,6 +18,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 # document the package of this checkout, not an installed copy
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(HERE / "_ext"))
 # the gallery scripts run in this process: no windows, deterministic output
 os.environ.setdefault("MPLBACKEND", "Agg")
 
@@ -95,6 +96,8 @@ sphinx_gallery_conf = {
     "doc_module": ("orbits",),
     "backreferences_dir": None,
     "min_reported_time": 1,
+    # after sphinx-gallery's own reset of matplotlib (docs/_ext)
+    "reset_modules": ("matplotlib", "gallery_setup.reset_matplotlib"),
 }
 
 # -- HTML --------------------------------------------------------------
@@ -123,8 +126,8 @@ def _check_api_reference(app):
     missing = sorted(n for n in orbits.__all__ if n not in listed and n != "__version__")
     if missing:
         logging.getLogger(__name__).warning(
-            "docs/api.md: names of orbits.__all__ not in the API reference: %s",
-            ", ".join(missing))
+            "docs/api.md: names of orbits.__all__ not in the API reference: %s", ", ".join(missing)
+        )
 
 
 def setup(app):
