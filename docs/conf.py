@@ -98,12 +98,14 @@ sphinx_gallery_conf = {
     "min_reported_time": 1,
     # after sphinx-gallery's own reset of matplotlib (docs/_ext)
     "reset_modules": ("matplotlib", "gallery_setup.reset_matplotlib"),
+    "image_scrapers": ("gallery_setup.orbits_figure_scraper", "matplotlib"),
 }
 
 # -- HTML --------------------------------------------------------------
 html_theme = "pydata_sphinx_theme"
 html_title = f"orbits {release}"
-html_static_path = []
+html_static_path = ["_static"]
+html_css_files = ["orbits.css"]
 html_theme_options = {
     "navigation_with_keys": False,
     "show_toc_level": 2,
@@ -112,7 +114,8 @@ html_theme_options = {
     "footer_end": ["sphinx-version"],
     "secondary_sidebar_items": ["page-toc"],
 }
-html_sidebars = {"index": [], "changelog": []}
+# no section navigation beside the gallery examples: their code needs the width
+html_sidebars = {"index": [], "changelog": [], "auto_examples/plot_*": []}
 html_show_sourcelink = False
 
 

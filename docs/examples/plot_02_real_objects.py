@@ -70,12 +70,11 @@ print(caught[0].message)
 apophis = Body((0.61, 0.965, 1.0), name="Apophis")
 
 bodies = [phone, t_handle, racket, formaldehyde, apophis]
+print(f"{'body':14s} {'I1, I2, I3 (as given)':>30s}   {'|I| = 1':>20s}   theta_c")
 for body in bodies:
-    print(
-        f"{body.name:14s} moments {np.array2string(body.moments, precision=4)}"
-        f"   |I| = 1: {np.array2string(body.normalized_moments, precision=4)}"
-        f"   theta_c = {body.critical_angle():.4f} rad"
-    )
+    given = ", ".join(f"{v:.3g}" for v in body.moments)
+    unit = ", ".join(f"{v:.4f}" for v in body.normalized_moments)
+    print(f"{body.name:14s} {given:>30s}   {unit:>20s}   {body.critical_angle():.4f}")
 
 # %%
 # Where they sit in body space
@@ -83,17 +82,19 @@ for body in bodies:
 # The paper's Fig. 2 map of the physical moments (``|I| = 1``, ``I1 < I2 <
 # I3``), coloured by the smallest total phase any spin of that body can
 # have.  The phone and the formaldehyde molecule are nearly flat
-# (``I3 ≈ I1 + I2``); Apophis is close to the oblate edge (``I2 ≈ I3``).
+# (``I3 ≈ I1 + I2``); Apophis is close to the prolate edge (``I2 ≈ I3``).
 fig, ax = plt.subplots(figsize=(7.0, 5.6), layout="constrained")
 plot_body_space(ax, resolution=120)
 markers = "os^Dv"
-for body, marker in zip(bodies, markers):
+# label offsets (points): three of the bodies are close together
+offsets = [(8, -10), (8, 4), (8, -2), (-30, 10), (-24, -16)]
+for body, marker, offset in zip(bodies, markers, offsets):
     i1, i2, _ = body.normalized_moments
-    ax.plot(i1, i2, marker, color="white", markeredgecolor="black", markersize=8, label=body.name)
+    ax.plot(i1, i2, marker, color="white", markeredgecolor="black", markersize=8)
     ax.annotate(
         body.name,
         (i1, i2),
-        xytext=(6, 4),
+        xytext=offset,
         textcoords="offset points",
         color="white",
         fontsize="small",

@@ -26,8 +26,7 @@ table = orbits.closed_orbits(body, n_max=7)
 # paper's Fig. 6: SAM orbits with ``n`` rising towards θ_c, then LAM orbits
 # with ``n`` falling.  ``orbits figures BODY --n-max N --out DIR`` writes the
 # same sheet and one figure per orbit.
-fig = contact_sheet(body, table)
-fig
+sheet = contact_sheet(body, table)
 
 # %%
 # Odd multiples close after half a period
@@ -51,7 +50,12 @@ for ax, n in zip(axes, (4, 5)):
         label="first half period",
     )
     ax.plot(
-        omega[half:, 0], omega[half:, 1], color="tab:orange", lw=1.0, label="second half period"
+        omega[half:, 0],
+        omega[half:, 1],
+        color="black",
+        lw=0.8,
+        ls="--",
+        label="second half period",
     )
     ax.plot(*omega[0, :2], "o", color="black", label="start")
     ax.plot(*omega[half, :2], "x", color="black", ms=9, label="after T/2")

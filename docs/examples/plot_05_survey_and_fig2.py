@@ -36,25 +36,38 @@ print(bodies[["I1", "I2", "I3", "theta_crit", "min_total_phase", "orbits", "n_sm
 # ------------------
 # The survey's bodies table holds each body's smallest total phase over all
 # spins, ``min_total_phase``; on the grid it is the map of Fig. 2.  The red
-# curves bound the physical region (prolate ``I1 → 0``, oblate ``I2 = I3``,
-# flat ``I3 = I1 + I2``); along the dashed curve the two limits θ → 0 and
-# θ → π/2 of Δα are equal, and the minimum has a kink.  No body reaches
+# curves bound the physical region: prolate ``I2 = I3`` (top), oblate
+# ``I1 = I2`` (right) and flat ``I3 = I1 + I2`` (lower left).  Along the
+# dashed curve the two limits θ → 0 and θ → π/2 of Δα are equal, and the
+# minimum has a kink.  No body reaches
 # below ``2π`` (erratum 7).
-fig = figure2(survey_grid(out))
-fig
+fig2 = figure2(survey_grid(out))
 
 # %%
 # What else the tables say
 # ------------------------
-# A body has an orbit ``Δα = 2πn`` exactly when ``n`` lies above its
-# minimum, so the smallest multiple grows towards the oblate corner, where
-# the minimum total phase is largest.
+# A body has an orbit ``Δα = 2πn`` exactly when ``2πn`` lies above its
+# minimum total phase, so the smallest multiple grows towards the sphere
+# corner ``I1 = I2 = I3`` (right), where the minimum is largest.
+# ``n_smallest`` is −1 for a body with no closed orbit up to ``n_max``.
+none = bodies.n_smallest < 0
 fig, ax = plt.subplots(figsize=(6.4, 4.2), layout="constrained")
-points = ax.scatter(bodies.I1, bodies.I2, c=bodies.n_smallest, s=2, cmap="viridis")
-fig.colorbar(points, ax=ax, label="smallest n with a closed orbit Δα = 2πn")
+ax.scatter(bodies.I1[none], bodies.I2[none], s=2, color="0.75", label="none with n ≤ 6")
+cmap = plt.get_cmap("viridis", 5)
+points = ax.scatter(
+    bodies.I1[~none],
+    bodies.I2[~none],
+    c=bodies.n_smallest[~none],
+    s=2,
+    cmap=cmap,
+    vmin=1.5,
+    vmax=6.5,
+)
+fig.colorbar(points, ax=ax, ticks=range(2, 7), label="smallest n with Δα = 2πn")
 ax.set_xlabel("I1 (|I| = 1)")
 ax.set_ylabel("I2")
 ax.set_aspect("equal")
+ax.legend(loc="lower right", markerscale=4, fontsize="small")
 ax.set_title("Survey: the smallest closed-orbit multiple of each body")
 
 # %%
