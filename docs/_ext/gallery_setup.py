@@ -15,7 +15,7 @@ _SHOWN = weakref.WeakSet()
 
 def reset_matplotlib(gallery_conf, fname):
     """Embedded animations with JPEG frames (a quarter of PNG's size for these
-    3-D scenes): a page with a 40-frame animation stays near 1.5 MB."""
+    3-D scenes): a page with a 40-frame animation stays near 2 MB."""
     import matplotlib
 
     matplotlib.rcParams["animation.frame_format"] = "jpeg"
