@@ -24,6 +24,13 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 
 import orbits  # noqa: E402
 
+# The Markdown pages link the committed figures as `figures/...` (as seen
+# from the repository root); a link docs/figures -> ../figures (made here,
+# not committed) lets Sphinx find them under the same paths.
+_figures = HERE / "figures"
+if not _figures.exists() and not _figures.is_symlink():
+    _figures.symlink_to(Path("..") / "figures", target_is_directory=True)
+
 project = "orbits"
 author = "orbits developers"
 copyright = "2026, orbits developers"
