@@ -89,18 +89,18 @@ ax.legend()
 # Fractions ``p/q``
 # -----------------
 # With ``--q-max`` the catalog also holds orbits that close after several
-# periods.  Each ``q`` adds levels between the integers; here the orbits of
-# one branch, placed on the curve ``Δα(θ)``.
+# periods.  Each ``q`` adds levels between the integers.  On a log scale of
+# ``|θ − θ_c|`` the SAM branch's ``Δα`` is nearly a straight line, and the
+# orbits sit on it wherever it crosses a level ``p/q``.
 fig, ax = plt.subplots(figsize=(6.4, 4.2), layout="constrained")
-theta = np.linspace(0.05, body.critical_angle() - 1e-4, 800)
-ax.plot(theta, orbits.total_phase(body, theta) / (2 * np.pi), color="0.5", lw=1)
+offsets = -np.logspace(-11, np.log10(body.critical_angle() - 0.3), 400)
+ax.semilogx(-offsets, orbits.total_phase(body, dtheta=offsets) / (2 * np.pi), color="0.5")
 sam = catalog[catalog.branch == "SAM"]
 for q, marker in ((1, "o"), (2, "^"), (3, "s")):
     rows = sam[sam.q == q]
-    ax.plot(rows.theta, rows.total_phase / (2 * np.pi), marker, ms=5, label=f"q = {q}")
-ax.set_xlim(0.8, body.critical_angle())
-ax.set_ylim(0.5, 8.5)
-ax.set_xlabel("θ (rad)")
+    ax.plot(-rows.dtheta, rows.total_phase / (2 * np.pi), marker, ms=5, label=f"q = {q}")
+ax.invert_xaxis()
+ax.set_xlabel("θ_c − θ (rad), SAM branch")
 ax.set_ylabel("Δα / 2π")
 ax.set_title("SAM orbits with Δα = 2πp/q, q ≤ 3")
 ax.legend()
