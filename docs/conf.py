@@ -126,6 +126,26 @@ html_sidebars = {"index": [], "changelog": [], "auto_examples/plot_*": []}
 html_show_sourcelink = False
 
 
+# -- docstrings: |x| is an absolute value, not a reST substitution -------
+# Outside inline literals and roles, a bare "|" is escaped, so that the
+# plain-text formulas of the docstrings ("|omega0| = 1") render as written.
+_LITERAL = re.compile(r"``.+?``|:\w+:`[^`]*`|`[^`]*`")
+
+
+def _escape_bars(text):
+    parts, last = [], 0
+    for match in _LITERAL.finditer(text):
+        parts.append(re.sub(r"(?<!\\)\|", r"\|", text[last : match.start()]))
+        parts.append(match.group(0))
+        last = match.end()
+    parts.append(re.sub(r"(?<!\\)\|", r"\|", text[last:]))
+    return "".join(parts)
+
+
+def _absolute_values(app, what, name, obj, options, lines):
+    lines[:] = [_escape_bars(line) for line in lines]
+
+
 # -- completeness of the API reference ---------------------------------
 def _check_api_reference(app):
     """Warn (an error under -W) for a name of orbits.__all__ missing from api.md."""
@@ -142,3 +162,4 @@ def _check_api_reference(app):
 
 def setup(app):
     app.connect("builder-inited", _check_api_reference)
+    app.connect("autodoc-process-docstring", _absolute_values)

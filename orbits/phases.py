@@ -143,7 +143,7 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0):
     dtheta : float or array_like, optional
         Offset ``theta - theta_c`` from the critical angle instead of
         ``theta``.  Near the separatrix the phase is ill-conditioned in
-        ``theta`` (relative error ``~ eps / |theta - theta_c|``) but not in
+        ``theta`` (relative error ~ eps / |theta - theta_c|) but not in
         ``dtheta``: with ``dtheta`` the result keeps ~1e-15 relative
         accuracy down to ``|dtheta| = 1e-300``.
     phi : float or array_like
@@ -204,11 +204,11 @@ def phases(body_or_moments, theta=None, phi=0.0, *, dtheta=None):
         ``energy``
             E = omega0 . I . omega0 / 2 (eqn:E);
         ``momentum``
-            ``M = |I . omega0|`` (eqn:J);
+            M = |I . omega0| (eqn:J);
         ``m``
             elliptic parameter k^2 of eqn:TK (indices 1<->3 on LAM);
         ``period``
-            T of eqn:TK, in units of ``1/|omega0|``;
+            T of eqn:TK, in units of 1/|omega0|;
         ``dynamic_phase``
             2ET/M;
         ``total_phase``
