@@ -16,6 +16,7 @@ import numpy as np
 import orbits
 from orbits.figures import contact_sheet
 
+# sphinx_gallery_thumbnail_number = 2
 body = orbits.Body.preset("fig6")
 table = orbits.closed_orbits(body, n_max=7)
 
