@@ -485,11 +485,31 @@ def test_fold_angle_keeps_the_domain_bit_for_bit():
     inside = np.array([0.0, 1e-300, 0.3, 1.0, math.pi / 4, math.pi / 2])
     assert np.array_equal(fold_angle(inside), inside)
     assert np.array_equal(fold_angle(-inside), inside)
-    # any magnitude lands in the domain
-    huge = fold_angle([1e20, -3e15, 7.5e300, 1e6 + 0.25])
-    assert np.all((huge >= 0) & (huge <= math.pi / 2))
+    # up to the limit every angle lands in the domain, within 8e-11 rad
+    large = fold_angle([2.0**21, -3e5, 1e6 + 0.25])
+    assert np.all((large >= 0) & (large <= math.pi / 2))
+    # beyond it a double has (almost) no fraction of a radian: refused
+    for huge in (2.0**21 * (1 + 2**-52), 1e20, -3e15, 7.5e300):
+        with pytest.raises(orbits.AngleError, match="too large to fold"):
+            fold_angle(huge)
     assert fold_angle(1e6 + 0.25) == pytest.approx(
         float(abs(mp.mpf(1e6 + 0.25) - mp.pi * mp.nint((1e6 + 0.25) / mp.pi))), abs=1e-9)
+
+
+def test_fold_angle_is_correctly_rounded():
+    """Against mpmath (60 digits): |x - k pi| with the nearest k, relative 2.3e-16
+    (the result's rounding; a fold by the double pi would err by k ulp(pi))."""
+    from orbits.phases import fold_angle
+    rng = np.random.default_rng(5)
+    given = np.concatenate([rng.uniform(-20, 20, 400), rng.uniform(-2**21, 2**21, 400),
+                            [math.pi, -2 * math.pi, 3 * math.pi / 2, 6 * math.pi - 1e-4,
+                             np.nextafter(math.pi / 2, 4.0)]])
+    got = fold_angle(given)
+    with mp.workdps(60):
+        for x, y in zip(given, got):
+            exact = abs(mp.mpf(x) - mp.pi * mp.nint(mp.mpf(x) / mp.pi))
+            assert abs(mp.mpf(y) - exact) <= 2.3e-16 * exact, x
+    assert np.all((got >= 0) & (got <= math.pi / 2))
 
 
 @pytest.mark.parametrize("given, folded", FOLDS)
