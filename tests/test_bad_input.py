@@ -89,6 +89,10 @@ def _damage(directory, damage):
         document = json.loads(manifest.read_text())
         del document["orbits_survey"]
         manifest.write_text(json.dumps(document))
+    elif damage == "ledger-outside":
+        document = json.loads(manifest.read_text())
+        document["parts"]["0"]["bodies"]["file"] = "../../../etc/hostname"
+        manifest.write_text(json.dumps(document))
     elif damage == "ledger-damaged":
         document = json.loads(manifest.read_text())
         document["parts"] = {"first": 1}
@@ -602,7 +606,8 @@ API_CASES = [
                                            _read_bodies)),
     *[(f"read_survey-{damage}", on_survey("grid", damage, orbits.survey.read_survey))
       for damage in ("no-manifest", "manifest-not-json", "manifest-incomplete",
-                     "ledger-damaged", "part-missing", "part-truncated", "part-empty",
+                     "ledger-damaged", "ledger-outside", "part-missing", "part-truncated",
+                     "part-empty",
                      "part-changed", "stray-bak-and-truncated")],
     ("survey_grid-list", on_survey("list", None, orbits.survey.survey_grid)),
     ("check_survey-ledger", on_survey("grid", "ledger-damaged", orbits.survey.check_survey)),
