@@ -483,47 +483,72 @@ def _have_pyarrow():
 def _arrow_cells(rest, raw_header):
     """Parse with pyarrow's CSV reader (every cell as text), or None to fall back.
 
-    Ten times faster than the csv module on large files.  A row with the
-    wrong number of fields (or any other parse error) returns None: the
-    csv-module path then names each such row.  Numbers are converted by
-    Arrow's correctly rounded parser, which like :data:`NUMBER` refuses
-    ``True``, ``1_000``, ``0x10`` and empty cells; ``nan`` and ``inf`` are
-    refused below.
+    Several times faster than the csv module on large files.  Rows with the
+    wrong number of fields are collected by Arrow's invalid-row handler (its
+    row numbers count records, like ours: blank lines are not rows).
+    Numbers are converted by Arrow's correctly rounded parser, which like
+    :data:`NUMBER` refuses ``True``, ``1_000``, ``0x10`` and empty cells;
+    ``nan`` and ``inf`` are refused below.  Anything unusual (a stray quote,
+    a parse error) returns None: the csv-module path then handles the file.
     """
     import pyarrow as pa
     from pyarrow import csv as pacsv
     if any("\n" in cell or "\r" in cell for cell in raw_header):
         return None
     names = [f"c{k}" for k in range(len(raw_header))]
-    data = rest.encode("utf-8", "surrogatepass")
+    data = rest.encode("utf-8")
     if _stray_quote(data):
         return None
+    ragged = []                      # (0-based data row, its number of fields)
+
+    def collect(row):
+        ragged.append((row.number, row.actual_columns))
+        return "skip"
     try:
         table = pacsv.read_csv(
             io.BytesIO(data),
-            read_options=pacsv.ReadOptions(column_names=names, skip_rows=1),
+            # one thread: the handler then gets row numbers (and it is as fast)
+            read_options=pacsv.ReadOptions(column_names=names, skip_rows=1,
+                                           use_threads=False),
             parse_options=pacsv.ParseOptions(newlines_in_values=True,
-                                              ignore_empty_lines=True),
+                                              ignore_empty_lines=True,
+                                              invalid_row_handler=collect),
             convert_options=pacsv.ConvertOptions(
                 column_types={name: pa.string() for name in names},
                 strings_can_be_null=False, quoted_strings_can_be_null=False))
-    except (pa.ArrowInvalid, pa.ArrowNotImplementedError, UnicodeEncodeError):
+    except (pa.ArrowInvalid, pa.ArrowNotImplementedError):
+        return None
+    if any(number is None for number, _ in ragged):
         return None
     header = [cell.strip() for cell in raw_header]
-    count = table.num_rows
+    count = table.num_rows + len(ragged)
     problems = {}
+    whole = np.ones(count, dtype=bool)
+    for number, fields in ragged:
+        # Arrow numbers records from 1 with the header as record 1
+        problems[number - 2] = (f"{fields} fields, the header has {len(header)} "
+                                "(no implicit index column)")
+        whole[number - 2] = False
+    place = np.flatnonzero(whole)    # full row index of each row of the table
     columns = []
     for column in ("I1", "I2", "I3"):
-        values = _arrow_numbers(column, table.column(names[header.index(column)]),
-                                problems)
+        found = {}
+        values = _arrow_numbers(column, table.column(names[header.index(column)]), found)
         if values is None:
             return None
-        columns.append(values)
+        full = np.full(count, np.nan)
+        full[place] = values
+        for k, reason in found.items():
+            problems.setdefault(int(place[k]), reason)
+        columns.append(full)
     moments = (np.column_stack(columns) if count else np.empty((0, 3)))
     names_list = None
     if "name" in header:
-        names_list = table.column(names[header.index("name")]).to_pylist()
-    return _Cells(count, moments, problems, np.ones(count, dtype=bool), names_list)
+        names_list = [""] * count
+        for k, name in zip(place.tolist(),
+                           table.column(names[header.index("name")]).to_pylist()):
+            names_list[k] = name
+    return _Cells(count, moments, problems, whole, names_list)
 
 
 def _stray_quote(data):

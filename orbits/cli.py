@@ -482,6 +482,8 @@ def _add_catalog(subparsers):
 def _output_directory(path):
     from pathlib import Path
     directory = Path(path)
+    if directory.exists() and not directory.is_dir():
+        raise InputError(f"output path {directory} exists and is not a directory")
     try:
         directory.mkdir(parents=True, exist_ok=True)
     except OSError as error:

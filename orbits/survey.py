@@ -306,10 +306,14 @@ class Survey:
 
     # ------------------------------------------------------------ directory
     def _refuse_foreign_directory(self):
+        import re
         if self.out_dir.exists() and not self.out_dir.is_dir():
             raise InputError(f"{self.out_dir} exists and is not a directory")
-        if (self.out_dir.is_dir() and not (self.out_dir / MANIFEST).exists()
-                and any(p.name != LOCK for p in self.out_dir.iterdir())):
+        if not self.out_dir.is_dir() or (self.out_dir / MANIFEST).exists():
+            return
+        # a survey being created (by another run, or one killed) has only these
+        ours = re.compile(rf"{re.escape(LOCK)}|bodies|orbits|\.manifest\.json\..*\.part")
+        if any(not ours.fullmatch(p.name) for p in self.out_dir.iterdir()):
             raise InputError(f"{self.out_dir} exists and is not a survey directory")
 
     def prepare(self):
@@ -619,9 +623,13 @@ def _sha256(path):
 
 def _check_part(out_dir, entry):
     """The first problem of a ledger entry's files, or '' if they match."""
+    import re
     try:
         for table in TABLES:
             item = entry[table]
+            # only our own part names: a ledger never points outside DIR/TABLE/
+            if not re.fullmatch(rf"{table}/part-\d{{5,}}\.(?:csv|parquet)", item["file"]):
+                return f"malformed ledger entry (file {item['file']!r})"
             path = Path(out_dir) / item["file"]
             if not path.is_file():
                 return f"{item['file']} is missing"

@@ -89,6 +89,10 @@ def _damage(directory, damage):
         document = json.loads(manifest.read_text())
         del document["orbits_survey"]
         manifest.write_text(json.dumps(document))
+    elif damage == "ledger-outside":
+        document = json.loads(manifest.read_text())
+        document["parts"]["0"]["bodies"]["file"] = "../../../etc/hostname"
+        manifest.write_text(json.dumps(document))
     elif damage == "ledger-damaged":
         document = json.loads(manifest.read_text())
         document["parts"] = {"first": 1}
@@ -323,8 +327,10 @@ CLI_CASES = [
     ("figures-body-no-n-max", [F, "--out", "{d}/o"] + FIG6, {}, "--n-max"),
     ("figures-huge-n-max", [F, "--out", "{d}/o", "--n-max", "99999999999999999999"] + FIG6,
      {}, "memory"),
-    ("figures-out-is-file", [F, "--paper", "--out", "{d}/f"], {"f": "x"}, "directory"),
-    ("figures-out-dev-null", [F, "--paper", "--out", "/dev/null"], {}, ""),
+    ("figures-out-is-file", [F, "--paper", "--out", "{d}/f"], {"f": "x"},
+     "exists and is not a directory"),
+    ("figures-out-dev-null", [F, "--paper", "--out", "/dev/null"], {},
+     "exists and is not a directory"),
     ("figures-out-proc", [F, "--paper", "--out", "/proc/orbits-figures"], {}, ""),
     ("figures-format", [F, "--paper", "--out", "{d}/o", "--formats", "gif"], {},
      "invalid choice"),
@@ -599,7 +605,8 @@ API_CASES = [
                                            _read_bodies)),
     *[(f"read_survey-{damage}", on_survey("grid", damage, orbits.survey.read_survey))
       for damage in ("no-manifest", "manifest-not-json", "manifest-incomplete",
-                     "ledger-damaged", "part-missing", "part-truncated", "part-empty",
+                     "ledger-damaged", "ledger-outside", "part-missing", "part-truncated",
+                     "part-empty",
                      "part-changed", "stray-bak-and-truncated")],
     ("survey_grid-list", on_survey("list", None, orbits.survey.survey_grid)),
     ("check_survey-ledger", on_survey("grid", "ledger-damaged", orbits.survey.check_survey)),

@@ -18,8 +18,14 @@ pytest.importorskip("pyarrow")
 @pytest.fixture(params=["arrow", "csv-module"])
 def parser(request, monkeypatch):
     """Run each test with the pyarrow fast path and with the csv-module path."""
+    module = sys.modules["orbits.catalog"]
     if request.param == "csv-module":
-        monkeypatch.setattr(sys.modules["orbits.catalog"], "_have_pyarrow", lambda: False)
+        monkeypatch.setattr(module, "_have_pyarrow", lambda: False)
+    else:
+        # these files need no fallback: the pyarrow path alone must read them
+        def no_fallback(*args):
+            raise AssertionError("fell back to the csv module")
+        monkeypatch.setattr(module, "_python_cells", no_fallback)
     return request.param
 
 
@@ -42,6 +48,15 @@ def test_quoted_comma_and_newline_in_a_name(tmp_path, parser):
     table = read_bodies_csv(path)
     assert table.names == ["a, b", "two\nlines"]
     assert table.rows.tolist() == [1, 2]
+
+
+def test_row_numbers_after_quoted_newlines_and_blank_lines(tmp_path, parser):
+    path = write(tmp_path, 'name,I1,I2,I3\n"two\nlines",1,2,2.5\n\n"x",1,2\n'
+                           '"y",1,1,2\n"z",0.3,0.5,0.7\n')
+    table = read_bodies_csv(path, skip_invalid=True)
+    assert table.names == ["two\nlines", "z"] and table.rows.tolist() == [1, 4]
+    assert [message.split(": ", 1)[0] for _, message in table.skipped] == [
+        f"{path}, row 2", f"{path}, row 3 ('y')"]
 
 
 def test_no_implicit_index_column(tmp_path, parser):

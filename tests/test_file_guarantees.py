@@ -127,6 +127,21 @@ def test_a_second_run_is_refused_while_the_lock_is_held(reference, tmp_path, cap
     assert files(target) == before
 
 
+def test_a_directory_being_created_is_not_foreign(tmp_path, capsys):
+    """Another run (or a killed one) has made DIR/.lock, bodies/, orbits/ but no manifest."""
+    out = tmp_path / "s"
+    for name in ("bodies", "orbits"):
+        (out / name).mkdir(parents=True)
+    with open(out / ".lock", "a+") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        capsys.readouterr()
+        assert main(GRID + ["--out", str(out)]) == 2
+        assert "being written by another orbits run" in capsys.readouterr().err
+    # the creator died: the next run takes over
+    assert main(GRID + ["--out", str(out)]) == 0
+    assert check_survey(out)["complete"]
+
+
 def test_concurrent_runs_never_break_each_other(tmp_path):
     """Four identical runs at once: each finishes or is refused by the lock."""
     out = tmp_path / "s"
