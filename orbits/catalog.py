@@ -676,7 +676,7 @@ def _validated(path, header, cells, skip_invalid):
 
 def _invalid_moments(moments):
     """Indices of rows that :func:`orbits.bodies.validate_moments` rejects."""
-    from .bodies import _FLAT_SLACK, validate_moments
+    from .bodies import _FLAT_SLACK, flat_excess, validate_moments
     if moments.shape[0] == 0:
         return []
     ordered = np.sort(moments, axis=1)
@@ -687,11 +687,13 @@ def _invalid_moments(moments):
         pass
     # at least one bad row: find every one (vectorised checks first, then
     # the validator row by row on what they did not explain)
-    with np.errstate(invalid="ignore", over="ignore"):
+    with np.errstate(invalid="ignore", over="ignore", under="ignore"):
+        # the triangle test as the validator makes it: exact, at unit scale
+        scale = np.frexp(np.where(np.isfinite(ordered[:, 2]), ordered[:, 2], 1.0))[1]
+        unit = np.ldexp(ordered, -scale[:, None])
         flags = (~np.all(np.isfinite(ordered), axis=1) | (ordered[:, 0] <= 0)
                  | (ordered[:, 0] == ordered[:, 1]) | (ordered[:, 1] == ordered[:, 2])
-                 | (ordered[:, 2] - (ordered[:, 0] + ordered[:, 1])
-                    > _FLAT_SLACK * ordered[:, 2]))
+                 | (flat_excess(unit) > _FLAT_SLACK * unit[:, 2]))
     bad = set(np.flatnonzero(flags).tolist())
     rest = np.flatnonzero(~flags)
     try:

@@ -27,13 +27,12 @@ import numpy as np
 import pandas as pd
 from scipy.integrate import solve_ivp
 
-from .bodies import region_sample
+from ._args import broadcast, real_array, real_scalar
+from .bodies import region_sample, unit_moments
 from .core import checks as _checks
 from .core import quadrature as _quadrature
 from .core.exact import separatrix_gap_exact
 from .core.ode import STATE_SIZE, euler_rhs
-from ._args import broadcast, real_array, real_scalar
-from .bodies import unit_moments
 from .errors import AngleError, InputError
 from .motion import Motion, _as_body
 

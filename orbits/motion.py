@@ -18,9 +18,8 @@ Units: the body's moments as given and omega as given (rad per unit time);
 ``|omega0| = 1``.
 """
 
-from collections import namedtuple
-
 import math
+from collections import namedtuple
 
 import numpy as np
 

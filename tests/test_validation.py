@@ -211,3 +211,15 @@ def test_survey_with_an_unusable_body_is_refused_up_front(tmp_path):
     first, second = bodies.iloc[0], bodies.iloc[1]
     for column in ("I1", "I2", "I3", "min_total_phase", "theta_crit"):
         assert first[column] == second[column]
+
+
+def test_bodies_file_flags_exactly_the_unusable_rows(tmp_path):
+    from orbits.catalog import read_bodies_csv
+    path = tmp_path / "bodies.csv"
+    path.write_text("I1,I2,I3\n0.26,0.55,0.793662\n0.26e150,0.55e150,0.793662e150\n"
+                    "1,4,8\n0.3,0.6,0.9\n1e-300,0.9999999999999999,1\n")
+    with pytest.raises(InputError, match="row 3"):
+        read_bodies_csv(path)
+    table = read_bodies_csv(path, skip_invalid=True)
+    assert [row for row, _ in table.skipped] == [3]
+    assert len(table.bodies()) == 4
