@@ -9,10 +9,10 @@ import pandas as pd
 import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
+from mp_formulas import period_and_total_phase
 
 import orbits
-from orbits import (AngleError, Body, NonPhysicalBodyError, SeparatrixError,
-                    SymmetricTopError)
+from orbits import AngleError, Body, NonPhysicalBodyError, SeparatrixError, SymmetricTopError
 
 EPS = np.finfo(float).eps
 REFERENCE = Path(__file__).parent / "reference" / "phase_reference.csv"
@@ -253,18 +253,7 @@ def mp_total_phase_from_dtheta(moments, dtheta, dps):
         w1, w3 = mp.sin(theta), mp.cos(theta)
         two_e = i1 * w1**2 + i3 * w3**2
         m_sq = i1**2 * w1**2 + i3**2 * w3**2
-        mom = mp.sqrt(m_sq)
-        if m_sq > two_e * i2:
-            k2 = (i2 - i1) * (two_e * i3 - m_sq) / ((i3 - i2) * (m_sq - two_e * i1))
-            rate = mp.sqrt((i3 - i2) * (m_sq - two_e * i1) / (i1 * i2 * i3))
-            n, shift = -i3 * (i2 - i1) / (i1 * (i3 - i2)), 2 * mp.pi
-        else:
-            k2 = (i3 - i2) * (m_sq - two_e * i1) / ((i2 - i1) * (two_e * i3 - m_sq))
-            rate = mp.sqrt((i2 - i1) * (two_e * i3 - m_sq) / (i1 * i2 * i3))
-            n, shift = -i3 * (m_sq - two_e * i1) / (i1 * (two_e * i3 - m_sq)), 0
-        period = 4 * mp.ellipk(k2) / rate
-        return float(mom * period / i3 + 4 * mom * (i3 - i1) * mp.ellippi(n, k2)
-                     / (i1 * i3 * rate) - shift)
+        return float(period_and_total_phase(i1, i2, i3, two_e, m_sq)[1])
 
 
 @pytest.mark.parametrize("body", [T_HANDLE, FIG6], ids=["t-handle", "fig6"])

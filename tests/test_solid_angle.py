@@ -24,6 +24,7 @@ import pandas as pd
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from mp_formulas import elliptic_parameters, period_and_total_phase
 
 import orbits
 from orbits import Body
@@ -58,19 +59,9 @@ def _mp_montgomery(moments, w):
     """``2ET/M - Delta alpha`` from eqn:TK and eqn:GeometricPhase literally."""
     i1, i2, i3, two_e, m_sq = _mp_invariants(moments, w)
     mom = mp.sqrt(m_sq)
-    if m_sq > two_e * i2:
-        k2 = (i2 - i1) * (two_e * i3 - m_sq) / ((i3 - i2) * (m_sq - two_e * i1))
-        rate = mp.sqrt((i3 - i2) * (m_sq - two_e * i1) / (i1 * i2 * i3))
-        n, shift = -i3 * (i2 - i1) / (i1 * (i3 - i2)), 2 * mp.pi
-    else:
-        k2 = (i3 - i2) * (m_sq - two_e * i1) / ((i2 - i1) * (two_e * i3 - m_sq))
-        rate = mp.sqrt((i2 - i1) * (two_e * i3 - m_sq) / (i1 * i2 * i3))
-        n, shift = -i3 * (m_sq - two_e * i1) / (i1 * (two_e * i3 - m_sq)), 0
-    if k2 == 0:                      # on an axis: the polhode is a point
+    if elliptic_parameters(i1, i2, i3, two_e, m_sq)[0] == 0:   # on an axis: a point
         return mp.mpf(0)
-    period = 4 * mp.ellipk(k2) / rate
-    total = (mom * period / i3 + 4 * mom * (i3 - i1) * mp.ellippi(n, k2)
-             / (i1 * i3 * rate) - shift)
+    period, total = period_and_total_phase(i1, i2, i3, two_e, m_sq)
     return two_e * period / mom - total
 
 
