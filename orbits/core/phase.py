@@ -505,6 +505,20 @@ def total_phase_many(i1, i2, i3, phi, angles, from_offset, out, status):
 
 
 @njit(cache=True, nogil=True, parallel=True)
+def total_phase_one_body_scalar(i1, i2, i3, phi, angles, from_offset, out, status):
+    """The scalar path of :func:`total_phase_one_body` (one looping ``cel`` per
+    point, per-body constants once): the reference and the benchmark's
+    baseline for the SIMD path."""
+    constants = body_constants(i1, i2, i3, phi)
+    for k in prange(angles.shape[0]):
+        code, _, _, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
+            constants, angles[k], from_offset)
+        status[k] = code
+        out[k] = (total_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing)
+                  if code == STATUS_OK else np.inf)
+
+
+@njit(cache=True, nogil=True, parallel=True)
 def total_phase_many_scalar(i1, i2, i3, phi, angles, from_offset, out, status):
     """The scalar path of :func:`total_phase_many` (one ``cel`` loop per point).
 
