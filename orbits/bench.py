@@ -62,12 +62,11 @@ def scipy_total_phase(moments, theta):
 
 def _scalar_total_phase(moments, theta):
     """The scalar kernel path (one looping ``cel`` per angle), for comparison."""
-    from .core.phase import total_phase_many_scalar
-    n = theta.size
-    out = np.empty(n)
-    status = np.empty(n, dtype=np.int8)
-    i1, i2, i3 = (np.full(n, float(v)) for v in moments)
-    total_phase_many_scalar(i1, i2, i3, np.zeros(n), theta, False, out, status)
+    from .core.phase import total_phase_one_body_scalar
+    out = np.empty(theta.size)
+    status = np.empty(theta.size, dtype=np.int8)
+    total_phase_one_body_scalar(*(float(v) for v in moments), 0.0, theta, False, out,
+                                status)
     return out
 
 

@@ -107,6 +107,10 @@ def test_simd_path_matches_scalar_path(from_offset):
     kw1 = {"dtheta": angle} if from_offset else {"theta": angle}
     got1 = orbits.total_phase(one, phi=phi[0], **kw1)
     want1, _ = _scalar(np.tile(one, (n, 1)), angle, np.full(n, phi[0]), from_offset)
+    again = np.empty(n)
+    kernels.total_phase_one_body_scalar(*one, phi[0], angle, from_offset, again,
+                                        np.empty(n, np.int8))
+    assert np.array_equal(again, want1)
     assert np.max(np.abs(got1 / want1 - 1)) <= 1e-14
 
 

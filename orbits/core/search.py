@@ -7,7 +7,16 @@ distance ``d = |dtheta|`` from the critical angle: ``dtheta = -d`` on SAM
 ``Delta alpha = L`` accumulate geometrically at the separatrix; in ``log d``
 they are evenly spaced.
 
-Method, per branch:
+Default method (:func:`search_body`, per branch, :func:`newton_branch`):
+``Delta alpha(d) = a ln(1/d) + b + O(d ln d)`` with ``a, b`` in closed form
+(:func:`separatrix_expansion`) places every root; safeguarded Newton steps
+in ``ln d`` with the analytic slope (:func:`phase_slope_of_offset`) finish
+it, about 3 phase evaluations per root.  It assumes ``Delta alpha``
+decreasing in ``d`` and checks the sign of every slope it computes; where
+that fails it hands the branch to the bracketing method below.
+
+Bracketing method (:func:`search_body_bracketing`, the reference), per
+branch:
 
 1. Scan ``Delta alpha`` on a merged grid: log-spaced in ``d`` from the
    smallest normal double (2.2e-308) up to the branch width, uniform in
