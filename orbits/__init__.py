@@ -14,24 +14,51 @@ import sys
 import types
 
 from ._version import __version__
-from .errors import (AngleError, ArgumentTypeError, InputError, NonPhysicalBodyError,
-                     OrbitsError, SeparatrixError, SymmetricTopError)
+from .errors import (
+    AngleError,
+    ArgumentTypeError,
+    InputError,
+    NonPhysicalBodyError,
+    OrbitsError,
+    SeparatrixError,
+    SymmetricTopError,
+)
 
 # public name -> submodule that defines it
 _LAZY = {
-    "PRESETS": "bodies", "Body": "bodies", "region_grid": "bodies",
-    "region_sample": "bodies", "InertialDefectWarning": "bodies",
-    "closure_errors": "checks", "montgomery": "checks", "motion_phase": "checks",
-    "rotation_by_integration": "checks", "verify": "checks",
-    "Motion": "motion", "MotionState": "motion", "TumblingPeriods": "motion",
-    "herpolhode": "motion", "polhode": "motion",
-    "CATALOG_COLUMNS": "search", "UnresolvedOrbitsWarning": "search",
-    "closed_orbits": "search", "minimum_phase": "search", "phase_levels": "search",
-    "catalog": "catalog", "read_catalog": "catalog", "write_catalog": "catalog",
-    "PhaseLimits": "phases", "critical_angle": "phases", "phase_limits": "phases",
-    "phases": "phases", "spin_phases": "phases", "total_phase": "phases",
-    "spins_with_period_ratio": "tumbling", "spins_with_total_phase": "tumbling",
-    "set_num_threads": "threads", "get_num_threads": "threads",
+    "PRESETS": "bodies",
+    "Body": "bodies",
+    "region_grid": "bodies",
+    "region_sample": "bodies",
+    "InertialDefectWarning": "bodies",
+    "closure_errors": "checks",
+    "montgomery": "checks",
+    "motion_phase": "checks",
+    "rotation_by_integration": "checks",
+    "verify": "checks",
+    "Motion": "motion",
+    "MotionState": "motion",
+    "TumblingPeriods": "motion",
+    "herpolhode": "motion",
+    "polhode": "motion",
+    "CATALOG_COLUMNS": "search",
+    "UnresolvedOrbitsWarning": "search",
+    "closed_orbits": "search",
+    "minimum_phase": "search",
+    "phase_levels": "search",
+    "catalog": "catalog",
+    "read_catalog": "catalog",
+    "write_catalog": "catalog",
+    "PhaseLimits": "phases",
+    "critical_angle": "phases",
+    "phase_limits": "phases",
+    "phases": "phases",
+    "spin_phases": "phases",
+    "total_phase": "phases",
+    "spins_with_period_ratio": "tumbling",
+    "spins_with_total_phase": "tumbling",
+    "set_num_threads": "threads",
+    "get_num_threads": "threads",
 }
 
 
@@ -58,7 +85,7 @@ def __getattr__(name):
     if module is None:
         raise AttributeError(f"module 'orbits' has no attribute {name!r}")
     value = getattr(importlib.import_module(f".{module}", __name__), name)
-    globals()[name] = value          # later look-ups skip this function
+    globals()[name] = value  # later look-ups skip this function
     return value
 
 

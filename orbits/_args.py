@@ -15,7 +15,7 @@ from .errors import ArgumentTypeError, InputError
 
 
 def _describe(value):
-    text = " ".join(repr(value).split())      # one line, for the CLI's messages
+    text = " ".join(repr(value).split())  # one line, for the CLI's messages
     if len(text) > 60:
         text = text[:57] + "..."
     return f"{text} ({type(value).__name__})"
@@ -34,15 +34,20 @@ def real_array(name, value, error=InputError):
     try:
         array = np.asarray(value)
     except (ValueError, TypeError):
-        raise error(f"{name} must be a rectangular array of real numbers, got "
-                    f"{_describe(value)}") from None
+        raise error(
+            f"{name} must be a rectangular array of real numbers, got {_describe(value)}"
+        ) from None
     kind = array.dtype.kind
     if kind == "O":
         flat = array.ravel()
-        if not all(isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_))
-                   for v in flat):
-            bad = next(v for v in flat if not isinstance(v, numbers.Real)
-                       or isinstance(v, (bool, np.bool_)))
+        if not all(
+            isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_)) for v in flat
+        ):
+            bad = next(
+                v
+                for v in flat
+                if not isinstance(v, numbers.Real) or isinstance(v, (bool, np.bool_))
+            )
             raise ArgumentTypeError(f"{name} must be real numbers, got {_describe(bad)}")
         try:
             with np.errstate(over="ignore"):
@@ -50,10 +55,16 @@ def real_array(name, value, error=InputError):
         except (OverflowError, ValueError, TypeError):
             raise error(f"{name} holds a number that is not a double") from None
     if kind not in "iuf":
-        what = {"b": "booleans", "c": "complex numbers", "U": "text", "S": "bytes",
-                "M": "dates", "m": "time spans", "V": "records"}.get(kind, kind)
-        raise ArgumentTypeError(f"{name} must be real numbers, got {what}: "
-                                f"{_describe(value)}")
+        what = {
+            "b": "booleans",
+            "c": "complex numbers",
+            "U": "text",
+            "S": "bytes",
+            "M": "dates",
+            "m": "time spans",
+            "V": "records",
+        }.get(kind, kind)
+        raise ArgumentTypeError(f"{name} must be real numbers, got {what}: {_describe(value)}")
     with np.errstate(over="ignore"):
         return array.astype(float, copy=False)
 
@@ -75,15 +86,13 @@ def integer(name, value, minimum=1, maximum=None):
     are not.
     """
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
-        raise ArgumentTypeError(f"{name} must be an integer >= {minimum}, got "
-                                f"{_describe(value)}")
+        raise ArgumentTypeError(f"{name} must be an integer >= {minimum}, got {_describe(value)}")
     if isinstance(value, numbers.Integral):
         number = int(value)
     else:
         real = float(value)
         if not real.is_integer():
-            raise InputError(f"{name} must be an integer >= {minimum}, got "
-                             f"{_describe(value)}")
+            raise InputError(f"{name} must be an integer >= {minimum}, got {_describe(value)}")
         number = int(real)
     if number < minimum:
         raise InputError(f"{name} must be an integer >= {minimum}, got {_describe(value)}")
@@ -100,12 +109,13 @@ def path_argument(name, value):
             try:
                 os.fsencode(path)
             except UnicodeError:
-                raise InputError(f"{name} {_describe(value)} cannot be a file name on this "
-                                 "system (not encodable)") from None
+                raise InputError(
+                    f"{name} {_describe(value)} cannot be a file name on this "
+                    "system (not encodable)"
+                ) from None
             return path
         raise InputError(f"{name} must be a non-empty path, got {_describe(value)}")
-    raise ArgumentTypeError(f"{name} must be a path (str or os.PathLike), got "
-                            f"{_describe(value)}")
+    raise ArgumentTypeError(f"{name} must be a path (str or os.PathLike), got {_describe(value)}")
 
 
 def broadcast(names_and_shapes):

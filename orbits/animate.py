@@ -50,9 +50,16 @@ from .motion import Motion, _as_body
 
 FORMATS = ("gif", "mp4")
 # colours of the drawing (one place, so that the two panels agree)
-COLOURS = {"solid": "tab:green", "ellipsoid": "0.45", "plane": "tab:blue",
-           "omega": "tab:red", "momentum": "black", "herpolhode": "tab:purple",
-           "polhode": "tab:orange", "axes": ("tab:red", "tab:green", "tab:blue")}
+COLOURS = {
+    "solid": "tab:green",
+    "ellipsoid": "0.45",
+    "plane": "tab:blue",
+    "omega": "tab:red",
+    "momentum": "black",
+    "herpolhode": "tab:purple",
+    "polhode": "tab:orange",
+    "axes": ("tab:red", "tab:green", "tab:blue"),
+}
 
 
 # ----------------------------------------------------------------- inputs
@@ -85,6 +92,7 @@ def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
         and no ``branch`` was given.
     """
     from .search import closed_orbits
+
     if (n is None) == (p is None):
         raise InputError("give exactly one of n and p")
     label_p = "n" if n is not None else "p"
@@ -109,8 +117,10 @@ def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
         raise InputError(f"the body has no closed orbit Delta alpha = 2 pi {multiple}{where}")
     if len(match) > 1:
         branches = ", ".join(sorted(set(match["branch"])))
-        raise InputError(f"{len(match)} orbits have Delta alpha = 2 pi {multiple} "
-                         f"({branches}); choose one with branch='SAM' or 'LAM' (--branch)")
+        raise InputError(
+            f"{len(match)} orbits have Delta alpha = 2 pi {multiple} "
+            f"({branches}); choose one with branch='SAM' or 'LAM' (--branch)"
+        )
     return match.iloc[0]
 
 
@@ -171,8 +181,7 @@ def solid_faces(body, solid="auto"):
     spec = solid
     if isinstance(spec, str) and spec == "auto":
         spec = getattr(body, "shape", None)
-        if spec is None and np.array_equal(body.moments,
-                                           Body.t_handle(8.0, 4.0, 1.0).moments):
+        if spec is None and np.array_equal(body.moments, Body.t_handle(8.0, 4.0, 1.0).moments):
             spec = ("t-handle", 8.0, 4.0, 1.0)
         if spec is None:
             spec = "ellipsoid"
@@ -202,19 +211,30 @@ def solid_faces(body, solid="auto"):
         faces = [vertices[np.asarray(f)] for f in spec[2]]
         frame = body.frame
     else:
-        raise InputError(f"unknown solid {solid!r}; use 'auto', 'ellipsoid', "
-                         "('t-handle', l1, l2, w), ('box', a, b, c), "
-                         "('cylinder', a, length, b) or ('mesh', vertices, faces)")
+        raise InputError(
+            f"unknown solid {solid!r}; use 'auto', 'ellipsoid', "
+            "('t-handle', l1, l2, w), ('box', a, b, c), "
+            "('cylinder', a, length, b) or ('mesh', vertices, faces)"
+        )
     # caller's axes -> sorted principal axes: v_principal = frame @ v
     return kind, [face @ frame.T for face in faces]
 
 
 def _box_faces(lo, hi):
     (x0, y0, z0), (x1, y1, z1) = lo, hi
-    corners = np.array([[x0, y0, z0], [x1, y0, z0], [x1, y1, z0], [x0, y1, z0],
-                        [x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]])
-    faces = [[0, 1, 2, 3], [4, 5, 6, 7], [0, 1, 5, 4], [2, 3, 7, 6], [1, 2, 6, 5],
-             [0, 3, 7, 4]]
+    corners = np.array(
+        [
+            [x0, y0, z0],
+            [x1, y0, z0],
+            [x1, y1, z0],
+            [x0, y1, z0],
+            [x0, y0, z1],
+            [x1, y0, z1],
+            [x1, y1, z1],
+            [x0, y1, z1],
+        ]
+    )
+    faces = [[0, 1, 2, 3], [4, 5, 6, 7], [0, 1, 5, 4], [2, 3, 7, 6], [1, 2, 6, 5], [0, 3, 7, 4]]
     return [corners[f] for f in faces]
 
 
@@ -225,8 +245,10 @@ def t_handle_boxes(l1, l2, w):
     section w (the geometry of eqn:IsforT).
     """
     com_y = (l2 / (l1 + l2)) * 0.5 * (w + l2)
-    return [((-l1 / 2, -w / 2 - com_y, -w / 2), (l1 / 2, w / 2 - com_y, w / 2)),
-            ((-w / 2, w / 2 - com_y, -w / 2), (w / 2, w / 2 + l2 - com_y, w / 2))]
+    return [
+        ((-l1 / 2, -w / 2 - com_y, -w / 2), (l1 / 2, w / 2 - com_y, w / 2)),
+        ((-w / 2, w / 2 - com_y, -w / 2), (w / 2, w / 2 + l2 - com_y, w / 2)),
+    ]
 
 
 def _cylinder_faces(a, b, length, sides=24):
@@ -249,11 +271,19 @@ def _t_handle_faces(l1, l2, w):
 def _ellipsoid_faces(semi, longitudes=16, latitudes=8):
     u = np.linspace(0.0, 2.0 * np.pi, longitudes + 1)
     v = np.linspace(0.0, np.pi, latitudes + 1)
-    points = np.stack([np.outer(np.cos(u), np.sin(v)) * semi[0],
-                       np.outer(np.sin(u), np.sin(v)) * semi[1],
-                       np.outer(np.ones_like(u), np.cos(v)) * semi[2]], axis=-1)
-    return [np.array([points[i, j], points[i + 1, j], points[i + 1, j + 1], points[i, j + 1]])
-            for i in range(longitudes) for j in range(latitudes)]
+    points = np.stack(
+        [
+            np.outer(np.cos(u), np.sin(v)) * semi[0],
+            np.outer(np.sin(u), np.sin(v)) * semi[1],
+            np.outer(np.ones_like(u), np.cos(v)) * semi[2],
+        ],
+        axis=-1,
+    )
+    return [
+        np.array([points[i, j], points[i + 1, j], points[i + 1, j + 1], points[i, j + 1]])
+        for i in range(longitudes)
+        for j in range(latitudes)
+    ]
 
 
 def inertia_ellipsoid_lines(moments, meridians=8, parallels=5, samples=49):
@@ -267,14 +297,28 @@ def inertia_ellipsoid_lines(moments, meridians=8, parallels=5, samples=49):
     curves = []
     for k in range(meridians):
         azimuth = np.pi * k / meridians
-        curves.append(np.stack([semi[0] * np.cos(azimuth) * np.sin(s),
-                                semi[1] * np.sin(azimuth) * np.sin(s),
-                                semi[2] * np.cos(s)], axis=-1))
+        curves.append(
+            np.stack(
+                [
+                    semi[0] * np.cos(azimuth) * np.sin(s),
+                    semi[1] * np.sin(azimuth) * np.sin(s),
+                    semi[2] * np.cos(s),
+                ],
+                axis=-1,
+            )
+        )
     for k in range(1, parallels + 1):
         polar = np.pi * k / (parallels + 1)
-        curves.append(np.stack([semi[0] * np.sin(polar) * np.cos(s),
-                                semi[1] * np.sin(polar) * np.sin(s),
-                                np.full(samples, semi[2] * np.cos(polar))], axis=-1))
+        curves.append(
+            np.stack(
+                [
+                    semi[0] * np.sin(polar) * np.cos(s),
+                    semi[1] * np.sin(polar) * np.sin(s),
+                    np.full(samples, semi[2] * np.cos(polar)),
+                ],
+                axis=-1,
+            )
+        )
     return curves
 
 
@@ -339,8 +383,19 @@ class PoinsotAnimation:
         Length units of the solid -> ellipsoid units (display only).
     """
 
-    def __init__(self, motion, times, *, fps=20, solid="auto", title=None,
-                 size=(9.0, 4.0), dpi=80, pyplot=False, subsamples=8):
+    def __init__(
+        self,
+        motion,
+        times,
+        *,
+        fps=20,
+        solid="auto",
+        title=None,
+        size=(9.0, 4.0),
+        dpi=80,
+        pyplot=False,
+        subsamples=8,
+    ):
         self.motion = motion
         self.times = np.asarray(times, dtype=float)
         self.fps = int(fps)
@@ -376,21 +431,26 @@ class PoinsotAnimation:
     def _build_figure(self, title, size, pyplot):
         from matplotlib.figure import Figure
         from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
         if pyplot:
             import matplotlib.pyplot as plt
+
             figure = plt.figure(figsize=size, dpi=self.dpi)
         else:
             from matplotlib.backends.backend_agg import FigureCanvasAgg
+
             figure = Figure(figsize=size, dpi=self.dpi)
             FigureCanvasAgg(figure)
         self.figure = figure
         # explicit panels under the titles (3-D axes leave wide margins); each extra
         # line of the heading takes ~0.045 of the 4 in figure's height
         extra = 0.045 * (title.count("\n") if title else 0)
-        space = figure.add_axes((0.0, 0.0, 0.5, 0.84 - extra), projection="3d",
-                                computed_zorder=False)
-        body_ax = figure.add_axes((0.5, 0.0, 0.5, 0.84 - extra), projection="3d",
-                                  computed_zorder=False)
+        space = figure.add_axes(
+            (0.0, 0.0, 0.5, 0.84 - extra), projection="3d", computed_zorder=False
+        )
+        body_ax = figure.add_axes(
+            (0.5, 0.0, 0.5, 0.84 - extra), projection="3d", computed_zorder=False
+        )
         self.space_axes, self.body_axes = space, body_ax
         h = self.plane_height
         semi = 1.0 / np.sqrt(self.motion.body.moments)
@@ -398,71 +458,108 @@ class PoinsotAnimation:
         radius = float(np.max(np.hypot(self._rho_space[:, 0], self._rho_space[:, 1])))
         half = max(reach, 1.15 * radius)
         artists = {}
-        plane = np.array([[-half, -half, h], [half, -half, h], [half, half, h],
-                          [-half, half, h]])
-        artists["plane"] = Poly3DCollection([plane], facecolor=COLOURS["plane"],
-                                            alpha=0.12, edgecolor="none")
+        plane = np.array([[-half, -half, h], [half, -half, h], [half, half, h], [-half, half, h]])
+        artists["plane"] = Poly3DCollection(
+            [plane], facecolor=COLOURS["plane"], alpha=0.12, edgecolor="none"
+        )
         space.add_collection3d(artists["plane"])
         outline = np.concatenate([plane, plane[:1]])
-        artists["plane_edge"], = space.plot(*outline.T, color=COLOURS["plane"],
-                                            linewidth=0.6, alpha=0.6)
-        artists["herpolhode"], = space.plot([], [], [], color=COLOURS["herpolhode"],
-                                            linewidth=1.4, zorder=4)
+        (artists["plane_edge"],) = space.plot(
+            *outline.T, color=COLOURS["plane"], linewidth=0.6, alpha=0.6
+        )
+        (artists["herpolhode"],) = space.plot(
+            [], [], [], color=COLOURS["herpolhode"], linewidth=1.4, zorder=4
+        )
         start = self._rho_space[0]
-        space.plot([start[0]], [start[1]], [start[2]], "o", color=COLOURS["herpolhode"],
-                   markersize=4, zorder=5)
-        artists["ellipsoid"] = [space.plot([], [], [], color=COLOURS["ellipsoid"],
-                                           linewidth=0.5, alpha=0.6, zorder=2)[0]
-                                for _ in self._wire]
+        space.plot(
+            [start[0]],
+            [start[1]],
+            [start[2]],
+            "o",
+            color=COLOURS["herpolhode"],
+            markersize=4,
+            zorder=5,
+        )
+        artists["ellipsoid"] = [
+            space.plot([], [], [], color=COLOURS["ellipsoid"], linewidth=0.5, alpha=0.6, zorder=2)[
+                0
+            ]
+            for _ in self._wire
+        ]
         # a fine mesh's edges would paint it solid dark: draw them faint
         fine = len(self._faces) > 200
-        edge = dict(edgecolor=(0.0, 0.39, 0.0, 0.12) if fine else "darkgreen",
-                    linewidths=0.2 if fine else 0.4)
-        artists["solid"] = Poly3DCollection([], facecolor=COLOURS["solid"], alpha=0.55,
-                                            zorder=3, **edge)
+        edge = dict(
+            edgecolor=(0.0, 0.39, 0.0, 0.12) if fine else "darkgreen",
+            linewidths=0.2 if fine else 0.4,
+        )
+        artists["solid"] = Poly3DCollection(
+            [], facecolor=COLOURS["solid"], alpha=0.55, zorder=3, **edge
+        )
         space.add_collection3d(artists["solid"])
-        artists["axes"] = [space.plot([], [], [], color=c, linewidth=1.0, zorder=4)[0]
-                           for c in COLOURS["axes"]]
-        artists["momentum"], = space.plot([0.0, 0.0], [0.0, 0.0], [0.0, 1.25 * h],
-                                          color=COLOURS["momentum"], linewidth=2.0, zorder=6)
+        artists["axes"] = [
+            space.plot([], [], [], color=c, linewidth=1.0, zorder=4)[0] for c in COLOURS["axes"]
+        ]
+        (artists["momentum"],) = space.plot(
+            [0.0, 0.0],
+            [0.0, 0.0],
+            [0.0, 1.25 * h],
+            color=COLOURS["momentum"],
+            linewidth=2.0,
+            zorder=6,
+        )
         space.text(0.0, 0.0, 1.3 * h, "L", color=COLOURS["momentum"], zorder=7)
-        artists["omega"], = space.plot([], [], [], color=COLOURS["omega"], linewidth=2.0,
-                                       zorder=6)
-        artists["contact"], = space.plot([], [], [], "o", color=COLOURS["omega"],
-                                         markersize=5, zorder=7)
+        (artists["omega"],) = space.plot(
+            [], [], [], color=COLOURS["omega"], linewidth=2.0, zorder=6
+        )
+        (artists["contact"],) = space.plot(
+            [], [], [], "o", color=COLOURS["omega"], markersize=5, zorder=7
+        )
         # the inertia ellipsoid lies between its two tangent planes z = +-h
         _cube(space, half, (-1.08 * h, 1.4 * h), zoom=1.75)
         space.view_init(elev=24, azim=-60)
         # body panel: the fixed inertia ellipsoid, the solid, the polhode
         for curve in self._wire:
             body_ax.plot(*curve.T, color=COLOURS["ellipsoid"], linewidth=0.5, alpha=0.5)
-        body_ax.add_collection3d(Poly3DCollection(self._faces, facecolor=COLOURS["solid"],
-                                                  alpha=0.25, **edge))
+        body_ax.add_collection3d(
+            Poly3DCollection(self._faces, facecolor=COLOURS["solid"], alpha=0.25, **edge)
+        )
         for k, colour in enumerate(COLOURS["axes"]):
             tip = np.zeros(3)
             tip[k] = 1.15 * semi[k]
             body_ax.plot(*np.stack([-tip, tip]).T, color=colour, linewidth=0.8)
             body_ax.text(*(1.2 * tip), f"$I_{k + 1}$", color=colour, fontsize="small")
-        artists["polhode"], = body_ax.plot([], [], [], color=COLOURS["polhode"],
-                                           linewidth=1.6)
-        artists["body_contact"], = body_ax.plot([], [], [], "o", color=COLOURS["omega"],
-                                                markersize=5)
+        (artists["polhode"],) = body_ax.plot([], [], [], color=COLOURS["polhode"], linewidth=1.6)
+        (artists["body_contact"],) = body_ax.plot(
+            [], [], [], "o", color=COLOURS["omega"], markersize=5
+        )
         _cube(body_ax, reach, (-reach, reach), zoom=1.6)
         body_ax.view_init(elev=22, azim=-50)
         self.artists = artists
         body = self.motion.body
         name = body.name or "body"
-        heading = title or (f"{name}: Poinsot construction, {self.motion.branch}, "
-                            f"T = {self.motion.period:.4g} s")
+        heading = title or (
+            f"{name}: Poinsot construction, {self.motion.branch}, T = {self.motion.period:.4g} s"
+        )
         self._title = figure.suptitle(heading, fontsize="medium", y=0.985)
-        figure.text(0.25, 0.905 - extra,
-                    "space frame (L fixed, along z): inertia ellipsoid rolling\n"
-                    "on the invariable plane; herpolhode (purple), "
-                    r"$\omega$ (red)", fontsize="x-small", ha="center", va="center")
-        figure.text(0.75, 0.905 - extra,
-                    "body frame: polhode (orange) on the inertia ellipsoid\n"
-                    f"{self.solid_kind} drawn x{self.solid_scale:.3g}",
-                    fontsize="x-small", ha="center", va="center")
+        figure.text(
+            0.25,
+            0.905 - extra,
+            "space frame (L fixed, along z): inertia ellipsoid rolling\n"
+            "on the invariable plane; herpolhode (purple), "
+            r"$\omega$ (red)",
+            fontsize="x-small",
+            ha="center",
+            va="center",
+        )
+        figure.text(
+            0.75,
+            0.905 - extra,
+            "body frame: polhode (orange) on the inertia ellipsoid\n"
+            f"{self.solid_kind} drawn x{self.solid_scale:.3g}",
+            fontsize="x-small",
+            ha="center",
+            va="center",
+        )
         self._clock = figure.text(0.01, 0.02, "", fontsize="small")
 
     def frame(self, k):
@@ -482,22 +579,29 @@ class PoinsotAnimation:
             line.set_data_3d([-tip[0], tip[0]], [-tip[1], tip[1]], [-tip[2], tip[2]])
         contact = self._frame_rho_space[k]
         contact_body = self._frame_rho_body[k]
-        artists["omega"].set_data_3d([0.0, contact[0]], [0.0, contact[1]],
-                                     [0.0, contact[2]])
+        artists["omega"].set_data_3d([0.0, contact[0]], [0.0, contact[1]], [0.0, contact[2]])
         artists["contact"].set_data_3d([contact[0]], [contact[1]], [contact[2]])
         end = k * self._subsamples + 1
         # the dense grid holds the frame times exactly at multiples of subsamples;
         # the traced curves end at the frame's own contact point
-        herpolhode = np.concatenate([self._rho_space[:end - 1], contact[None]])
-        polhode = np.concatenate([self._rho_body[:end - 1], contact_body[None]])
+        herpolhode = np.concatenate([self._rho_space[: end - 1], contact[None]])
+        polhode = np.concatenate([self._rho_body[: end - 1], contact_body[None]])
         artists["herpolhode"].set_data_3d(*herpolhode.T)
         artists["polhode"].set_data_3d(*polhode.T)
-        artists["body_contact"].set_data_3d([contact_body[0]], [contact_body[1]],
-                                            [contact_body[2]])
+        artists["body_contact"].set_data_3d(
+            [contact_body[0]], [contact_body[1]], [contact_body[2]]
+        )
         fraction = self.times[k] / self.motion.period
         self._clock.set_text(f"t = {self.times[k]:.3f} = {fraction:.3f} T")
-        return FrameData(float(self.times[k]), rotation, contact, contact_body,
-                         herpolhode, polhode, self.plane_height)
+        return FrameData(
+            float(self.times[k]),
+            rotation,
+            contact,
+            contact_body,
+            herpolhode,
+            polhode,
+            self.plane_height,
+        )
 
     @property
     def animation(self):
@@ -508,9 +612,14 @@ class PoinsotAnimation:
         """
         if self._animation is None:
             from matplotlib.animation import FuncAnimation
-            self._animation = FuncAnimation(self.figure, lambda k: self.frame(k),
-                                            frames=len(self.times),
-                                            interval=1000.0 / self.fps, blit=False)
+
+            self._animation = FuncAnimation(
+                self.figure,
+                lambda k: self.frame(k),
+                frames=len(self.times),
+                interval=1000.0 / self.fps,
+                blit=False,
+            )
         return self._animation
 
     def render(self, k):
@@ -545,8 +654,10 @@ class PoinsotAnimation:
         if fmt not in FORMATS:
             raise InputError(f"unknown animation format {fmt!r}; use {', '.join(FORMATS)}")
         if fmt == "mp4" and not mp4_available():
-            raise InputError("MP4 needs an ffmpeg writer: pip install 'orbits[animation]' "
-                             "(imageio-ffmpeg), or write a .gif")
+            raise InputError(
+                "MP4 needs an ffmpeg writer: pip install 'orbits[animation]' "
+                "(imageio-ffmpeg), or write a .gif"
+            )
         ensure_writable(path)
         with atomic_path(path) as temporary:
             if fmt == "gif":
@@ -557,6 +668,7 @@ class PoinsotAnimation:
 
     def _write_gif(self, target):
         from PIL import Image
+
         frames = [Image.fromarray(self.render(k)) for k in range(len(self.times))]
         # one fixed palette for all frames, from a montage of frames spread over
         # the animation (the traced curves are absent from frame 0); no dithering
@@ -564,27 +676,53 @@ class PoinsotAnimation:
         montage = Image.new("RGB", (frames[0].width, frames[0].height * len(picks)))
         for slot, k in enumerate(picks):
             montage.paste(frames[k], (0, slot * frames[0].height))
-        palette = montage.quantize(colors=255, method=Image.Quantize.MEDIANCUT,
-                                   dither=Image.Dither.NONE)
+        palette = montage.quantize(
+            colors=255, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE
+        )
         indexed = [f.quantize(palette=palette, dither=Image.Dither.NONE) for f in frames]
         buffer = io.BytesIO()
-        indexed[0].save(buffer, format="GIF", save_all=True, append_images=indexed[1:],
-                        duration=int(round(1000.0 / self.fps)), loop=0, optimize=False)
+        indexed[0].save(
+            buffer,
+            format="GIF",
+            save_all=True,
+            append_images=indexed[1:],
+            duration=int(round(1000.0 / self.fps)),
+            loop=0,
+            optimize=False,
+        )
         Path(target).write_bytes(buffer.getvalue())
 
     def _write_mp4(self, target):
         import imageio_ffmpeg
+
         first = self.render(0)
         height, width = first.shape[:2]
         # libx264 needs even sizes; pad by repeating the last row/column
         pad_h, pad_w = height % 2, width % 2
         writer = imageio_ffmpeg.write_frames(
-            str(target), (width + pad_w, height + pad_h), fps=self.fps, codec="libx264",
-            pix_fmt_out="yuv420p", macro_block_size=1, quality=None,
-            output_params=["-f", "mp4", "-crf", "20", "-threads", "1",
-                           "-fflags", "+bitexact", "-flags:v", "+bitexact",
-                           "-map_metadata", "-1"],
-            ffmpeg_log_level="error")
+            str(target),
+            (width + pad_w, height + pad_h),
+            fps=self.fps,
+            codec="libx264",
+            pix_fmt_out="yuv420p",
+            macro_block_size=1,
+            quality=None,
+            output_params=[
+                "-f",
+                "mp4",
+                "-crf",
+                "20",
+                "-threads",
+                "1",
+                "-fflags",
+                "+bitexact",
+                "-flags:v",
+                "+bitexact",
+                "-map_metadata",
+                "-1",
+            ],
+            ffmpeg_log_level="error",
+        )
         writer.send(None)
         for k in range(len(self.times)):
             image = first if k == 0 else self.render(k)
@@ -605,13 +743,28 @@ def _cube(ax, half, zrange, zoom=1.45):
 def mp4_available():
     """True when an ffmpeg writer (imageio-ffmpeg) is installed."""
     import importlib.util
+
     return importlib.util.find_spec("imageio_ffmpeg") is not None
 
 
 # ----------------------------------------------------------------- the entry point
-def poinsot_animation(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0,
-                      periods=None, frames=120, fps=20, out=None, solid="auto",
-                      title=None, dpi=80, pyplot=False, body=None):
+def poinsot_animation(
+    source,
+    theta=None,
+    *,
+    dtheta=None,
+    phi=0.0,
+    speed=1.0,
+    periods=None,
+    frames=120,
+    fps=20,
+    out=None,
+    solid="auto",
+    title=None,
+    dpi=80,
+    pyplot=False,
+    body=None,
+):
     """The Poinsot animation of a body's torque-free motion.
 
     Parameters
@@ -685,8 +838,9 @@ def poinsot_animation(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0,
         if fmt not in FORMATS:
             raise InputError(f"unknown animation format {path.suffix!r}; use .gif or .mp4")
         ensure_writable(path)
-    animation = PoinsotAnimation(motion, times, fps=fps, solid=solid,
-                                 title=title or label, dpi=dpi, pyplot=pyplot)
+    animation = PoinsotAnimation(
+        motion, times, fps=fps, solid=solid, title=title or label, dpi=dpi, pyplot=pyplot
+    )
     if out is not None:
         animation.save(out)
     return animation
@@ -704,16 +858,21 @@ def _motion_from(source, theta, dtheta, phi, speed, row_body=None):
         else:
             body = _as_body(row_body)
             if not np.allclose(body.normalized_moments, moments, rtol=1e-12, atol=0.0):
-                raise InputError("the catalog row is not of the given body: its moments "
-                                 f"{moments.tolist()} differ from the body's normalised "
-                                 f"{body.normalized_moments.tolist()}")
+                raise InputError(
+                    "the catalog row is not of the given body: its moments "
+                    f"{moments.tolist()} differ from the body's normalised "
+                    f"{body.normalized_moments.tolist()}"
+                )
         motion = Motion.from_spin(body, dtheta=float(row["dtheta"]))
         p, q = int(row["n"]), int(row["q"])
         multiple = f"{p}" if q == 1 else f"{p}/{q}"
         name = row.get("body") or "body"
-        label = (rf"{name}: closed orbit $\Delta\alpha = 2\pi\cdot{multiple}$, "
-                 rf"{row['branch']}, $\theta-\theta_c$ = {float(row['dtheta']):.3e}"
-                 + "\n" + _closure_text(row, q))
+        label = (
+            rf"{name}: closed orbit $\Delta\alpha = 2\pi\cdot{multiple}$, "
+            rf"{row['branch']}, $\theta-\theta_c$ = {float(row['dtheta']):.3e}"
+            + "\n"
+            + _closure_text(row, q)
+        )
         return motion, float(q), label
     body = _as_body(source)
     if theta is None and dtheta is None:
@@ -732,13 +891,21 @@ def _closure_text(row, q):
 
 def _as_row(source):
     keys = ("I1", "I2", "I3", "dtheta", "n", "q")
-    if hasattr(source, "_asdict"):                 # DataFrame.itertuples()
+    if hasattr(source, "_asdict"):  # DataFrame.itertuples()
         source = source._asdict()
     if hasattr(source, "keys") and all(k in source.keys() for k in keys):
         return {k: source[k] for k in source.keys()}
     return None
 
 
-__all__ = ["FrameData", "PoinsotAnimation", "flip_motion", "inertia_ellipsoid_lines",
-           "mp4_available", "orbit_row", "poinsot_animation", "solid_faces",
-           "t_handle_boxes"]
+__all__ = [
+    "FrameData",
+    "PoinsotAnimation",
+    "flip_motion",
+    "inertia_ellipsoid_lines",
+    "mp4_available",
+    "orbit_row",
+    "poinsot_animation",
+    "solid_faces",
+    "t_handle_boxes",
+]

@@ -41,6 +41,7 @@ def csv_float_options():
     option); pandas 2.x needs ``float_precision="round_trip"``.
     """
     import pandas as pd
+
     major = int(pd.__version__.split(".")[0])
     return {} if major >= 3 else {"float_precision": "round_trip"}
 
@@ -61,8 +62,10 @@ def ensure_writable(path):
     """
     text = os.fspath(path)
     if isinstance(text, str) and text.endswith(os.sep) and text != os.sep:
-        raise InputError(f"cannot write {text}: the trailing '/' names a directory; "
-                         f"give a file name (e.g. {text}catalog.csv)")
+        raise InputError(
+            f"cannot write {text}: the trailing '/' names a directory; "
+            f"give a file name (e.g. {text}catalog.csv)"
+        )
     path = Path(path)
     directory = path.parent if str(path.parent) else Path(".")
     if not directory.is_dir():
@@ -87,18 +90,30 @@ def _refuse_special(path):
     if stat.S_ISREG(mode):
         through = _magic_link(path)
         if through:
-            raise InputError(f"cannot write {path}: it is a symbolic link into {through} "
-                             "(a process's stream or a device); orbits only replaces "
-                             "regular files (use '--out -' for standard output)")
+            raise InputError(
+                f"cannot write {path}: it is a symbolic link into {through} "
+                "(a process's stream or a device); orbits only replaces "
+                "regular files (use '--out -' for standard output)"
+            )
         return
-    kind = ("a directory" if stat.S_ISDIR(mode) else
-            "a character device" if stat.S_ISCHR(mode) else
-            "a block device" if stat.S_ISBLK(mode) else
-            "a FIFO (named pipe)" if stat.S_ISFIFO(mode) else
-            "a socket" if stat.S_ISSOCK(mode) else "not a regular file")
+    kind = (
+        "a directory"
+        if stat.S_ISDIR(mode)
+        else "a character device"
+        if stat.S_ISCHR(mode)
+        else "a block device"
+        if stat.S_ISBLK(mode)
+        else "a FIFO (named pipe)"
+        if stat.S_ISFIFO(mode)
+        else "a socket"
+        if stat.S_ISSOCK(mode)
+        else "not a regular file"
+    )
     link = " (through a symbolic link)" if os.path.islink(path) else ""
-    raise InputError(f"cannot write {path}: it is {kind}{link}; orbits only "
-                     "replaces regular files (use '--out -' for standard output)")
+    raise InputError(
+        f"cannot write {path}: it is {kind}{link}; orbits only "
+        "replaces regular files (use '--out -' for standard output)"
+    )
 
 
 def _magic_link(path):
@@ -132,7 +147,7 @@ def _pid_alive(pid):
     except ProcessLookupError:
         return False
     except PermissionError:
-        return True           # exists, owned by someone else
+        return True  # exists, owned by someone else
     return True
 
 
@@ -147,8 +162,7 @@ def remove_stale_temporaries(directory, name, regex=False):
         How many were removed.  Temporaries of live processes (including
         this one) and files of any other pattern are never touched.
     """
-    pattern = re.compile(r"^\." + (name if regex else re.escape(name))
-                         + r"\.(\d+)\.[^/]*\.part$")
+    pattern = re.compile(r"^\." + (name if regex else re.escape(name)) + r"\.(\d+)\.[^/]*\.part$")
     removed = 0
     try:
         entries = list(os.scandir(directory))
@@ -188,7 +202,8 @@ def atomic_path(path):
     remove_stale_temporaries(directory, path.name)
     try:
         handle, temporary = tempfile.mkstemp(
-            prefix=f".{path.name}.{os.getpid()}.", suffix=".part", dir=directory)
+            prefix=f".{path.name}.{os.getpid()}.", suffix=".part", dir=directory
+        )
     except OSError as error:
         raise InputError(f"cannot write {path}: {error.strerror}") from None
     os.close(handle)
@@ -207,14 +222,25 @@ def atomic_path(path):
             os.unlink(temporary)
         except FileNotFoundError:
             pass
-        if isinstance(error, OSError) and not isinstance(error, InputError) and \
-                error.errno in _WRITE_ERRNOS:
+        if (
+            isinstance(error, OSError)
+            and not isinstance(error, InputError)
+            and error.errno in _WRITE_ERRNOS
+        ):
             raise InputError(f"cannot write {path}: {os.strerror(error.errno)}") from None
         raise
 
 
-_WRITE_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EIO, errno.EFBIG, errno.EROFS,
-                 errno.EACCES, errno.EPERM, errno.ENOENT}
+_WRITE_ERRNOS = {
+    errno.ENOSPC,
+    errno.EDQUOT,
+    errno.EIO,
+    errno.EFBIG,
+    errno.EROFS,
+    errno.EACCES,
+    errno.EPERM,
+    errno.ENOENT,
+}
 
 
 def write_text_atomic(path, text):

@@ -44,29 +44,41 @@ def scipy_total_phase(moments, theta):
     momentum = np.sqrt(m_sq)
     sam = m_sq > two_e * i2
     # eqn:TK and eqn:GeometricPhase, indices 1 <-> 3 in k and D on LAM
-    k2 = np.where(sam, (i2 - i1) * (two_e * i3 - m_sq) / ((i3 - i2) * (m_sq - two_e * i1)),
-                  (i3 - i2) * (m_sq - two_e * i1) / ((i2 - i1) * (two_e * i3 - m_sq)))
-    rate = np.where(sam, np.sqrt((i3 - i2) * (m_sq - two_e * i1) / (i1 * i2 * i3)),
-                    np.sqrt((i2 - i1) * (two_e * i3 - m_sq) / (i1 * i2 * i3)))
-    n = np.where(sam, -i3 * (i2 - i1) / (i1 * (i3 - i2)),
-                 -i3 * (m_sq - two_e * i1) / (i1 * (two_e * i3 - m_sq)))
+    k2 = np.where(
+        sam,
+        (i2 - i1) * (two_e * i3 - m_sq) / ((i3 - i2) * (m_sq - two_e * i1)),
+        (i3 - i2) * (m_sq - two_e * i1) / ((i2 - i1) * (two_e * i3 - m_sq)),
+    )
+    rate = np.where(
+        sam,
+        np.sqrt((i3 - i2) * (m_sq - two_e * i1) / (i1 * i2 * i3)),
+        np.sqrt((i2 - i1) * (two_e * i3 - m_sq) / (i1 * i2 * i3)),
+    )
+    n = np.where(
+        sam,
+        -i3 * (i2 - i1) / (i1 * (i3 - i2)),
+        -i3 * (m_sq - two_e * i1) / (i1 * (two_e * i3 - m_sq)),
+    )
     one_minus_m = 1.0 - k2
     big_k = special.ellipk(k2)
-    big_pi = (special.elliprf(0.0, one_minus_m, 1.0)
-              + n / 3.0 * special.elliprj(0.0, one_minus_m, 1.0, 1.0 - n))
+    big_pi = special.elliprf(0.0, one_minus_m, 1.0) + n / 3.0 * special.elliprj(
+        0.0, one_minus_m, 1.0, 1.0 - n
+    )
     period = 4.0 * big_k / rate
-    return (momentum * period / i3
-            + 4.0 * momentum * (i3 - i1) * big_pi / (i1 * i3 * rate)
-            - np.where(sam, 2.0 * np.pi, 0.0))
+    return (
+        momentum * period / i3
+        + 4.0 * momentum * (i3 - i1) * big_pi / (i1 * i3 * rate)
+        - np.where(sam, 2.0 * np.pi, 0.0)
+    )
 
 
 def _scalar_total_phase(moments, theta):
     """The scalar kernel path (one looping ``cel`` per angle), for comparison."""
     from .core.phase import total_phase_one_body_scalar
+
     out = np.empty(theta.size)
     status = np.empty(theta.size, dtype=np.int8)
-    total_phase_one_body_scalar(*(float(v) for v in moments), 0.0, theta, False, out,
-                                status)
+    total_phase_one_body_scalar(*(float(v) for v in moments), 0.0, theta, False, out, status)
     return out
 
 
@@ -87,8 +99,8 @@ def bench_total_phase(points=1_000_000, repeats=7, seed=0):
         "speedup": theirs / ours,
         "scalar_s": scalar,
         "note": f"scalar-cel kernel path {_seconds(scalar)} ({theirs / scalar:.1f}x); "
-                f"max relative difference {agree:.1e} (near theta_c the baseline "
-                "loses digits to 1 - m)",
+        f"max relative difference {agree:.1e} (near theta_c the baseline "
+        "loses digits to 1 - m)",
     }
 
 
@@ -98,6 +110,7 @@ def _herpolhode_by_integration(motion, times):
     from scipy.spatial.transform import Rotation
 
     from .core.ode import euler_rhs
+
     inertia = motion.body.moments
     w0 = motion.omega0
     # start oriented with space z along M and phi = 0, like the exact motion
@@ -111,8 +124,15 @@ def _herpolhode_by_integration(motion, times):
         euler_rhs(inertia, y, dy)
         return dy
 
-    solution = solve_ivp(rhs, (0.0, times[-1]), np.concatenate([w0, q0]),
-                         method="DOP853", rtol=1e-12, atol=1e-12, dense_output=True)
+    solution = solve_ivp(
+        rhs,
+        (0.0, times[-1]),
+        np.concatenate([w0, q0]),
+        method="DOP853",
+        rtol=1e-12,
+        atol=1e-12,
+        dense_output=True,
+    )
     states = solution.sol(times)
     rotation = Rotation.from_quat(np.roll(states[3:].T, -1, axis=-1))
     return rotation.apply(states[:3].T)
@@ -125,6 +145,7 @@ def bench_motion(points=2001, repeats=5, dtheta=None):
     the offset ``dtheta`` from the separatrix.
     """
     from .motion import Motion, herpolhode
+
     body = Body.preset("fig6")
     theta = 0.9 if dtheta is None else None
     unit_body = Body(body.normalized_moments)
@@ -139,19 +160,16 @@ def bench_motion(points=2001, repeats=5, dtheta=None):
     note = "accuracy vs mpmath: "
     try:
         from .checks import exact_motion_mpmath
+
         sample = np.arange(0, points, max(1, points // 40))
-        reference = exact_motion_mpmath(unit_body.moments, motion.omega0,
-                                        times[sample])[2]
-        err_ours = np.max(np.abs(herpolhode(body, theta, points=points)[1][sample]
-                                 - reference))
-        err_theirs = np.max(np.abs(_herpolhode_by_integration(motion, times)[sample]
-                                   - reference))
+        reference = exact_motion_mpmath(unit_body.moments, motion.omega0, times[sample])[2]
+        err_ours = np.max(np.abs(herpolhode(body, theta, points=points)[1][sample] - reference))
+        err_theirs = np.max(np.abs(_herpolhode_by_integration(motion, times)[sample] - reference))
         note += f"ours {err_ours:.1e}, solve_ivp {err_theirs:.1e} (max |omega| error)"
-    except Exception:      # mpmath missing: no accuracy column
+    except Exception:  # mpmath missing: no accuracy column
         note += "n/a (install mpmath)"
     rate = points / ours
-    where = ("theta 0.9" if dtheta is None
-             else f"1 - m = {motion.one_minus_m:.0e}")
+    where = "theta 0.9" if dtheta is None else f"1 - m = {motion.one_minus_m:.0e}"
     return {
         "_ours": (lambda: herpolhode(body, theta, points=points), repeats),
         "task": f"herpolhode, {points} points, 1 period ({where})",
@@ -166,6 +184,7 @@ def bench_motion(points=2001, repeats=5, dtheta=None):
 def bench_motion_rate(points=1_000_000, repeats=3):
     """Throughput of the exact motion on a long grid (points per second)."""
     from .motion import Motion
+
     motion = Motion.from_spin(Body.preset("fig6"), 0.9)
     times = np.linspace(0.0, 10.0 * motion.period, points)
     ours = best_time(lambda: motion.state(times), repeats)
@@ -183,6 +202,7 @@ def bench_motion_rate(points=1_000_000, repeats=3):
 def _roots_by_scipy(body, n_max, points=2000):
     """The obvious route: scan theta, brentq on the SciPy-route phase."""
     from scipy.optimize import brentq
+
     moments = body.moments
     theta_c = float(critical_angle(body))
     found = 0
@@ -193,8 +213,12 @@ def _roots_by_scipy(body, n_max, points=2000):
             level = 2.0 * np.pi * n
             signs = np.flatnonzero(np.diff(np.sign(values - level)) != 0)
             for k in signs:
-                brentq(lambda t: float(scipy_total_phase(moments, np.array([t]))[0]) - level,
-                       theta[k], theta[k + 1], xtol=1e-15)
+                brentq(
+                    lambda t: float(scipy_total_phase(moments, np.array([t]))[0]) - level,
+                    theta[k],
+                    theta[k + 1],
+                    xtol=1e-15,
+                )
                 found += 1
     return found
 
@@ -202,6 +226,7 @@ def _roots_by_scipy(body, n_max, points=2000):
 def _search_counts(function, bodies, levels):
     """Kernel time, phase evaluations and roots of a search over ``bodies``."""
     from .core import search as kernels
+
     capacity = 4 * levels.size + 16
     branch = np.empty(capacity, dtype=np.int8)
     level = np.empty(capacity, dtype=np.int64)
@@ -211,8 +236,7 @@ def _search_counts(function, bodies, levels):
     roots = 0
     start = time.perf_counter()
     for moments in bodies:
-        roots += function(moments[0], moments[1], moments[2], levels, branch, level,
-                          offset, info)
+        roots += function(moments[0], moments[1], moments[2], levels, branch, level, offset, info)
         evaluations += info[kernels.INFO_EVALUATIONS]
     return time.perf_counter() - start, evaluations, roots
 
@@ -221,6 +245,7 @@ def bench_search(n_max=50, repeats=20):
     """Every closed orbit with n <= 50 on both branches of the fig6 body."""
     from .core import search as kernels
     from .search import closed_orbits, find_roots, phase_levels
+
     body = Body.preset("fig6")
     ours = best_time(lambda: closed_orbits(body, n_max=n_max), repeats)
     levels = phase_levels(n_max)[2]
@@ -229,8 +254,7 @@ def bench_search(n_max=50, repeats=20):
     theirs = best_time(lambda: _roots_by_scipy(body, n_max), 3)
     found = _roots_by_scipy(body, n_max)
     _, new_evaluations, _ = _search_counts(kernels.search_body, [body.moments], levels)
-    _, old_evaluations, _ = _search_counts(kernels.search_body_bracketing, [body.moments],
-                                           levels)
+    _, old_evaluations, _ = _search_counts(kernels.search_body_bracketing, [body.moments], levels)
     return {
         "_ours": (lambda: closed_orbits(body, n_max=n_max), repeats),
         "task": f"closed orbits n <= {n_max}, both branches (fig6)",
@@ -239,9 +263,9 @@ def bench_search(n_max=50, repeats=20):
         "baseline_s": theirs,
         "speedup": theirs / ours,
         "note": f"ours finds {roots} roots ({kernel * 1e3:.2f} ms in the kernel, the rest "
-                f"is the DataFrame; {new_evaluations / roots:.1f} phase evaluations per "
-                f"root, the bracketing search {old_evaluations / roots:.1f}); the baseline "
-                f"finds {found}: roots closer to theta_c than its grid step are missed",
+        f"is the DataFrame; {new_evaluations / roots:.1f} phase evaluations per "
+        f"root, the bracketing search {old_evaluations / roots:.1f}); the baseline "
+        f"finds {found}: roots closer to theta_c than its grid step are missed",
     }
 
 
@@ -250,13 +274,13 @@ def bench_search_evaluations(resolution=60, n_max=10):
     from .bodies import region_grid
     from .core import search as kernels
     from .search import phase_levels
+
     bodies = region_grid(resolution)
     levels = phase_levels(n_max)[2]
-    _search_counts(kernels.search_body, bodies[:2], levels)              # compile
+    _search_counts(kernels.search_body, bodies[:2], levels)  # compile
     _search_counts(kernels.search_body_bracketing, bodies[:2], levels)
     ours, new_evaluations, roots = _search_counts(kernels.search_body, bodies, levels)
-    theirs, old_evaluations, _ = _search_counts(kernels.search_body_bracketing, bodies,
-                                                levels)
+    theirs, old_evaluations, _ = _search_counts(kernels.search_body_bracketing, bodies, levels)
     return {
         "task": f"search kernel, {len(bodies)} bodies, n <= {n_max} (one thread)",
         "ours_s": ours,
@@ -266,8 +290,8 @@ def bench_search_evaluations(resolution=60, n_max=10):
         "evaluations_per_root": new_evaluations / roots,
         "baseline_evaluations_per_root": old_evaluations / roots,
         "note": f"{roots} roots; phase evaluations per root {new_evaluations / roots:.2f} "
-                f"vs {old_evaluations / roots:.2f} "
-                f"({old_evaluations / new_evaluations:.1f}x fewer)",
+        f"vs {old_evaluations / roots:.2f} "
+        f"({old_evaluations / new_evaluations:.1f}x fewer)",
     }
 
 
@@ -283,6 +307,7 @@ def bench_survey(resolution=400, n_max=10, repeats=1):
     from .bodies import region_grid
     from .search import closed_orbits, minimum_phase
     from .survey import Survey
+
     count = len(region_grid(resolution))
     times = {}
 
@@ -295,12 +320,13 @@ def bench_survey(resolution=400, n_max=10, repeats=1):
 
     for fmt in ("csv", "parquet"):
         times[fmt] = best_time(lambda fmt=fmt: survey_once(fmt), repeats)
-    sample = region_grid(resolution)[::max(1, count // 500)]
+    sample = region_grid(resolution)[:: max(1, count // 500)]
 
     def loop():
         for moments in sample:
             closed_orbits(moments, n_max=n_max)
             minimum_phase(moments)
+
     per_body = best_time(loop, 1) / len(sample)
     return {
         "_ours": (lambda: survey_once("parquet"), 1),
@@ -311,8 +337,8 @@ def bench_survey(resolution=400, n_max=10, repeats=1):
         "speedup": per_body * count / times["parquet"],
         "bodies_per_s": count / times["parquet"],
         "note": f"{count / times['parquet']:.0f} bodies/s to Parquet (the default), "
-                f"{count / times['csv']:.0f} bodies/s to CSV (end to end: search, "
-                "tables, atomic files, report)",
+        f"{count / times['csv']:.0f} bodies/s to CSV (end to end: search, "
+        "tables, atomic files, report)",
     }
 
 
@@ -321,10 +347,17 @@ def _fresh_interpreter(args, env=None):
     import resource
     import subprocess
     import sys
+
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
-    subprocess.run([sys.executable, *args], check=True, env=env, stdin=subprocess.DEVNULL,
-                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    subprocess.run(
+        [sys.executable, *args],
+        check=True,
+        env=env,
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     wall = time.perf_counter() - start
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
@@ -351,8 +384,8 @@ def bench_startup(repeats=7):
         "baseline_s": numpy_s,
         "speedup": numpy_s / help_s,
         "note": f"--help takes {help_s / numpy_s:.1f}x and import orbits "
-                f"{import_s / numpy_s:.1f}x the time of import numpy (target <= 4x); "
-                f"medians of {repeats} runs",
+        f"{import_s / numpy_s:.1f}x the time of import numpy (target <= 4x); "
+        f"medians of {repeats} runs",
     }
 
 
@@ -367,6 +400,7 @@ def bench_cold_compile():
     """
     import shutil
     import tempfile
+
     cache = tempfile.mkdtemp(prefix="orbits-bench-cache-")
     out = os.path.join(cache, "fig6.csv")
     env = dict(os.environ, NUMBA_CACHE_DIR=cache)
@@ -383,7 +417,7 @@ def bench_cold_compile():
         "baseline_s": warm,
         "speedup": warm / cold,
         "note": f"cold {cold:.1f} s wall / {cold_cpu:.1f} s CPU (target <= 8 s), "
-                f"warm {warm:.1f} s wall / {warm_cpu:.1f} s CPU",
+        f"warm {warm:.1f} s wall / {warm_cpu:.1f} s CPU",
     }
 
 
@@ -419,9 +453,13 @@ def _busy_process():
     """A CPU-bound child (a Python busy loop) standing for another user's job."""
     import subprocess
     import sys
-    return subprocess.Popen([sys.executable, "-c", "while True:\n    pass"],
-                            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL)
+
+    return subprocess.Popen(
+        [sys.executable, "-c", "while True:\n    pass"],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
 
 
 def load_check(rows):
@@ -442,13 +480,17 @@ def load_check(rows):
         idle = _median_time(function, repeats)
         busy = _busy_process()
         try:
-            time.sleep(0.3)            # let it start spinning
+            time.sleep(0.3)  # let it start spinning
             loaded = _median_time(function, repeats)
         finally:
             busy.kill()
             busy.wait()
-        row["load"] = {"idle_s": idle, "loaded_s": loaded, "slowdown": loaded / idle,
-                       "holds": bool(loaded / idle <= LOAD_LIMIT)}
+        row["load"] = {
+            "idle_s": idle,
+            "loaded_s": loaded,
+            "slowdown": loaded / idle,
+            "holds": bool(loaded / idle <= LOAD_LIMIT),
+        }
 
 
 def run(names=None, quick=False, load=True):
@@ -490,33 +532,41 @@ def run(names=None, quick=False, load=True):
 def format_table(report):
     """Plain-text table of a :func:`run` report."""
     machine = report["machine"]
-    lines = [f"orbits bench: {machine['cpu_count']} cores, "
-             f"{machine['numba_threads']} numba threads, Python "
-             f"{machine['python']}, NumPy {machine['numpy']}, SciPy "
-             f"{machine['scipy']}, numba {machine['numba']}",
-             "",
-             f"{'task':<52} {'ours':>10} {'baseline':>10} {'ratio':>8}"]
+    lines = [
+        f"orbits bench: {machine['cpu_count']} cores, "
+        f"{machine['numba_threads']} numba threads, Python "
+        f"{machine['python']}, NumPy {machine['numpy']}, SciPy "
+        f"{machine['scipy']}, numba {machine['numba']}",
+        "",
+        f"{'task':<52} {'ours':>10} {'baseline':>10} {'ratio':>8}",
+    ]
     for row in report["results"]:
-        baseline = (_seconds(row["baseline_s"]) if math.isfinite(row["baseline_s"])
-                    else "-")
-        ratio = (f"{row['speedup']:>7.1f}x" if math.isfinite(row["speedup"])
-                 else f"{'-':>8}")
-        lines.append(f"{row['task']:<52} {_seconds(row['ours_s']):>10} "
-                     f"{baseline:>10} {ratio}")
+        baseline = _seconds(row["baseline_s"]) if math.isfinite(row["baseline_s"]) else "-"
+        ratio = f"{row['speedup']:>7.1f}x" if math.isfinite(row["speedup"]) else f"{'-':>8}"
+        lines.append(f"{row['task']:<52} {_seconds(row['ours_s']):>10} {baseline:>10} {ratio}")
         lines.append(f"    baseline: {row['baseline']}; {row['note']}")
     loaded = [row for row in report["results"] if "load" in row]
     if loaded:
-        lines += ["", ("under load: each task again beside one CPU-bound process "
-                       f"(a Python busy loop), medians; must hold within {LOAD_LIMIT:g}x"),
-                  f"{'task':<52} {'idle':>10} {'loaded':>10} {'slowdown':>8}"]
+        lines += [
+            "",
+            (
+                "under load: each task again beside one CPU-bound process "
+                f"(a Python busy loop), medians; must hold within {LOAD_LIMIT:g}x"
+            ),
+            f"{'task':<52} {'idle':>10} {'loaded':>10} {'slowdown':>8}",
+        ]
         for row in loaded:
             load = row["load"]
-            lines.append(f"{row['task']:<52} {_seconds(load['idle_s']):>10} "
-                         f"{_seconds(load['loaded_s']):>10} {load['slowdown']:>7.2f}x"
-                         + ("" if load["holds"] else "  FAILS"))
+            lines.append(
+                f"{row['task']:<52} {_seconds(load['idle_s']):>10} "
+                f"{_seconds(load['loaded_s']):>10} {load['slowdown']:>7.2f}x"
+                + ("" if load["holds"] else "  FAILS")
+            )
         held = sum(row["load"]["holds"] for row in loaded)
-        lines.append(f"under-load check: {held} of {len(loaded)} rows hold within "
-                     f"{LOAD_LIMIT:g}x" + ("" if held == len(loaded) else " (NOT ALL)"))
+        lines.append(
+            f"under-load check: {held} of {len(loaded)} rows hold within "
+            f"{LOAD_LIMIT:g}x" + ("" if held == len(loaded) else " (NOT ALL)")
+        )
     return "\n".join(lines)
 
 

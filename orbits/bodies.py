@@ -91,12 +91,10 @@ def canonical_moments(moments):
     flat = np.array(moments, dtype=float).reshape(-1, 3)
     bad = ~np.all(np.isfinite(flat), axis=1)
     if bad.any():
-        raise NonPhysicalBodyError(
-            f"moments {_row(flat, bad)} are not all finite")
+        raise NonPhysicalBodyError(f"moments {_row(flat, bad)} are not all finite")
     bad = flat[:, 0] <= 0.0
     if bad.any():
-        raise NonPhysicalBodyError(
-            f"moments {_row(flat, bad)} must all be positive")
+        raise NonPhysicalBodyError(f"moments {_row(flat, bad)} must all be positive")
     bad = flat[:, 0] < np.finfo(float).tiny
     if bad.any():
         # a subnormal double keeps fewer than 53 bits: the body would not be
@@ -104,7 +102,8 @@ def canonical_moments(moments):
         raise NonPhysicalBodyError(
             f"moments {_row(flat, bad)} are below the smallest normal double "
             "(2.2e-308) and carry reduced precision; rescale them (the phases "
-            "do not depend on the scale)")
+            "do not depend on the scale)"
+        )
     _, exponent = np.frexp(flat[:, 2])
     exponent = exponent.astype(np.int64)
     with np.errstate(under="ignore"):
@@ -115,7 +114,8 @@ def canonical_moments(moments):
         raise NonPhysicalBodyError(
             f"moments {_row(flat, bad)} violate the triangle inequality "
             "I3 <= I1 + I2 that every rigid body satisfies (by more than the "
-            "rounding slack 8 eps I3)")
+            "rounding slack 8 eps I3)"
+        )
     near = np.flatnonzero(excess > 0.0)
     if near.size:
         unit[near] = _snap_flat(unit[near], flat[near])
@@ -124,7 +124,8 @@ def canonical_moments(moments):
         raise SymmetricTopError(
             f"moments {_row(flat, bad)} describe a symmetric top (two equal "
             "moments): it has no separatrix and its elliptic modulus "
-            "degenerates, so the total-phase formula needs I1 < I2 < I3")
+            "degenerates, so the total-phase formula needs I1 < I2 < I3"
+        )
     return unit.reshape(shape + (3,)), exponent.reshape(shape)
 
 
@@ -153,7 +154,8 @@ def _snap_flat(unit, given):
             f"moments {_row(given, ~done)} exceed the flat edge I3 = I1 + I2 by "
             "less than the rounding slack 8 eps I3, but no body on the edge "
             "differs from them in one moment by that excess; give moments with "
-            "I3 <= I1 + I2")
+            "I3 <= I1 + I2"
+        )
     return out
 
 
@@ -184,8 +186,7 @@ def _moment_array(body_or_moments):
     """Sorted moments, shape (..., 3), from an array-like (type-checked)."""
     moments = real_array("moments", body_or_moments, NonPhysicalBodyError)
     if moments.ndim == 0 or moments.shape[-1] != 3:
-        raise NonPhysicalBodyError(
-            f"moments must have shape (..., 3), got {moments.shape}")
+        raise NonPhysicalBodyError(f"moments must have shape (..., 3), got {moments.shape}")
     return np.sort(moments, axis=-1)
 
 
@@ -200,7 +201,8 @@ def _rescaled(unit, exponent, given):
         raise NonPhysicalBodyError(
             f"moments {_row(flat, wrong)} lie within rounding of the flat edge; "
             "the body on the edge is not representable at this scale "
-            "(subnormal moments): give the moments in larger units")
+            "(subnormal moments): give the moments in larger units"
+        )
     return out
 
 
@@ -259,8 +261,8 @@ class Body:
         given = real_array("moments", moments, NonPhysicalBodyError)
         if given.shape != (3,):
             raise NonPhysicalBodyError(
-                f"a body needs exactly 3 principal moments, got shape "
-                f"{given.shape}")
+                f"a body needs exactly 3 principal moments, got shape {given.shape}"
+            )
         order = np.argsort(given, kind="stable")
         unit, exponent = canonical_moments(given[order])
         sorted_moments = _rescaled(unit, exponent, given[order])
@@ -312,13 +314,23 @@ class Body:
         for label, value in (("l1", l1), ("l2", l2), ("w", w)):
             if not (math.isfinite(value) and value > 0.0):
                 raise NonPhysicalBodyError(
-                    f"T-handle {label} must be a positive length, got {value}")
+                    f"T-handle {label} must be a positive length, got {value}"
+                )
         total = l1 + l2
-        ix = (6 * l1 * l2 * w**2 + 2 * l1**2 * w**2 + l2**2 * w * (6 * l1 + w)
-              + l2**4 + 4 * l1 * l2**3) / (12 * total**2)
+        ix = (
+            6 * l1 * l2 * w**2
+            + 2 * l1**2 * w**2
+            + l2**2 * w * (6 * l1 + w)
+            + l2**4
+            + 4 * l1 * l2**3
+        ) / (12 * total**2)
         iy = ((l1 + 2 * l2) * w**2 + l1**3) / (12 * total)
-        iz = (l1 * l2 * (l1**2 + 5 * w**2 + 4 * l2**2) + l1**2 * (l1**2 + w**2)
-              + l2**2 * w * (6 * l1 + w) + l2**4) / (12 * total**2)
+        iz = (
+            l1 * l2 * (l1**2 + 5 * w**2 + 4 * l2**2)
+            + l1**2 * (l1**2 + w**2)
+            + l2**2 * w * (6 * l1 + w)
+            + l2**4
+        ) / (12 * total**2)
         body = cls((ix, iy, iz), name=name)
         body.shape = ("t-handle", float(l1), float(l2), float(w))
         return body
@@ -335,20 +347,21 @@ class Body:
         for label, value in (("b", b), ("c", c)):
             if not (math.isfinite(value) and value >= 0.0):
                 raise NonPhysicalBodyError(
-                    f"ellipsoid semi-axis {label} must be finite and "
-                    f">= 0, got {value}")
+                    f"ellipsoid semi-axis {label} must be finite and >= 0, got {value}"
+                )
         root_sq = 2.0 - 3.0 * b**4 - 2.0 * b**2 * c**2 - 3.0 * c**4
         if root_sq < 0.0:
             raise NonPhysicalBodyError(
                 f"ellipsoid semi-axes b={b}, c={c} are too large for a "
-                "unit-norm moment of inertia (2 - 3b^4 - 2b^2c^2 - 3c^4 < 0)")
+                "unit-norm moment of inertia (2 - 3b^4 - 2b^2c^2 - 3c^4 < 0)"
+            )
         root = math.sqrt(root_sq)
         if root - b * b - c * c <= 0.0:
             raise NonPhysicalBodyError(
                 f"ellipsoid semi-axes b={b}, c={c} leave no real third "
-                "semi-axis a (need sqrt(2-3b^4-2b^2c^2-3c^4) > b^2 + c^2)")
-        moments = (b * b + c * c, 0.5 * (c * c - b * b + root),
-                   0.5 * (b * b - c * c + root))
+                "semi-axis a (need sqrt(2-3b^4-2b^2c^2-3c^4) > b^2 + c^2)"
+            )
+        moments = (b * b + c * c, 0.5 * (c * c - b * b + root), 0.5 * (b * b - c * c + root))
         return cls(moments, name=name)
 
     @classmethod
@@ -365,8 +378,7 @@ class Body:
         """
         tensor = np.asarray(tensor, dtype=float)
         if tensor.shape != (3, 3) or not np.all(np.isfinite(tensor)):
-            raise NonPhysicalBodyError(
-                "an inertia tensor must be a finite 3x3 matrix")
+            raise NonPhysicalBodyError("an inertia tensor must be a finite 3x3 matrix")
         scale = np.max(np.abs(tensor))
         if not np.allclose(tensor, tensor.T, rtol=0.0, atol=1e-12 * scale):
             raise NonPhysicalBodyError("an inertia tensor must be symmetric")
@@ -383,10 +395,10 @@ class Body:
         for label, value in (("a", a), ("b", b), ("c", c)):
             if not (math.isfinite(value) and value >= 0.0):
                 raise NonPhysicalBodyError(
-                    f"semi-axis {label} must be finite and >= 0, got {value}")
+                    f"semi-axis {label} must be finite and >= 0, got {value}"
+                )
         a2, b2, c2 = a * a, b * b, c * c
-        return cls(((b2 + c2) / 5.0, (a2 + c2) / 5.0, (a2 + b2) / 5.0),
-                   name=name)
+        return cls(((b2 + c2) / 5.0, (a2 + c2) / 5.0, (a2 + b2) / 5.0), name=name)
 
     @classmethod
     def preset(cls, name):
@@ -399,7 +411,8 @@ class Body:
         except KeyError:
             known = ", ".join(sorted(PRESETS))
             raise NonPhysicalBodyError(
-                f"unknown preset {name!r}; known presets: {known}") from None
+                f"unknown preset {name!r}; known presets: {known}"
+            ) from None
         return factory()
 
     # -- properties ----------------------------------------------------
@@ -424,7 +437,7 @@ class Body:
     @property
     def normalized_moments(self):
         """Moments scaled to ``|I| = 1`` (the paper's convention)."""
-        return self._unit / np.linalg.norm(self._unit)     # no overflow at any scale
+        return self._unit / np.linalg.norm(self._unit)  # no overflow at any scale
 
     @property
     def permutation(self):
@@ -460,6 +473,7 @@ class Body:
     def critical_angle(self, phi=0.0):
         """Polar angle of the separatrix spin, radians; see :func:`orbits.critical_angle`."""
         from .phases import critical_angle
+
         return critical_angle(self, phi)
 
     def __repr__(self):
@@ -470,8 +484,9 @@ class Body:
     def __eq__(self, other):
         if not isinstance(other, Body):
             return NotImplemented
-        return (np.array_equal(self._moments, other._moments)
-                and np.array_equal(self._frame, other._frame))
+        return np.array_equal(self._moments, other._moments) and np.array_equal(
+            self._frame, other._frame
+        )
 
     def __hash__(self):
         return hash(self._moments.tobytes())
@@ -496,8 +511,9 @@ class Body:
         a, b, c = _positive_lengths("box edge", a=a, b=b, c=c)
         mass = _positive_mass(mass)
         a2, b2, c2 = a * a, b * b, c * c
-        body = cls((mass * (b2 + c2) / 12.0, mass * (a2 + c2) / 12.0,
-                    mass * (a2 + b2) / 12.0), name=name)
+        body = cls(
+            (mass * (b2 + c2) / 12.0, mass * (a2 + c2) / 12.0, mass * (a2 + b2) / 12.0), name=name
+        )
         body.shape = ("box", a, b, c)
         return body
 
@@ -527,7 +543,8 @@ class Body:
                 f"({moments[0]:.17g}, {moments[1]:.17g}, {moments[2]:.17g}): "
                 "a symmetric top, which has no separatrix and no total-phase "
                 "formula; give radius_y (an elliptic section) for an asymmetric "
-                "body")
+                "body"
+            )
         body = cls(moments, name=name)
         body.shape = ("cylinder", float(radius), float(length), float(radius_y))
         return body
@@ -557,20 +574,21 @@ class Body:
         if masses.ndim != 1 or masses.size == 0 or positions.shape != (masses.size, 3):
             raise NonPhysicalBodyError(
                 f"point masses need masses of shape (n,) and positions of shape "
-                f"(n, 3), got {masses.shape} and {positions.shape}")
+                f"(n, 3), got {masses.shape} and {positions.shape}"
+            )
         if not (np.all(np.isfinite(masses)) and np.all(np.isfinite(positions))):
             raise NonPhysicalBodyError("point masses and positions must be finite")
         if np.any(masses <= 0.0):
             raise NonPhysicalBodyError("point masses must all be positive")
         relative = positions - masses @ positions / masses.sum()
         squared = np.einsum("k,ki,ki->", masses, relative, relative)
-        tensor = squared * np.eye(3) - np.einsum("k,ki,kj->ij", masses, relative,
-                                                 relative)
+        tensor = squared * np.eye(3) - np.einsum("k,ki,kj->ij", masses, relative, relative)
         values = np.linalg.eigvalsh(tensor)
         if values[0] <= 1e-12 * values[2]:
             raise NonPhysicalBodyError(
                 "the point masses lie on a line: the moment about that line is "
-                "zero, which is no rigid body of this library")
+                "zero, which is no rigid body of this library"
+            )
         return cls.from_inertia_tensor(tensor, name=name)
 
     @classmethod
@@ -592,12 +610,12 @@ class Body:
             ``density`` not finite and positive.
         """
         from .errors import InputError
+
         density = _positive_mass(density, "density")
         try:
             import trimesh
         except ImportError:
-            raise InputError("Body.from_mesh needs trimesh: pip install "
-                             "'orbits[mesh]'") from None
+            raise InputError("Body.from_mesh needs trimesh: pip install 'orbits[mesh]'") from None
         try:
             mesh = trimesh.load(str(path), force="mesh")
         except Exception as error:  # trimesh raises many kinds
@@ -605,21 +623,22 @@ class Body:
         if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
             raise InputError(f"{path} holds no triangle mesh")
         if not mesh.is_watertight:
-            raise InputError(f"mesh {path} is not closed (watertight): it bounds "
-                             "no volume")
+            raise InputError(f"mesh {path} is not closed (watertight): it bounds no volume")
         if not mesh.is_winding_consistent or mesh.volume <= 0.0:
-            raise InputError(f"mesh {path} is inside out or inconsistently "
-                             "wound (its volume is not positive)")
+            raise InputError(
+                f"mesh {path} is inside out or inconsistently wound (its volume is not positive)"
+            )
         mesh.density = density
-        body = cls.from_inertia_tensor(np.asarray(mesh.moment_inertia, dtype=float),
-                                       name=name)
-        body.shape = ("mesh", np.asarray(mesh.vertices - mesh.center_mass, dtype=float),
-                      np.asarray(mesh.faces))
+        body = cls.from_inertia_tensor(np.asarray(mesh.moment_inertia, dtype=float), name=name)
+        body.shape = (
+            "mesh",
+            np.asarray(mesh.vertices - mesh.center_mass, dtype=float),
+            np.asarray(mesh.faces),
+        )
         return body
 
     @classmethod
-    def from_rotational_constants(cls, a, b, c, unit="cm-1", *, defect="error",
-                                  name=None):
+    def from_rotational_constants(cls, a, b, c, unit="cm-1", *, defect="error", name=None):
         """A molecule from its rotational constants A >= B >= C.
 
         ``I_A = h / (8 pi^2 c A)`` for wavenumbers (``unit="cm-1"``, with
@@ -655,30 +674,36 @@ class Body:
         import warnings
 
         from scipy import constants as codata
+
         factors = {"cm-1": 100.0 * codata.c, "MHz": 1e6, "GHz": 1e9}
         if unit not in factors:
             raise NonPhysicalBodyError(
-                f"unknown unit {unit!r} for rotational constants; use one of "
-                f"{', '.join(factors)}")
+                f"unknown unit {unit!r} for rotational constants; use one of {', '.join(factors)}"
+            )
         if defect not in ("error", "flatten"):
-            raise NonPhysicalBodyError(
-                f"defect must be 'error' or 'flatten', got {defect!r}")
+            raise NonPhysicalBodyError(f"defect must be 'error' or 'flatten', got {defect!r}")
         values = _positive_lengths("rotational constant", A=a, B=b, C=c)
-        hertz = np.sort(np.array(values)) * factors[unit]   # C <= B <= A
+        hertz = np.sort(np.array(values)) * factors[unit]  # C <= B <= A
         i_c, i_b, i_a = codata.h / (8.0 * math.pi**2 * hertz)
         excess = i_c - (i_a + i_b)
         if excess > _FLAT_SLACK * i_c:
             amu_a2 = codata.physical_constants["atomic mass constant"][0] * 1e-20
-            text = (f"inertial defect Delta = I_C - I_A - I_B = "
-                    f"{excess / amu_a2:.6g} u A^2 ({excess / i_c:.3%} of I_C)")
+            text = (
+                f"inertial defect Delta = I_C - I_A - I_B = "
+                f"{excess / amu_a2:.6g} u A^2 ({excess / i_c:.3%} of I_C)"
+            )
             if defect == "error":
                 raise NonPhysicalBodyError(
                     f"rotational constants ({a:.10g}, {b:.10g}, {c:.10g}) {unit} violate "
                     f"I_C <= I_A + I_B by the {text}; pass defect='flatten' "
                     "(CLI: --defect flatten) to put the body on the flat edge "
-                    "I_C = I_A + I_B")
-            warnings.warn(f"{text} removed: I_C set to I_A + I_B (flat body)",
-                          InertialDefectWarning, stacklevel=2)
+                    "I_C = I_A + I_B"
+                )
+            warnings.warn(
+                f"{text} removed: I_C set to I_A + I_B (flat body)",
+                InertialDefectWarning,
+                stacklevel=2,
+            )
             i_c = i_a + i_b
         return cls((i_a, i_b, i_c), name=name)
 
@@ -690,18 +715,24 @@ class InertialDefectWarning(UserWarning):
 def _positive_lengths(what, **values):
     """The values, checked finite and positive (named in the error)."""
     for label, value in values.items():
-        if not (isinstance(value, (int, float, np.floating, np.integer))
-                and math.isfinite(value) and value > 0.0):
+        if not (
+            isinstance(value, (int, float, np.floating, np.integer))
+            and math.isfinite(value)
+            and value > 0.0
+        ):
             raise NonPhysicalBodyError(
-                f"{what} {label} must be a finite positive number, got {value!r}")
+                f"{what} {label} must be a finite positive number, got {value!r}"
+            )
     return tuple(float(v) for v in values.values())
 
 
 def _positive_mass(value, label="mass"):
-    if not (isinstance(value, (int, float, np.floating, np.integer))
-            and math.isfinite(value) and value > 0.0):
-        raise NonPhysicalBodyError(
-            f"{label} must be a finite positive number, got {value!r}")
+    if not (
+        isinstance(value, (int, float, np.floating, np.integer))
+        and math.isfinite(value)
+        and value > 0.0
+    ):
+        raise NonPhysicalBodyError(f"{label} must be a finite positive number, got {value!r}")
     return float(value)
 
 
@@ -717,8 +748,11 @@ def cylinder_moments(radius, length, mass=1.0, *, radius_y=None):
     b = a if radius_y is None else _positive_lengths("cylinder", radius_y=radius_y)[0]
     mass = _positive_mass(mass)
     axial = length * length / 12.0
-    return (mass * (b * b / 4.0 + axial), mass * (a * a / 4.0 + axial),
-            mass * (a * a + b * b) / 4.0)
+    return (
+        mass * (b * b / 4.0 + axial),
+        mass * (a * a / 4.0 + axial),
+        mass * (a * a + b * b) / 4.0,
+    )
 
 
 # The region of physical asymmetric bodies in the paper's I1-I2 plane
@@ -739,8 +773,9 @@ def region_moments(i1, i2):
     i2 = np.asarray(i2, dtype=float)
     rest = 1.0 - i1 * i1 - i2 * i2
     i3 = np.sqrt(np.clip(rest, 0.0, None))
-    inside = ((rest > 0.0) & (i1 > 0.0) & (i1 < i2) & (i2 < i3)
-              & (i3 <= (i1 + i2) * (1.0 + _FLAT_SLACK)))
+    inside = (
+        (rest > 0.0) & (i1 > 0.0) & (i1 < i2) & (i2 < i3) & (i3 <= (i1 + i2) * (1.0 + _FLAT_SLACK))
+    )
     return np.stack([i1, i2, i3], axis=-1), inside
 
 
@@ -757,6 +792,7 @@ def region_grid(resolution):
         machine's memory (:func:`orbits.survey.check_resolution`).
     """
     from .survey import check_resolution
+
     resolution = check_resolution(resolution)
     (lo1, hi1), (lo2, hi2) = REGION_BOX
     axis1 = lo1 + (np.arange(resolution) + 0.5) * (hi1 - lo1) / resolution
@@ -785,20 +821,24 @@ def region_sample(count):
     from scipy.stats import qmc
 
     from .catalog import _bytes, memory_budget
+
     count = integer("count", count, minimum=1)
     if count * _BYTES_PER_SAMPLE > memory_budget():
-        raise InputError(f"region_sample({count}) would need about "
-                         f"{_bytes(count * _BYTES_PER_SAMPLE)} of memory, more than the "
-                         f"{_bytes(memory_budget())} allowed (half of this machine's)")
+        raise InputError(
+            f"region_sample({count}) would need about "
+            f"{_bytes(count * _BYTES_PER_SAMPLE)} of memory, more than the "
+            f"{_bytes(memory_budget())} allowed (half of this machine's)"
+        )
     (lo1, hi1), (lo2, hi2) = REGION_BOX
     sampler = qmc.Halton(d=2, scramble=False)
-    sampler.fast_forward(1)                  # skip the corner (0, 0)
+    sampler.fast_forward(1)  # skip the corner (0, 0)
     kept = []
     total = 0
     while total < count:
         points = sampler.random(max(64, 4 * (count - total)))
-        moments, inside = region_moments(lo1 + points[:, 0] * (hi1 - lo1),
-                                         lo2 + points[:, 1] * (hi2 - lo2))
+        moments, inside = region_moments(
+            lo1 + points[:, 0] * (hi1 - lo1), lo2 + points[:, 1] * (hi2 - lo2)
+        )
         kept.append(moments[inside])
         total += int(inside.sum())
     return np.concatenate(kept)[:count]

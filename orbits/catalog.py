@@ -39,8 +39,10 @@ from .search import CATALOG_COLUMNS, _count, closed_orbits
 
 VERIFIED_COLUMN = "closure_error"
 CLOSURE_TOLERANCE = 1e-8
-READ_HINT = ('read with orbits.read_catalog(path), or pandas.read_csv(path, comment="#") '
-             '(pandas 2.x: add float_precision="round_trip")')
+READ_HINT = (
+    'read with orbits.read_catalog(path), or pandas.read_csv(path, comment="#") '
+    '(pandas 2.x: add float_precision="round_trip")'
+)
 ROWS_KEY = "rows: "
 CHECKSUM_KEY = "sha256 of the data section: "
 # first characters a spreadsheet takes as the start of a formula (OWASP CSV
@@ -61,8 +63,8 @@ def memory_budget():
 
 # measured here (phase_levels(1000, 30): 465,000 candidate fractions in 1.9 s)
 _SECONDS_PER_CANDIDATE = 4e-6
-_BYTES_PER_LEVEL = 400          # Fraction set, sorted list and level arrays
-_BYTES_PER_ROW = 600            # catalog row: search arrays, DataFrame, CSV text
+_BYTES_PER_LEVEL = 400  # Fraction set, sorted list and level arrays
+_BYTES_PER_ROW = 600  # catalog row: search arrays, DataFrame, CSV text
 _SECONDS_PER_BODY_LEVEL = 2e-7  # root search per body and level, one core
 MAX_SECONDS = 24 * 3600
 
@@ -76,7 +78,7 @@ def search_estimate(n_max, q_max, bodies=1):
     orbits per level.
     """
     candidates = float(n_max) * q_max * (q_max + 1) / 2.0
-    levels = candidates * 6.0 / math.pi ** 2 + n_max
+    levels = candidates * 6.0 / math.pi**2 + n_max
     memory = levels * _BYTES_PER_LEVEL + 2.0 * levels * bodies * _BYTES_PER_ROW
     seconds = candidates * _SECONDS_PER_CANDIDATE + levels * bodies * _SECONDS_PER_BODY_LEVEL
     return memory, seconds
@@ -98,13 +100,17 @@ def check_search_bounds(n_max, q_max, bodies=1, what="this search"):
     memory, seconds = search_estimate(n_max, q_max, bodies)
     budget = memory_budget()
     if memory > budget:
-        raise InputError(f"{what} (n_max={n_max}, q_max={q_max}, {bodies} body(ies)) "
-                         f"would need about {_bytes(memory)} of memory, more than the "
-                         f"{_bytes(budget)} allowed (half of this machine's); "
-                         "lower --n-max or --q-max")
+        raise InputError(
+            f"{what} (n_max={n_max}, q_max={q_max}, {bodies} body(ies)) "
+            f"would need about {_bytes(memory)} of memory, more than the "
+            f"{_bytes(budget)} allowed (half of this machine's); "
+            "lower --n-max or --q-max"
+        )
     if seconds > MAX_SECONDS:
-        raise InputError(f"{what} (n_max={n_max}, q_max={q_max}, {bodies} body(ies)) "
-                         f"would take about {_duration(seconds)}; lower --n-max or --q-max")
+        raise InputError(
+            f"{what} (n_max={n_max}, q_max={q_max}, {bodies} body(ies)) "
+            f"would take about {_duration(seconds)}; lower --n-max or --q-max"
+        )
     return memory, seconds
 
 
@@ -155,11 +161,14 @@ def catalog(bodies, n_max=10, q_max=1, *, verify=False, progress=None):
         :func:`check_search_bounds`; refused before any work).
     """
     from .checks import closure_errors
+
     if isinstance(bodies, Body):
         bodies = [bodies]
     if isinstance(bodies, (str, bytes)) or not hasattr(bodies, "__iter__"):
-        raise ArgumentTypeError(f"bodies must be a Body or an iterable of Body objects "
-                                f"(or moments), got {type(bodies).__name__}")
+        raise ArgumentTypeError(
+            f"bodies must be a Body or an iterable of Body objects "
+            f"(or moments), got {type(bodies).__name__}"
+        )
     bodies = [b if isinstance(b, Body) else Body(b) for b in bodies]
     if not bodies:
         raise InputError("no bodies given")
@@ -170,7 +179,8 @@ def catalog(bodies, n_max=10, q_max=1, *, verify=False, progress=None):
         frame = closed_orbits(body, n_max=n_max, q_max=q_max)
         if verify:
             frame[VERIFIED_COLUMN] = closure_errors(
-                body.moments, frame["dtheta"].to_numpy(), frame["q"].to_numpy())
+                body.moments, frame["dtheta"].to_numpy(), frame["q"].to_numpy()
+            )
         frames.append(frame)
         if progress is not None:
             progress(1)
@@ -224,15 +234,20 @@ def write_catalog(frame, path, command=None, notes=()):
     checks.  ``path`` ``"-"`` writes to standard output.
     """
     data = csv_text(frame)
-    header = [f"orbits {__version__} closed-orbit catalog",
-              f"command: {command if command else '(Python API)'}",
-              READ_HINT]
+    header = [
+        f"orbits {__version__} closed-orbit catalog",
+        f"command: {command if command else '(Python API)'}",
+        READ_HINT,
+    ]
     header += [" ".join(str(note).split()) for note in notes]
-    header += [f"{ROWS_KEY}{len(frame)}",
-               f"{CHECKSUM_KEY}{hashlib.sha256(data.encode()).hexdigest()}"]
+    header += [
+        f"{ROWS_KEY}{len(frame)}",
+        f"{CHECKSUM_KEY}{hashlib.sha256(data.encode()).hexdigest()}",
+    ]
     text = "".join(f"# {line}\n" for line in header) + data
     if os.fspath(path) == "-":
         import sys
+
         sys.stdout.write(text)
         sys.stdout.flush()
         return
@@ -247,7 +262,7 @@ def _split_header(raw):
     while raw.startswith(b"#", position):
         end = raw.find(b"\n", position)
         end = len(raw) if end < 0 else end + 1
-        header.append(raw[position + 1:end].decode("utf-8").strip())
+        header.append(raw[position + 1 : end].decode("utf-8").strip())
         position = end
     return header, raw[position:]
 
@@ -292,35 +307,48 @@ def read_catalog(path, *, check=True):
         header, data = _split_header(raw)
     except UnicodeDecodeError:
         raise InputError(f"{path} is not a catalog CSV (not UTF-8 text)") from None
-    recorded = {key: line[len(key):] for line in header
-                for key in (ROWS_KEY, CHECKSUM_KEY) if line.startswith(key)}
+    recorded = {
+        key: line[len(key) :]
+        for line in header
+        for key in (ROWS_KEY, CHECKSUM_KEY)
+        if line.startswith(key)
+    }
     if check:
         if len(recorded) != 2:
-            raise InputError(f"{path}: no row count and checksum in the header (not an "
-                             "orbits catalog, or written before checksums; "
-                             "read_catalog(path, check=False) skips the check)")
+            raise InputError(
+                f"{path}: no row count and checksum in the header (not an "
+                "orbits catalog, or written before checksums; "
+                "read_catalog(path, check=False) skips the check)"
+            )
         if hashlib.sha256(data).hexdigest() != recorded[CHECKSUM_KEY]:
-            raise InputError(f"{path} is damaged: the data section does not match its "
-                             "SHA-256 (changed, truncated or extended)")
+            raise InputError(
+                f"{path} is damaged: the data section does not match its "
+                "SHA-256 (changed, truncated or extended)"
+            )
     dtypes = {name: float for name in CATALOG_COLUMNS + (VERIFIED_COLUMN,)}
     dtypes.update(body=str, branch=str, n="int64", q="int64", closes_after=str)
     try:
-        frame = pd.read_csv(io.BytesIO(data), dtype=dtypes, keep_default_na=False,
-                            **csv_float_options())
+        frame = pd.read_csv(
+            io.BytesIO(data), dtype=dtypes, keep_default_na=False, **csv_float_options()
+        )
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as error:
         raise InputError(f"{path} is not a catalog CSV: {_one_line(error)}") from None
     except (ValueError, TypeError) as error:
-        raise InputError(f"{path}: a cell has the wrong type for its column "
-                         f"({_one_line(error)})") from None
+        raise InputError(
+            f"{path}: a cell has the wrong type for its column ({_one_line(error)})"
+        ) from None
     if check and str(len(frame)) != recorded[ROWS_KEY].strip():
-        raise InputError(f"{path} is damaged: {len(frame)} rows, the header records "
-                         f"{recorded[ROWS_KEY].strip()}")
+        raise InputError(
+            f"{path} is damaged: {len(frame)} rows, the header records "
+            f"{recorded[ROWS_KEY].strip()}"
+        )
     columns = list(frame.columns)
     expected = list(CATALOG_COLUMNS)
-    if columns[:len(expected)] != expected:
-        raise InputError(f"{path}: columns {columns} do not start with the catalog "
-                         f"schema {expected}")
-    extra = columns[len(expected):]
+    if columns[: len(expected)] != expected:
+        raise InputError(
+            f"{path}: columns {columns} do not start with the catalog schema {expected}"
+        )
+    extra = columns[len(expected) :]
     if extra not in ([], [VERIFIED_COLUMN]):
         raise InputError(f"{path}: unexpected columns {extra}")
     if not frame["branch"].isin(["SAM", "LAM"]).all():
@@ -392,8 +420,9 @@ class BodiesFile:
         if not self.skipped:
             return []
         rows = ", ".join(str(row) for row, _ in self.skipped)
-        return [f"skipped {len(self.skipped)} invalid row(s) of {self.path} "
-                f"(--skip-invalid): {rows}"]
+        return [
+            f"skipped {len(self.skipped)} invalid row(s) of {self.path} (--skip-invalid): {rows}"
+        ]
 
 
 def read_bodies_csv(path, skip_invalid=False):
@@ -432,8 +461,7 @@ def read_bodies_csv(path, skip_invalid=False):
         raise InputError(f"cannot read {path}: {error.strerror}") from None
     lines = text.split("\n")
     start = 0
-    while start < len(lines) and (lines[start].startswith("#")
-                                  or not lines[start].strip("\r")):
+    while start < len(lines) and (lines[start].startswith("#") or not lines[start].strip("\r")):
         start += 1
     rest = "\n".join(lines[start:])
     try:
@@ -455,12 +483,17 @@ def _check_header(path, raw_header):
     duplicate = sorted({c for c in header if header.count(c) > 1})
     missing = [c for c in ("I1", "I2", "I3") if c not in header]
     if missing or unknown or duplicate:
-        what = "; ".join(filter(None, [
-            missing and f"missing column(s) {', '.join(missing)}",
-            unknown and f"unknown column(s) {', '.join(map(repr, unknown))}",
-            duplicate and f"repeated column(s) {', '.join(duplicate)}"]))
-        raise InputError(f"{path}: {what} (the header must name I1, I2, I3 and "
-                         "optionally name)")
+        what = "; ".join(
+            filter(
+                None,
+                [
+                    missing and f"missing column(s) {', '.join(missing)}",
+                    unknown and f"unknown column(s) {', '.join(map(repr, unknown))}",
+                    duplicate and f"repeated column(s) {', '.join(duplicate)}",
+                ],
+            )
+        )
+        raise InputError(f"{path}: {what} (the header must name I1, I2, I3 and optionally name)")
     return header
 
 
@@ -469,14 +502,15 @@ class _Cells:
     """The data rows of a bodies file, parsed but not yet validated."""
 
     count: int
-    moments: np.ndarray         # (count, 3); NaN where a cell is not a number
-    problems: dict              # row index -> first reason
-    whole: np.ndarray           # bool: the row has the header's number of fields
+    moments: np.ndarray  # (count, 3); NaN where a cell is not a number
+    problems: dict  # row index -> first reason
+    whole: np.ndarray  # bool: the row has the header's number of fields
     names: list = None
 
 
 def _have_pyarrow():
     from importlib.util import find_spec
+
     return find_spec("pyarrow") is not None
 
 
@@ -493,29 +527,33 @@ def _arrow_cells(rest, raw_header):
     """
     import pyarrow as pa
     from pyarrow import csv as pacsv
+
     if any("\n" in cell or "\r" in cell for cell in raw_header):
         return None
     names = [f"c{k}" for k in range(len(raw_header))]
     data = rest.encode("utf-8")
     if _stray_quote(data):
         return None
-    ragged = []                      # (0-based data row, its number of fields)
+    ragged = []  # (0-based data row, its number of fields)
 
     def collect(row):
         ragged.append((row.number, row.actual_columns))
         return "skip"
+
     try:
         table = pacsv.read_csv(
             io.BytesIO(data),
             # one thread: the handler then gets row numbers (and it is as fast)
-            read_options=pacsv.ReadOptions(column_names=names, skip_rows=1,
-                                           use_threads=False),
-            parse_options=pacsv.ParseOptions(newlines_in_values=True,
-                                              ignore_empty_lines=True,
-                                              invalid_row_handler=collect),
+            read_options=pacsv.ReadOptions(column_names=names, skip_rows=1, use_threads=False),
+            parse_options=pacsv.ParseOptions(
+                newlines_in_values=True, ignore_empty_lines=True, invalid_row_handler=collect
+            ),
             convert_options=pacsv.ConvertOptions(
                 column_types={name: pa.string() for name in names},
-                strings_can_be_null=False, quoted_strings_can_be_null=False))
+                strings_can_be_null=False,
+                quoted_strings_can_be_null=False,
+            ),
+        )
     except (pa.ArrowInvalid, pa.ArrowNotImplementedError):
         return None
     if any(number is None for number, _ in ragged):
@@ -526,10 +564,11 @@ def _arrow_cells(rest, raw_header):
     whole = np.ones(count, dtype=bool)
     for number, fields in ragged:
         # Arrow numbers records from 1 with the header as record 1
-        problems[number - 2] = (f"{fields} fields, the header has {len(header)} "
-                                "(no implicit index column)")
+        problems[number - 2] = (
+            f"{fields} fields, the header has {len(header)} (no implicit index column)"
+        )
         whole[number - 2] = False
-    place = np.flatnonzero(whole)    # full row index of each row of the table
+    place = np.flatnonzero(whole)  # full row index of each row of the table
     columns = []
     for column in ("I1", "I2", "I3"):
         found = {}
@@ -541,12 +580,11 @@ def _arrow_cells(rest, raw_header):
         for k, reason in found.items():
             problems.setdefault(int(place[k]), reason)
         columns.append(full)
-    moments = (np.column_stack(columns) if count else np.empty((0, 3)))
+    moments = np.column_stack(columns) if count else np.empty((0, 3))
     names_list = None
     if "name" in header:
         names_list = [""] * count
-        for k, name in zip(place.tolist(),
-                           table.column(names[header.index("name")]).to_pylist()):
+        for k, name in zip(place.tolist(), table.column(names[header.index("name")]).to_pylist()):
             names_list[k] = name
     return _Cells(count, moments, problems, whole, names_list)
 
@@ -579,6 +617,7 @@ def _arrow_numbers(column, given, problems, whole=None):
     """
     import pyarrow as pa
     import pyarrow.compute as pc
+
     text = pc.utf8_trim_whitespace(given)
     count = len(given)
     try:
@@ -610,14 +649,15 @@ def _python_cells(path, rest, header):
         records = list(csv.reader(io.StringIO(rest), strict=True))
     except csv.Error as error:
         raise InputError(f"{path} is not a CSV of bodies: {error}") from None
-    data = [r for r in records[1:] if r]       # blank lines
+    data = [r for r in records[1:] if r]  # blank lines
     width = len(header)
     count = len(data)
     problems = {}
     lengths = np.fromiter((len(r) for r in data), dtype=np.int64, count=count)
     for k in np.flatnonzero(lengths != width):
-        problems[int(k)] = (f"{lengths[k]} fields, the header has {width} "
-                            "(no implicit index column)")
+        problems[int(k)] = (
+            f"{lengths[k]} fields, the header has {width} (no implicit index column)"
+        )
     whole = lengths == width
     columns = []
     for column in ("I1", "I2", "I3"):
@@ -626,8 +666,8 @@ def _python_cells(path, rest, header):
         numbers = None
         if _have_pyarrow():
             import pyarrow as pa
-            numbers = _arrow_numbers(column, pa.array(values, pa.string()), problems,
-                                     whole)
+
+            numbers = _arrow_numbers(column, pa.array(values, pa.string()), problems, whole)
         if numbers is None:
             numbers = np.full(count, np.nan)
             for k, cell in enumerate(values):
@@ -655,28 +695,34 @@ def _validated(path, header, cells, skip_invalid):
         problems[index] = _body_error(moments[index])
 
     def label(k):
-        return f"{path}, row {k + 1}" + (f" ({names[k]!r})" if names is not None
-                                         and cells.whole[k] else "")
+        return f"{path}, row {k + 1}" + (
+            f" ({names[k]!r})" if names is not None and cells.whole[k] else ""
+        )
+
     bad = sorted(problems)
     if bad and not skip_invalid:
         more = len(bad) - 1
-        tail = (f"; {more} more bad row(s) (--skip-invalid skips them)" if more else "")
+        tail = f"; {more} more bad row(s) (--skip-invalid skips them)" if more else ""
         raise InputError(f"{label(bad[0])}: {problems[bad[0]]}{tail}")
     keep = np.ones(count, dtype=bool)
     keep[bad] = False
     if not keep.any():
-        raise InputError(f"{path}: all {count} rows are invalid (first: row {bad[0] + 1}: "
-                         f"{problems[bad[0]]})")
+        raise InputError(
+            f"{path}: all {count} rows are invalid (first: row {bad[0] + 1}: {problems[bad[0]]})"
+        )
     return BodiesFile(
-        path=str(path), moments=moments[keep],
+        path=str(path),
+        moments=moments[keep],
         names=None if names is None else [n for n, k in zip(names, keep) if k],
         rows=np.flatnonzero(keep) + 1,
-        skipped=[(k + 1, f"{label(k)}: {problems[k]}") for k in bad])
+        skipped=[(k + 1, f"{label(k)}: {problems[k]}") for k in bad],
+    )
 
 
 def _invalid_moments(moments):
     """Indices of rows that :func:`orbits.bodies.validate_moments` rejects."""
     from .bodies import _FLAT_SLACK, flat_excess, validate_moments
+
     if moments.shape[0] == 0:
         return []
     ordered = np.sort(moments, axis=1)
@@ -691,9 +737,13 @@ def _invalid_moments(moments):
         # the triangle test as the validator makes it: exact, at unit scale
         scale = np.frexp(np.where(np.isfinite(ordered[:, 2]), ordered[:, 2], 1.0))[1]
         unit = np.ldexp(ordered, -scale[:, None])
-        flags = (~np.all(np.isfinite(ordered), axis=1) | (ordered[:, 0] <= 0)
-                 | (ordered[:, 0] == ordered[:, 1]) | (ordered[:, 1] == ordered[:, 2])
-                 | (flat_excess(unit) > _FLAT_SLACK * unit[:, 2]))
+        flags = (
+            ~np.all(np.isfinite(ordered), axis=1)
+            | (ordered[:, 0] <= 0)
+            | (ordered[:, 0] == ordered[:, 1])
+            | (ordered[:, 1] == ordered[:, 2])
+            | (flat_excess(unit) > _FLAT_SLACK * unit[:, 2])
+        )
     bad = set(np.flatnonzero(flags).tolist())
     rest = np.flatnonzero(~flags)
     try:
@@ -701,7 +751,7 @@ def _invalid_moments(moments):
     except OrbitsError:
         for k in rest:
             try:
-                validate_moments(ordered[k:k + 1])
+                validate_moments(ordered[k : k + 1])
             except OrbitsError:
                 bad.add(int(k))
     return sorted(bad)

@@ -41,8 +41,7 @@ TOLERANCE = 1e-9
 MAX_CLOSURE_PERIODS = 100_000
 TWO_PI = 2.0 * np.pi
 
-RotationCheck = namedtuple("RotationCheck",
-                           ["period", "angle", "off_axis", "expected", "error"])
+RotationCheck = namedtuple("RotationCheck", ["period", "angle", "off_axis", "expected", "error"])
 RotationCheck.__doc__ = """Result of :func:`rotation_by_integration`.
 
 period : time between returns of omega to omega0 (from the integration)
@@ -52,8 +51,9 @@ expected : ``periods * Delta alpha`` mod 2 pi from the closed form
 error : max(circular |angle - expected|, off_axis)
 """
 
-MontgomeryCheck = namedtuple("MontgomeryCheck",
-                             ["total_phase", "dynamic_phase", "solid_angle", "period"])
+MontgomeryCheck = namedtuple(
+    "MontgomeryCheck", ["total_phase", "dynamic_phase", "solid_angle", "period"]
+)
 
 
 def _unit_motion(body_or_moments, theta, dtheta, phi):
@@ -67,8 +67,17 @@ def circular_distance(a, b):
     return np.minimum(d, TWO_PI - d)
 
 
-def rotation_by_integration(body_or_moments, theta=None, *, dtheta=None, phi=0.0,
-                            periods=1, rtol=1e-12, atol=1e-14, engine="scipy"):
+def rotation_by_integration(
+    body_or_moments,
+    theta=None,
+    *,
+    dtheta=None,
+    phi=0.0,
+    periods=1,
+    rtol=1e-12,
+    atol=1e-14,
+    engine="scipy",
+):
     """Check (a): integrate Euler's equations and the orientation.
 
     Parameters
@@ -98,10 +107,10 @@ def rotation_by_integration(body_or_moments, theta=None, *, dtheta=None, phi=0.0
     expected = np.mod(periods * motion_closed_form(motion), TWO_PI)
     if engine == "compiled":
         period, angle, off_axis = _checks.rotation_after_periods(
-            i1, i2, i3, w[0], w[1], w[2], int(periods), rtol, atol, 10_000_000)
+            i1, i2, i3, w[0], w[1], w[2], int(periods), rtol, atol, 10_000_000
+        )
     else:
-        period, angle, off_axis = _rotation_scipy(motion.body.moments, w,
-                                                  int(periods), rtol, atol)
+        period, angle, off_axis = _rotation_scipy(motion.body.moments, w, int(periods), rtol, atol)
     error = max(float(circular_distance(angle, expected)), off_axis)
     return RotationCheck(period, angle, off_axis, float(expected), error)
 
@@ -109,6 +118,7 @@ def rotation_by_integration(body_or_moments, theta=None, *, dtheta=None, phi=0.0
 def motion_closed_form(motion):
     """The closed-form Delta alpha (eqn:GeometricPhase) for a :class:`Motion`."""
     from .phases import spin_phases
+
     return float(spin_phases(motion.body, motion.omega0)["total_phase"].iloc[0])
 
 
@@ -136,16 +146,16 @@ def _rotation_scipy(moments, omega0, periods, rtol, atol):
     two_e = inertia @ (omega0 * omega0)
     m_sq = (inertia * inertia) @ (omega0 * omega0)
     guess = 2.0 * np.pi * np.sqrt(m_sq) / two_e * 1e6
-    solution = solve_ivp(rhs, (0.0, guess), y0, method="DOP853", rtol=rtol,
-                         atol=atol, events=event)
+    solution = solve_ivp(
+        rhs, (0.0, guess), y0, method="DOP853", rtol=rtol, atol=atol, events=event
+    )
     times = solution.t_events[0]
     states = solution.y_events[0]
     keep = times > 0.0
     times, states = times[keep], states[keep]
     if times.size < periods:
         return np.nan, np.nan, np.nan
-    angle, off_axis = _checks.rotation_about_momentum(states[periods - 1][3:], *inertia,
-                                                      *omega0)
+    angle, off_axis = _checks.rotation_about_momentum(states[periods - 1][3:], *inertia, *omega0)
     return times[periods - 1] / periods, float(angle), float(off_axis)
 
 
@@ -164,7 +174,8 @@ def montgomery(body_or_moments, theta=None, *, dtheta=None, phi=0.0, rtol=1e-14)
     w1, w2, w3 = motion.omega0
     gap = separatrix_gap_exact(i1, i2, i3, w1, w3)
     total, dynamic, solid, period, _ = _quadrature.montgomery_phase(
-        i1, i2, i3, w1, w2, w3, gap, rtol)
+        i1, i2, i3, w1, w2, w3, gap, rtol
+    )
     return MontgomeryCheck(total, dynamic, solid, period)
 
 
@@ -216,29 +227,45 @@ def closure_errors(moments, dtheta, periods, rtol=1e-13):
         raise AngleError("dtheta must be finite and nonzero (0 is the separatrix)")
     moments, _ = unit_moments(moments)
     periods = real_array("periods", periods)
-    if not np.all(np.isfinite(periods)) or np.any(periods != np.round(periods)) \
-            or np.any(periods < 1) or np.any(periods > MAX_CLOSURE_PERIODS):
-        raise InputError(f"periods (the catalog's q) must be integers from 1 to "
-                         f"{MAX_CLOSURE_PERIODS}, got {periods.ravel()[:5].tolist()}")
+    if (
+        not np.all(np.isfinite(periods))
+        or np.any(periods != np.round(periods))
+        or np.any(periods < 1)
+        or np.any(periods > MAX_CLOSURE_PERIODS)
+    ):
+        raise InputError(
+            f"periods (the catalog's q) must be integers from 1 to "
+            f"{MAX_CLOSURE_PERIODS}, got {periods.ravel()[:5].tolist()}"
+        )
     rtol = real_scalar("rtol", rtol)
     if not (0.0 < rtol <= 1e-3):
         raise InputError(f"rtol must be in (0, 1e-3], got {rtol!r}")
-    shape = broadcast([("moments", moments.shape[:-1]), ("dtheta", dtheta.shape),
-                       ("periods", periods.shape)])
+    shape = broadcast(
+        [("moments", moments.shape[:-1]), ("dtheta", dtheta.shape), ("periods", periods.shape)]
+    )
     if len(shape) != 1:
-        raise InputError(f"closure_errors takes one row per orbit: moments (n, 3) or "
-                         f"(3,), dtheta and periods (n,), got broadcast shape {shape}")
+        raise InputError(
+            f"closure_errors takes one row per orbit: moments (n, 3) or "
+            f"(3,), dtheta and periods (n,), got broadcast shape {shape}"
+        )
     dtheta = np.broadcast_to(dtheta, shape)
     moments = np.broadcast_to(moments, shape + (3,))
     periods = np.broadcast_to(periods.astype(np.int64), shape)
     out = np.empty(dtheta.shape)
-    _checks.closure_batch(np.ascontiguousarray(moments), np.ascontiguousarray(dtheta),
-                          np.ascontiguousarray(periods), rtol, out)
+    _checks.closure_batch(
+        np.ascontiguousarray(moments),
+        np.ascontiguousarray(dtheta),
+        np.ascontiguousarray(periods),
+        rtol,
+        out,
+    )
     bad = ~np.isfinite(out)
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
-        raise AngleError(f"dtheta = {dtheta[k]!r} puts theta outside [0, pi/2] for the "
-                         f"body {moments[k].tolist()} (unit scale)")
+        raise AngleError(
+            f"dtheta = {dtheta[k]!r} puts theta outside [0, pi/2] for the "
+            f"body {moments[k].tolist()} (unit scale)"
+        )
     return out
 
 
@@ -252,8 +279,7 @@ passed : every discrepancy within the tolerance
 """
 
 
-def verify(n_bodies=293, n_angles=22, *, tolerance=TOLERANCE, progress=None,
-           chunk=2048):
+def verify(n_bodies=293, n_angles=22, *, tolerance=TOLERANCE, progress=None, chunk=2048):
     """The paper's exhaustive check, at any scale.
 
     ``n_bodies`` bodies spread evenly over the region of physical bodies
@@ -306,8 +332,15 @@ def _verify_grid(bodies, n_angles, tolerance, progress, chunk):
     out = np.empty((theta.size, len(_checks.CHECK_COLUMNS)))
     for start in range(0, theta.size, chunk):
         stop = min(start + chunk, theta.size)
-        _checks.check_batch(moments[start:stop], theta[start:stop], phi[start:stop],
-                            1e-12, 1e-14, 1e-14, out[start:stop])
+        _checks.check_batch(
+            moments[start:stop],
+            theta[start:stop],
+            phi[start:stop],
+            1e-12,
+            1e-14,
+            1e-14,
+            out[start:stop],
+        )
         if progress is not None:
             progress(stop - start)
     table = pd.DataFrame(out, columns=_checks.CHECK_COLUMNS)
@@ -318,8 +351,9 @@ def _verify_grid(bodies, n_angles, tolerance, progress, chunk):
     closed = table["closed_form"].to_numpy()
     table["montgomery_error"] = np.abs(table["montgomery"] - closed)
     table["motion_error"] = np.abs(table["motion"] - closed)
-    table["ode_error"] = np.maximum(circular_distance(table["ode_angle"], closed),
-                                    table["ode_off_axis"])
+    table["ode_error"] = np.maximum(
+        circular_distance(table["ode_angle"], closed), table["ode_off_axis"]
+    )
     table["ode_period_error"] = np.abs(table["ode_period"] - table["period"])
     checks = {
         "montgomery": float(table["montgomery_error"].max()),
@@ -356,7 +390,7 @@ def exact_motion_mpmath(moments, omega0, times, dps=40):
     """
     try:
         import mpmath as mp
-    except ImportError as error:          # pragma: no cover
+    except ImportError as error:  # pragma: no cover
         raise InputError("exact_motion_mpmath needs mpmath") from error
     with mp.workdps(dps):
         i1, i2, i3 = (mp.mpf(float(v)) for v in sorted(moments))
@@ -370,18 +404,22 @@ def exact_motion_mpmath(moments, omega0, times, dps=40):
             k2 = (i2 - i1) * gap_3m / ((i3 - i2) * gap_m1)
             rate = mp.sqrt((i3 - i2) * gap_m1 / (i1 * i2 * i3))
             sign = 1 if w3 >= 0 else -1
-            amp = (mp.sqrt(gap_3m / (i1 * (i3 - i1))),
-                   sign * mp.sqrt(gap_3m / (i2 * (i3 - i2))),
-                   sign * mp.sqrt(gap_m1 / (i3 * (i3 - i1))))
+            amp = (
+                mp.sqrt(gap_3m / (i1 * (i3 - i1))),
+                sign * mp.sqrt(gap_3m / (i2 * (i3 - i2))),
+                sign * mp.sqrt(gap_m1 / (i3 * (i3 - i1))),
+            )
             cos0, sin0 = w1 / amp[0] if amp[0] else 1, w2 / amp[1] if amp[1] else 0
             n = -i3 * (i2 - i1) / (i1 * (i3 - i2))
         else:
             k2 = (i3 - i2) * gap_m1 / ((i2 - i1) * gap_3m)
             rate = mp.sqrt((i2 - i1) * gap_3m / (i1 * i2 * i3))
             sign = 1 if w1 >= 0 else -1
-            amp = (sign * mp.sqrt(gap_3m / (i1 * (i3 - i1))),
-                   sign * mp.sqrt(gap_m1 / (i2 * (i2 - i1))),
-                   mp.sqrt(gap_m1 / (i3 * (i3 - i1))))
+            amp = (
+                sign * mp.sqrt(gap_3m / (i1 * (i3 - i1))),
+                sign * mp.sqrt(gap_m1 / (i2 * (i2 - i1))),
+                mp.sqrt(gap_m1 / (i3 * (i3 - i1))),
+            )
             cos0, sin0 = w3 / amp[2] if amp[2] else 1, w2 / amp[1] if amp[1] else 0
             n = -i3 * gap_m1 / (i1 * gap_3m)
         quarter = mp.ellipk(k2)
@@ -406,14 +444,21 @@ def exact_motion_mpmath(moments, omega0, times, dps=40):
                 w = (amp[0] * cn, amp[1] * sn, amp[2] * dn)
             else:
                 w = (amp[0] * dn, amp[1] * sn, amp[2] * cn)
-            theta = mp.atan2(mp.sqrt((i1 * w[0])**2 + (i2 * w[1])**2), i3 * w[2])
+            theta = mp.atan2(mp.sqrt((i1 * w[0]) ** 2 + (i2 * w[1]) ** 2), i3 * w[2])
             psi = mp.atan2(i1 * w[0], i2 * w[1])
-            cf, sf, ct, st, cp, sp = (mp.cos(phi), mp.sin(phi), mp.cos(theta),
-                                      mp.sin(theta), mp.cos(psi), mp.sin(psi))
+            cf, sf, ct, st, cp, sp = (
+                mp.cos(phi),
+                mp.sin(phi),
+                mp.cos(theta),
+                mp.sin(theta),
+                mp.cos(psi),
+                mp.sin(psi),
+            )
             x = cp * w[0] - sp * w[1]
             y = sp * w[0] + cp * w[1]
             y, z = ct * y - st * w[2], st * y + ct * w[2]
-            rows.append([float(v) for v in (*w, phi, theta, psi,
-                                            cf * x - sf * y, sf * x + cf * y, z)])
+            rows.append(
+                [float(v) for v in (*w, phi, theta, psi, cf * x - sf * y, sf * x + cf * y, z)]
+            )
     rows = np.array(rows)
     return rows[:, 0:3], rows[:, 3:6], rows[:, 6:9]

@@ -22,8 +22,11 @@ from .search import closed_orbits
 
 FORMATS = ("png", "svg", "pdf")
 DPI = 150
-_METADATA = {"png": {"Software": None}, "svg": {"Date": None},
-             "pdf": {"CreationDate": None, "ModDate": None}}
+_METADATA = {
+    "png": {"Software": None},
+    "svg": {"Date": None},
+    "pdf": {"CreationDate": None, "ModDate": None},
+}
 
 
 def new_figure(width=6.4, height=4.8):
@@ -45,8 +48,7 @@ def save_figure(figure, stem, formats=("png", "svg")):
         path = Path(f"{stem}.{fmt}")
         with mpl.rc_context({"svg.hashsalt": "orbits", "svg.fonttype": "path"}):
             with atomic_path(path) as temporary:
-                figure.savefig(temporary, format=fmt, dpi=DPI,
-                               metadata=_METADATA[fmt])
+                figure.savefig(temporary, format=fmt, dpi=DPI, metadata=_METADATA[fmt])
         written.append(path)
     return written
 
@@ -61,8 +63,9 @@ def _paper_order(orbits):
     return orbits.sort_values("dtheta", kind="stable").reset_index(drop=True)
 
 
-def herpolhode_set(body, n_max, out_dir, *, q_max=1, formats=("png", "svg"),
-                   progress=None, orbits=None):
+def herpolhode_set(
+    body, n_max, out_dir, *, q_max=1, formats=("png", "svg"), progress=None, orbits=None
+):
     """One figure per closed orbit of ``body`` and a contact sheet.
 
     Each curve is drawn over the time in which it closes (the catalog's
@@ -104,8 +107,7 @@ def herpolhode_set(body, n_max, out_dir, *, q_max=1, formats=("png", "svg"),
         if progress is not None:
             progress(1)
     if len(orbits):
-        written += save_figure(contact_sheet(body, orbits), out_dir / "contact_sheet",
-                               formats)
+        written += save_figure(contact_sheet(body, orbits), out_dir / "contact_sheet", formats)
     if progress is not None:
         progress(1)
     return written
@@ -124,6 +126,7 @@ def closed_herpolhode_figure(body, row, name=None, *, limit=None, radii=None):
 def _periods_text(row):
     """``T/2``, ``3T/2``...: the time a row's herpolhode closes in (closes_after)."""
     from fractions import Fraction
+
     periods = Fraction(str(row.closes_after))
     head = "" if periods.numerator == 1 else f"{periods.numerator}"
     return f"{head}T/{periods.denominator}" if periods.denominator > 1 else f"{head}T"
@@ -134,16 +137,18 @@ def _common_limit(radii):
     return 1.1 * max(r_max for _, r_max in radii)
 
 
-def draw_closed_herpolhode(ax, body, row, *, limit=None, radii=None, label_axes=True,
-                           centre_label=True, **line):
+def draw_closed_herpolhode(
+    ax, body, row, *, limit=None, radii=None, label_axes=True, centre_label=True, **line
+):
     """A catalog row's herpolhode over the time it closes in, with its marks.
 
     Returns the dict of :func:`orbits.plotting.mark_herpolhode` plus
     ``curve`` (Line2D) and ``periods`` (the duration drawn, in T).
     """
     periods = plotting.drawn_periods(row)
-    curve = plotting.plot_herpolhode(ax, body, dtheta=row.dtheta, periods=periods,
-                                     label_axes=label_axes, **line)
+    curve = plotting.plot_herpolhode(
+        ax, body, dtheta=row.dtheta, periods=periods, label_axes=label_axes, **line
+    )
     radii = radii or plotting.herpolhode_radii(body, dtheta=row.dtheta)
     marks = plotting.mark_herpolhode(ax, curve, radii, centre_label=centre_label)
     limit = limit or _common_limit([radii])
@@ -157,17 +162,53 @@ def draw_closed_herpolhode(ax, body, row, *, limit=None, radii=None, label_axes=
 def _marks_legend(figure, fontsize="x-small"):
     """A legend of the herpolhode marks under the figure."""
     from matplotlib.lines import Line2D
-    handles = [Line2D([], [], color="tab:purple", marker="o", markersize=4, linestyle="none",
-                      label="start (t = 0)"),
-               Line2D([], [], color="tab:purple", marker=r"$\rightarrow$", markersize=9,
-                      linestyle="none", label="direction"),
-               Line2D([], [], color="black", marker="+", markersize=6, linestyle="none",
-                      label="centre: the L axis"),
-               Line2D([], [], color="0.55", linestyle=(0, (4, 3)), linewidth=0.8,
-                      label=r"$r_{min}$, $r_{max}$")]
-    return figure.legend(handles=handles, loc="outside lower center", ncols=4,
-                         fontsize=fontsize, frameon=False, handlelength=1.6,
-                         columnspacing=1.0)
+
+    handles = [
+        Line2D(
+            [],
+            [],
+            color="tab:purple",
+            marker="o",
+            markersize=4,
+            linestyle="none",
+            label="start (t = 0)",
+        ),
+        Line2D(
+            [],
+            [],
+            color="tab:purple",
+            marker=r"$\rightarrow$",
+            markersize=9,
+            linestyle="none",
+            label="direction",
+        ),
+        Line2D(
+            [],
+            [],
+            color="black",
+            marker="+",
+            markersize=6,
+            linestyle="none",
+            label="centre: the L axis",
+        ),
+        Line2D(
+            [],
+            [],
+            color="0.55",
+            linestyle=(0, (4, 3)),
+            linewidth=0.8,
+            label=r"$r_{min}$, $r_{max}$",
+        ),
+    ]
+    return figure.legend(
+        handles=handles,
+        loc="outside lower center",
+        ncols=4,
+        fontsize=fontsize,
+        frameon=False,
+        handlelength=1.6,
+        columnspacing=1.0,
+    )
 
 
 def contact_sheet(body, orbits, columns=None):
@@ -191,23 +232,38 @@ def contact_sheet(body, orbits, columns=None):
     for ax in grid.ravel()[count:]:
         ax.set_axis_off()
     for ax, row, bounds in zip(grid.ravel(), orbits.itertuples(), radii):
-        draw_closed_herpolhode(ax, body, row, limit=limit, radii=bounds, label_axes=False,
-                               centre_label=False, linewidth=0.6)
+        draw_closed_herpolhode(
+            ax,
+            body,
+            row,
+            limit=limit,
+            radii=bounds,
+            label_axes=False,
+            centre_label=False,
+            linewidth=0.6,
+        )
         multiple = f"{row.n}" if row.q == 1 else f"{row.n}/{row.q}"
         half = f" ({_periods_text(row)})" if plotting.drawn_periods(row) != row.q else ""
-        ax.set_title(rf"{row.branch} $2\pi\cdot{multiple}${half}" + "\n"
-                     + plotting.theta_text(row.theta, row.dtheta), fontsize="x-small")
+        ax.set_title(
+            rf"{row.branch} $2\pi\cdot{multiple}${half}"
+            + "\n"
+            + plotting.theta_text(row.theta, row.dtheta),
+            fontsize="x-small",
+        )
         ax.tick_params(labelsize="xx-small")
     for column in range(columns):
-        lowest = (count - 1 - column) // columns          # last drawn row of the column
+        lowest = (count - 1 - column) // columns  # last drawn row of the column
         if lowest >= 0:
             grid[lowest, column].set_xlabel(r"$\omega_x$ (rad/s)", fontsize="x-small")
             grid[lowest, column].xaxis.set_tick_params(labelbottom=True)
     for ax in grid[:, 0]:
         ax.set_ylabel(r"$\omega_y$ (rad/s)", fontsize="x-small")
-    figure.suptitle(f"Closed herpolhodes of {body.name or 'the body'} in the invariable plane, "
-                    r"one scale ($|\omega_0|$ = 1 rad/s), left to right in $\theta$; "
-                    "odd n close after T/2", fontsize="medium")
+    figure.suptitle(
+        f"Closed herpolhodes of {body.name or 'the body'} in the invariable plane, "
+        r"one scale ($|\omega_0|$ = 1 rad/s), left to right in $\theta$; "
+        "odd n close after T/2",
+        fontsize="medium",
+    )
     _marks_legend(figure, fontsize="small")
     figure.limit = limit
     return figure
@@ -221,7 +277,7 @@ def _directory(out_dir):
 
 
 # ------------------------------------------------------------- the paper
-T_HANDLE_SPIN = dict(theta=0.5 * np.pi - 0.15, phi=0.5 * np.pi - 0.2)   # Fig. 3
+T_HANDLE_SPIN = dict(theta=0.5 * np.pi - 0.15, phi=0.5 * np.pi - 0.2)  # Fig. 3
 
 
 def figure1():
@@ -238,12 +294,15 @@ def figure1():
     plotting.plot_t_handle(left, 8.0, 4.0, 1.0, ellipsoid=False)
     drawn = plotting.plot_t_handle(right, 8.0, 4.0, 1.0, shrink=1.0, bars="outline")
     a, b, c = drawn["semi_axes"]
-    left.set_title("(a) T-handle $l_1$ = 8, $l_2$ = 4, $w$ = 1 (length units)",
-                   fontsize="small")
-    right.set_title(f"(b) equivalent solid ellipsoid, full size (T outlined)\n"
-                    f"(a, b, c) = ({a:.5f}, {b:.5f}, {c:.6f})", fontsize="small")
-    figure.suptitle("Fig. 1: two bodies with the same principal moments of inertia",
-                    fontsize="medium")
+    left.set_title("(a) T-handle $l_1$ = 8, $l_2$ = 4, $w$ = 1 (length units)", fontsize="small")
+    right.set_title(
+        f"(b) equivalent solid ellipsoid, full size (T outlined)\n"
+        f"(a, b, c) = ({a:.5f}, {b:.5f}, {c:.6f})",
+        fontsize="small",
+    )
+    figure.suptitle(
+        "Fig. 1: two bodies with the same principal moments of inertia", fontsize="medium"
+    )
     return figure
 
 
@@ -252,8 +311,9 @@ def figure2(grid=None, resolution=300):
     figure = new_figure(8.2, 4.6)
     ax = figure.add_subplot()
     plotting.plot_body_space(ax, grid, resolution=resolution)
-    ax.set_title("Fig. 2: physical bodies ($|I| = 1$) and their minimum total phase",
-                 fontsize="small")
+    ax.set_title(
+        "Fig. 2: physical bodies ($|I| = 1$) and their minimum total phase", fontsize="small"
+    )
     return figure
 
 
@@ -264,13 +324,20 @@ def figure3():
     right = figure.add_subplot(1, 2, 2)
     body = Body.preset("t-handle")
     drawn = plotting.plot_binet(left, body, **T_HANDLE_SPIN)
-    left.set_title(f"(a) $|M|$ = {drawn['momentum']:.6f} J s sphere and the Binet "
-                   f"ellipsoid, E = {drawn['energy']:.6f} J", fontsize="small")
+    left.set_title(
+        f"(a) $|M|$ = {drawn['momentum']:.6f} J s sphere and the Binet "
+        f"ellipsoid, E = {drawn['energy']:.6f} J",
+        fontsize="small",
+    )
     plotting.plot_omega_components(right, body, **T_HANDLE_SPIN)
-    right.set_title(r"(b) $\omega$ in the body, $\theta = \pi/2 - 0.15$, "
-                    r"$\phi = \pi/2 - 0.2$", fontsize="small")
-    figure.suptitle("Fig. 3: T-handle, I = (0.286827, 0.533256, 0.795844) J s$^2$",
-                    fontsize="medium")
+    right.set_title(
+        r"(b) $\omega$ in the body, $\theta = \pi/2 - 0.15$, "
+        r"$\phi = \pi/2 - 0.2$",
+        fontsize="small",
+    )
+    figure.suptitle(
+        "Fig. 3: T-handle, I = (0.286827, 0.533256, 0.795844) J s$^2$", fontsize="medium"
+    )
     return figure
 
 
@@ -279,8 +346,11 @@ def figure4():
     figure = new_figure(6.6, 5.4)
     ax = figure.add_subplot(projection="3d")
     plotting.plot_polhode_foliation(ax, Body.preset("t-handle"))
-    ax.set_title("Fig. 4: T-handle polhodes on the Binet ellipsoid ($E$ = 1/2 J),\n"
-                 "coloured by total phase mod $2\\pi$; far side faint", fontsize="small")
+    ax.set_title(
+        "Fig. 4: T-handle polhodes on the Binet ellipsoid ($E$ = 1/2 J),\n"
+        "coloured by total phase mod $2\\pi$; far side faint",
+        fontsize="small",
+    )
     return figure
 
 
@@ -289,8 +359,9 @@ def figure5():
     figure = new_figure(7.0, 4.8)
     ax = figure.add_subplot()
     plotting.plot_phase_curves(ax, Body.preset("t-handle"))
-    ax.set_title("Fig. 5: T-handle, phases and period against the spin's polar angle",
-                 fontsize="small")
+    ax.set_title(
+        "Fig. 5: T-handle, phases and period against the spin's polar angle", fontsize="small"
+    )
     return figure
 
 
@@ -304,6 +375,7 @@ def figure6(n_inset=3):
     the level names or the spike at theta_c.
     """
     from matplotlib.patches import ConnectionPatch
+
     body = Body.preset("fig6")
     orbits = closed_orbits(body, n_max=8)
     shown = orbits[orbits["n"] <= n_inset + 1].sort_values("theta").reset_index(drop=True)
@@ -318,27 +390,57 @@ def figure6(n_inset=3):
     insets, leaders = [], []
     for k, (row, bounds) in enumerate(zip(shown.itertuples(), radii)):
         inset = figure.add_subplot(grid[0, k])
-        draw_closed_herpolhode(inset, body, row, limit=limit, radii=bounds, label_axes=False,
-                               centre_label=False, linewidth=0.6)
+        draw_closed_herpolhode(
+            inset,
+            body,
+            row,
+            limit=limit,
+            radii=bounds,
+            label_axes=False,
+            centre_label=False,
+            linewidth=0.6,
+        )
         inset.set_xticks([])
         inset.set_yticks([])
         half = f", {_periods_text(row)}" if plotting.drawn_periods(row) != row.q else ""
-        inset.set_title(rf"{row.branch} $n$={row.n}{half}" + "\n"
-                        + rf"$\theta$={row.theta:.4f}", fontsize="x-small")
-        leader = ConnectionPatch(xyA=(0.5, 0.0), coordsA=inset.transAxes,
-                                 xyB=(row.theta, row.total_phase), coordsB=ax.transData,
-                                 color="0.55", linewidth=0.6, zorder=1)
+        inset.set_title(
+            rf"{row.branch} $n$={row.n}{half}" + "\n" + rf"$\theta$={row.theta:.4f}",
+            fontsize="x-small",
+        )
+        leader = ConnectionPatch(
+            xyA=(0.5, 0.0),
+            coordsA=inset.transAxes,
+            xyB=(row.theta, row.total_phase),
+            coordsB=ax.transData,
+            color="0.55",
+            linewidth=0.6,
+            zorder=1,
+        )
         figure.add_artist(leader)
         insets.append((inset, row))
         leaders.append(leader)
     theta_c = float(plotting.critical_angle(body))
-    ax.annotate(rf"$\theta_c$ = {theta_c:.5f}", (theta_c, 0.0), xytext=(4, 4),
-                textcoords="offset points", fontsize="small", color="0.35")
-    ax.legend(handles=[drawn["curve"], drawn["roots"]], loc="upper center",
-              bbox_to_anchor=(0.5, -0.11), ncols=2, fontsize="small", frameon=False)
-    figure.suptitle("Fig. 6: I = (0.26, 0.55, 0.793662) J s$^2$; closed herpolhodes at "
-                    r"$\Delta\alpha = 2\pi n$ (one scale; odd $n$ close after T/2)",
-                    fontsize="medium")
+    ax.annotate(
+        rf"$\theta_c$ = {theta_c:.5f}",
+        (theta_c, 0.0),
+        xytext=(4, 4),
+        textcoords="offset points",
+        fontsize="small",
+        color="0.35",
+    )
+    ax.legend(
+        handles=[drawn["curve"], drawn["roots"]],
+        loc="upper center",
+        bbox_to_anchor=(0.5, -0.11),
+        ncols=2,
+        fontsize="small",
+        frameon=False,
+    )
+    figure.suptitle(
+        "Fig. 6: I = (0.26, 0.55, 0.793662) J s$^2$; closed herpolhodes at "
+        r"$\Delta\alpha = 2\pi n$ (one scale; odd $n$ close after T/2)",
+        fontsize="medium",
+    )
     figure.insets = insets
     figure.inset_axes_list = [inset for inset, _ in insets]
     figure.leaders = leaders
@@ -346,12 +448,17 @@ def figure6(n_inset=3):
     return figure
 
 
-PAPER_FIGURES = {"fig1": figure1, "fig2": figure2, "fig3": figure3, "fig4": figure4,
-                 "fig5": figure5, "fig6": figure6}
+PAPER_FIGURES = {
+    "fig1": figure1,
+    "fig2": figure2,
+    "fig3": figure3,
+    "fig4": figure4,
+    "fig5": figure5,
+    "fig6": figure6,
+}
 
 
-def paper_figures(out_dir, *, formats=("png", "svg"), survey_grid=None, progress=None,
-                  names=None):
+def paper_figures(out_dir, *, formats=("png", "svg"), survey_grid=None, progress=None, names=None):
     """Write the paper's figures as ``fig1`` ... ``fig6`` (or those in ``names``).
 
     ``survey_grid``: optional (i1, i2, minimum) for Fig. 2 (from a survey).

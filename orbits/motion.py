@@ -30,8 +30,7 @@ from .core import phase as _phase
 from .errors import AngleError, InputError, SeparatrixError
 from .threads import size_aware
 
-MotionState = namedtuple("MotionState",
-                         ["t", "omega", "euler", "rotation", "omega_space"])
+MotionState = namedtuple("MotionState", ["t", "omega", "euler", "rotation", "omega_space"])
 MotionState.__doc__ = """The motion on a time grid.
 
 t : (n,) times; omega : (n, 3) body-frame angular velocity;
@@ -40,8 +39,9 @@ unwrapped; rotation : (n, 3, 3) body -> space; omega_space : (n, 3) the
 angular velocity in the space frame (z along M).
 """
 
-TumblingPeriods = namedtuple("TumblingPeriods", ["precession", "rotation", "ratio",
-                                                 "axis", "about_momentum"])
+TumblingPeriods = namedtuple(
+    "TumblingPeriods", ["precession", "rotation", "ratio", "axis", "about_momentum"]
+)
 TumblingPeriods.__doc__ = """Periods of a tumbling body; see :meth:`Motion.tumbling_periods`.
 
 precession : P_phi; rotation : P_psi (= T); ratio : P_psi / P_phi;
@@ -65,8 +65,10 @@ def _scaled(value, power, what):
         out = np.ldexp(value, power)
         back = np.ldexp(out, -power)
     if not np.all(np.isfinite(out)) or not np.array_equal(back, value):
-        raise InputError(f"the {what} of this motion does not fit a double at this "
-                         "scale of the moments and omega0; rescale them")
+        raise InputError(
+            f"the {what} of this motion does not fit a double at this "
+            "scale of the moments and omega0; rescale them"
+        )
     return out
 
 
@@ -120,21 +122,25 @@ class Motion:
         orbit = np.zeros(_kernels.ORBIT_SIZE)
         branch = _kernels.orbit_setup(i1, i2, i3, *unit_omega, *_gap, orbit)
         if branch == _phase.BRANCH_SEPARATRIX:
-            raise SeparatrixError(
-                "omega0 lies on the separatrix M^2 = 2 E I2 (infinite period)")
+            raise SeparatrixError("omega0 lies on the separatrix M^2 = 2 E I2 (infinite period)")
         self.body = body
         self.omega0 = omega0
         self._orbit = orbit
         self._speed = speed
         self.branch = "SAM" if branch == _phase.BRANCH_SAM else "LAM"
-        self.energy = float(_scaled(0.5 * orbit[_kernels.SLOT_TWO_E],
-                                    body.exponent + 2 * speed, "energy"))
-        self.momentum = float(_scaled(orbit[_kernels.SLOT_MOMENTUM],
-                                      body.exponent + speed, "angular momentum"))
+        self.energy = float(
+            _scaled(0.5 * orbit[_kernels.SLOT_TWO_E], body.exponent + 2 * speed, "energy")
+        )
+        self.momentum = float(
+            _scaled(orbit[_kernels.SLOT_MOMENTUM], body.exponent + speed, "angular momentum")
+        )
         self.period = float(_scaled(orbit[_kernels.SLOT_PERIOD], -speed, "period"))
         # D = M^2/(2E) depends on the moments only (units of the moments)
-        self.D = float(_scaled(orbit[_kernels.SLOT_MOMENTUM] ** 2 / orbit[_kernels.SLOT_TWO_E],
-                               body.exponent, "D"))
+        self.D = float(
+            _scaled(
+                orbit[_kernels.SLOT_MOMENTUM] ** 2 / orbit[_kernels.SLOT_TWO_E], body.exponent, "D"
+            )
+        )
         self.m = orbit[_kernels.SLOT_M]
         self.one_minus_m = orbit[_kernels.SLOT_KC] ** 2
 
@@ -177,24 +183,28 @@ class Motion:
         if not np.isfinite(phi):
             raise AngleError(f"phi must be finite, got {phi}")
         from_offset = dtheta is not None
-        angle = real_scalar("dtheta" if from_offset else "theta",
-                            dtheta if from_offset else theta, AngleError)
+        angle = real_scalar(
+            "dtheta" if from_offset else "theta", dtheta if from_offset else theta, AngleError
+        )
         if not from_offset and np.isfinite(angle) and not 0.0 <= angle <= 0.5 * np.pi:
             # the spin as given (not folded: the motion differs by signs; its
             # T, E, M and total phase are those of the folded spin)
-            return cls(body, speed * np.array([np.sin(angle) * np.cos(phi),
-                                               np.sin(angle) * np.sin(phi),
-                                               np.cos(angle)]))
-        status, theta_, _, _, w1, w2, w3, scale, offset, closing = \
-            _phase.spin_from_angle(_phase.body_constants(*body.unit_moments, phi),
-                                   angle, from_offset)
+            return cls(
+                body,
+                speed
+                * np.array(
+                    [np.sin(angle) * np.cos(phi), np.sin(angle) * np.sin(phi), np.cos(angle)]
+                ),
+            )
+        status, theta_, _, _, w1, w2, w3, scale, offset, closing = _phase.spin_from_angle(
+            _phase.body_constants(*body.unit_moments, phi), angle, from_offset
+        )
         if status == _phase.STATUS_NOT_FINITE:
             raise AngleError(f"{'dtheta' if from_offset else 'theta'} must be finite")
         if status == _phase.STATUS_OUT_OF_RANGE:
             raise AngleError(f"theta = {theta_!r} is outside [0, pi/2]")
         if status == _phase.STATUS_SEPARATRIX:
-            raise SeparatrixError("the spin lies on the separatrix; pass a "
-                                  "nonzero dtheta")
+            raise SeparatrixError("the spin lies on the separatrix; pass a nonzero dtheta")
         with np.errstate(over="ignore"):
             omega = speed * np.array([w1, w2, w3])
         if not np.all(np.isfinite(omega)):
@@ -225,15 +235,17 @@ class Motion:
         euler = np.empty((n, 3))
         rotation = np.empty((n, 3, 3))
         omega_space = np.empty((n, 3))
-        _kernels.motion_on_grid(self._orbit, flat, omega, euler, rotation,
-                                omega_space)
+        _kernels.motion_on_grid(self._orbit, flat, omega, euler, rotation, omega_space)
         shape = times.shape
         omega = _scaled(omega, self._speed, "angular velocity")
         omega_space = _scaled(omega_space, self._speed, "angular velocity")
-        return MotionState(times, omega.reshape(shape + (3,)),
-                           euler.reshape(shape + (3,)),
-                           rotation.reshape(shape + (3, 3)),
-                           omega_space.reshape(shape + (3,)))
+        return MotionState(
+            times,
+            omega.reshape(shape + (3,)),
+            euler.reshape(shape + (3,)),
+            rotation.reshape(shape + (3, 3)),
+            omega_space.reshape(shape + (3,)),
+        )
 
     def omega(self, t):
         """Body-frame angular velocity, shape ``t.shape + (3,)``: (3,) for a scalar t."""
@@ -263,9 +275,15 @@ class Motion:
         half = 0.5 * theta
         plus = 0.5 * (phi + psi)
         minus = 0.5 * (phi - psi)
-        return np.stack([np.cos(half) * np.cos(plus), np.sin(half) * np.cos(minus),
-                         np.sin(half) * np.sin(minus), np.cos(half) * np.sin(plus)],
-                        axis=-1)
+        return np.stack(
+            [
+                np.cos(half) * np.cos(plus),
+                np.sin(half) * np.cos(minus),
+                np.sin(half) * np.sin(minus),
+                np.cos(half) * np.sin(plus),
+            ],
+            axis=-1,
+        )
 
     @size_aware
     def omega_space(self, t):
@@ -323,9 +341,13 @@ class Motion:
         sam = self.branch == "SAM"
         ratio = turns + 1.0 if sam else turns - 1.0
         period = float(self.period)
-        return TumblingPeriods(precession=period / ratio, rotation=period,
-                               ratio=ratio, axis="short" if sam else "long",
-                               about_momentum=period / turns)
+        return TumblingPeriods(
+            precession=period / ratio,
+            rotation=period,
+            ratio=ratio,
+            axis="short" if sam else "long",
+            about_momentum=period / turns,
+        )
 
     @property
     def precession_period(self):
@@ -347,16 +369,22 @@ class Motion:
         single rotation, an array one rotation per time (flattened).
         """
         from scipy.spatial.transform import Rotation
+
         matrices = self.rotation(t)
         if matrices.ndim == 2:
             return Rotation.from_matrix(matrices)
+        if matrices.size == 0:
+            # SciPy before 1.14 cannot hold an empty stack of rotations
+            raise InputError("t is empty: a scipy Rotation needs at least one time")
         return Rotation.from_matrix(matrices.reshape(-1, 3, 3))
 
     as_scipy = rotation_object
 
     def __repr__(self):
-        return (f"Motion({self.body!r}, omega0={self.omega0.tolist()}, "
-                f"branch={self.branch!r}, period={self.period:.6g})")
+        return (
+            f"Motion({self.body!r}, omega0={self.omega0.tolist()}, "
+            f"branch={self.branch!r}, period={self.period:.6g})"
+        )
 
 
 # largest curve returned by herpolhode/polhode (about 0.5 GB of state)
@@ -380,8 +408,7 @@ def _paper_motion(body_or_moments, theta, dtheta, phi):
     return Motion.from_spin(unit, theta, dtheta=dtheta, phi=phi)
 
 
-def herpolhode(body_or_moments, theta=None, *, dtheta=None, phi=0.0,
-               periods=1, points=2001):
+def herpolhode(body_or_moments, theta=None, *, dtheta=None, phi=0.0, periods=1, points=2001):
     """The herpolhode: the angular velocity in the space frame over time.
 
     Parameters
@@ -408,14 +435,12 @@ def herpolhode(body_or_moments, theta=None, *, dtheta=None, phi=0.0,
     As :func:`orbits.total_phase`; InputError for bad ``periods``/``points``.
     """
     # omega(t) does not depend on the scale of I: no need to normalise
-    motion = Motion.from_spin(_as_body(body_or_moments), theta, dtheta=dtheta,
-                              phi=phi)
+    motion = Motion.from_spin(_as_body(body_or_moments), theta, dtheta=dtheta, phi=phi)
     t = _grid(motion, periods, points)
     return t, motion.omega_space(t)
 
 
-def polhode(body_or_moments, theta=None, *, dtheta=None, phi=0.0, periods=1,
-            points=2001):
+def polhode(body_or_moments, theta=None, *, dtheta=None, phi=0.0, periods=1, points=2001):
     """The polhode: the angular momentum in the body frame over time.
 
     Parameters as :func:`herpolhode`; ``|I| = 1`` and ``|omega0| = 1``.

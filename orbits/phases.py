@@ -72,7 +72,7 @@ def _first_bad(array):
 
 
 # |angle| above which fold_angle refuses (the input's ulp exceeds 4e-10 rad)
-FOLD_LIMIT = 2.0 ** 21
+FOLD_LIMIT = 2.0**21
 # pi - fl(pi): the low part of pi in double-double
 _PI_LOW = 1.2246467991473532e-16
 
@@ -114,17 +114,18 @@ def fold_angle(angle):
         # fold would be a made-up number
         raise AngleError(
             f"angle {angle[large].flat[0]:.17g} rad is too large to fold into "
-            f"[0, pi/2] faithfully; give angles within +-{FOLD_LIMIT:.0f} rad")
+            f"[0, pi/2] faithfully; give angles within +-{FOLD_LIMIT:.0f} rad"
+        )
     with np.errstate(invalid="ignore"):
         # t -> -t first (exact).  fmod by the double pi is exact: r = a - k fl(pi);
         # the true a - k pi follows with pi's low part, and pi - r likewise, so
         # the fold errs by rounding of the result only, not by k ulp(pi)
         size = np.abs(angle)
         high = np.fmod(size, np.pi)
-        low = -np.rint((size - high) / np.pi) * _PI_LOW   # size - k pi = high + low
+        low = -np.rint((size - high) / np.pi) * _PI_LOW  # size - k pi = high + low
         below = high + low
         folded = np.where(high <= 0.5 * np.pi, below, (np.pi - high) + (_PI_LOW - low))
-        folded = np.where(below < 0.0, -below, folded)    # just below a multiple of pi
+        folded = np.where(below < 0.0, -below, folded)  # just below a multiple of pi
     return np.where(np.isfinite(angle), folded, angle)
 
 
@@ -139,8 +140,7 @@ def _spin_inputs(moments, theta, dtheta, phi):
     if not from_offset:
         angle = fold_angle(angle)
     phi = fold_angle(phi)
-    shape = broadcast([("moments", moments.shape[:-1]), (name, angle.shape),
-                       ("phi", phi.shape)])
+    shape = broadcast([("moments", moments.shape[:-1]), (name, angle.shape), ("phi", phi.shape)])
     return from_offset, angle, phi, shape
 
 
@@ -165,11 +165,13 @@ def _check_status(status, moments, angle, phi, shape, from_offset):
         raise AngleError(
             f"theta_c + dtheta = {theta_c:.17g} + {value:.17g} is outside "
             "[0, pi/2]; dtheta is an offset from theta_c and is not folded "
-            "(pass theta, which is folded by the top's symmetries)")
+            "(pass theta, which is folded by the top's symmetries)"
+        )
     raise SeparatrixError(
         f"{name} = {value:.17g} puts the spin on the separatrix M^2 = 2 E I2 "
         f"(theta_c = {theta_c:.17g}), where the period and the total phase "
-        "are infinite; pass a nonzero dtheta = theta - theta_crit instead")
+        "are infinite; pass a nonzero dtheta = theta - theta_crit instead"
+    )
 
 
 @size_aware
@@ -202,8 +204,9 @@ def critical_angle(body_or_moments, phi=0.0):
     phi = _float_array("phi", phi)
     shape = broadcast([("moments", moments.shape[:-1]), ("phi", phi.shape)])
     out = np.empty(shape)
-    _kernels.critical_angle_many(*(_flat(moments[..., k], shape) for k in range(3)),
-                                 _flat(phi, shape), out.reshape(-1))
+    _kernels.critical_angle_many(
+        *(_flat(moments[..., k], shape) for k in range(3)), _flat(phi, shape), out.reshape(-1)
+    )
     return float(out) if out.ndim == 0 else out
 
 
@@ -252,13 +255,24 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0):
     if moments.ndim == 1 and phi.ndim == 0:
         # one body: its constants are computed once, angles used in place
         _kernels.total_phase_one_body(
-            moments[0], moments[1], moments[2], float(phi),
-            np.ascontiguousarray(angle, dtype=float).reshape(-1), from_offset,
-            out.reshape(-1), status.reshape(-1))
+            moments[0],
+            moments[1],
+            moments[2],
+            float(phi),
+            np.ascontiguousarray(angle, dtype=float).reshape(-1),
+            from_offset,
+            out.reshape(-1),
+            status.reshape(-1),
+        )
     else:
         _kernels.total_phase_many(
-            *(_flat(moments[..., k], shape) for k in range(3)), _flat(phi, shape),
-            _flat(angle, shape), from_offset, out.reshape(-1), status.reshape(-1))
+            *(_flat(moments[..., k], shape) for k in range(3)),
+            _flat(phi, shape),
+            _flat(angle, shape),
+            from_offset,
+            out.reshape(-1),
+            status.reshape(-1),
+        )
     _check_status(status, moments, angle, phi, shape, from_offset)
     return at_least_two_pi(out)
 
@@ -329,29 +343,34 @@ def phases(body_or_moments, theta=None, phi=0.0, *, dtheta=None):
     phi_flat, angle_flat = _flat(phi, shape), _flat(angle, shape)
     parts = np.empty((i1.shape[0], len(_kernels.PARTS_COLUMNS)))
     status = np.empty(i1.shape[0], dtype=np.int8)
-    _kernels.phase_parts_many(i1, i2, i3, phi_flat, angle_flat, from_offset, parts,
-                              status)
+    _kernels.phase_parts_many(i1, i2, i3, phi_flat, angle_flat, from_offset, parts, status)
     _check_status(status, moments, angle, phi, shape, from_offset)
     geometric = np.empty(i1.shape[0])
     _solid.solid_angle_many(i1, i2, i3, phi_flat, angle_flat, from_offset, geometric)
-    (theta, dtheta, theta_c, two_e, m_sq, m_param, branch, period, dynamic,
-     total) = parts.T
+    (theta, dtheta, theta_c, two_e, m_sq, m_param, branch, period, dynamic, total) = parts.T
     norm = np.sqrt(i1 * i1 + i2 * i2 + i3 * i3)
-    return pd.DataFrame({
-        "I1": i1 / norm, "I2": i2 / norm, "I3": i3 / norm,
-        "theta": theta, "dtheta": dtheta, "phi": _flat(phi, shape),
-        "theta_crit": theta_c,
-        **_parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total,
-                         geometric),
-    })
+    return pd.DataFrame(
+        {
+            "I1": i1 / norm,
+            "I2": i2 / norm,
+            "I3": i3 / norm,
+            "theta": theta,
+            "dtheta": dtheta,
+            "phi": _flat(phi, shape),
+            "theta_crit": theta_c,
+            **_parts_columns(
+                norm, two_e, m_sq, m_param, branch, period, dynamic, total, geometric
+            ),
+        }
+    )
 
 
-def _parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total,
-                   geometric):
+def _parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total, geometric):
     """The columns shared by :func:`phases` and :func:`spin_phases`."""
     return {
-        "branch": pd.Categorical.from_codes((branch < 0).astype(np.int8),
-                                            categories=["SAM", "LAM"]),
+        "branch": pd.Categorical.from_codes(
+            (branch < 0).astype(np.int8), categories=["SAM", "LAM"]
+        ),
         "energy": 0.5 * two_e / norm,
         "momentum": np.sqrt(m_sq) / norm,
         # D = M^2/(2E): the same for every |omega|; I1 <= D <= I3 in the row's moments
@@ -435,9 +454,11 @@ def spin_phases(body_or_moments, omega):
     if not np.all(np.isfinite(omega)):
         raise AngleError(f"omega must be finite, got {_first_bad(omega)}")
     shape = broadcast([("moments", moments.shape[:-1]), ("omega", omega.shape[:-1])])
-    cols = [np.ascontiguousarray(np.broadcast_to(a[..., k], shape),
-                                 dtype=float).ravel()
-            for a in (moments, omega) for k in range(3)]
+    cols = [
+        np.ascontiguousarray(np.broadcast_to(a[..., k], shape), dtype=float).ravel()
+        for a in (moments, omega)
+        for k in range(3)
+    ]
     i1, i2, i3, w1, w2, w3 = cols
     if np.any((w1 == 0.0) & (w2 == 0.0) & (w3 == 0.0)):
         raise AngleError("omega must be nonzero")
@@ -454,17 +475,21 @@ def spin_phases(body_or_moments, omega):
         k = int(np.flatnonzero(branch == 0)[0])
         raise SeparatrixError(
             f"omega = ({w1[k]:.17g}, {w2[k]:.17g}, {w3[k]:.17g}) lies on the "
-            "separatrix M^2 = 2 E I2 (infinite period and phase)")
+            "separatrix M^2 = 2 E I2 (infinite period and phase)"
+        )
     # E, M and D for the moments and the spin *as given* (as Motion): the
     # kernel saw unit moments (times 2**-exponent) and a unit-scale spin
     # (times 2**-speed), both exact; Euler's equations are homogeneous, so
     # E ~ |I| |omega|^2, M ~ |I| |omega|, D ~ |I|, T ~ 1/|omega|.  A value
     # that over- or underflows is refused rather than rounded to 0 or inf.
     exponent = np.broadcast_to(exponent, shape).ravel()
-    columns = _parts_columns(1.0, two_e, m_sq, m_param, branch, period, dynamic, total,
-                             geometric)
-    for label, power in (("energy", exponent + 2 * speed), ("momentum", exponent + speed),
-                         ("D", exponent), ("period", -speed)):
+    columns = _parts_columns(1.0, two_e, m_sq, m_param, branch, period, dynamic, total, geometric)
+    for label, power in (
+        ("energy", exponent + 2 * speed),
+        ("momentum", exponent + speed),
+        ("D", exponent),
+        ("period", -speed),
+    ):
         with np.errstate(over="ignore", under="ignore"):
             value = np.ldexp(columns[label], power)
         wrong = ~np.isfinite(value) | (value < np.finfo(float).tiny)
@@ -473,8 +498,10 @@ def spin_phases(body_or_moments, omega):
             raise InputError(
                 f"omega = ({w1[k]:.17g}, {w2[k]:.17g}, {w3[k]:.17g}): its {label} "
                 "does not fit a normal double (|omega| or the moments too large or too "
-                "small); the phases do not depend on |omega|: pass a unit spin")
+                "small); the phases do not depend on |omega|: pass a unit spin"
+            )
         columns[label] = value
     given = [np.ldexp(i, exponent) for i in (i1, i2, i3)]
-    return pd.DataFrame({"I1": given[0], "I2": given[1], "I3": given[2],
-                         "w1": w1, "w2": w2, "w3": w3, **columns})
+    return pd.DataFrame(
+        {"I1": given[0], "I2": given[1], "I3": given[2], "w1": w1, "w2": w2, "w3": w3, **columns}
+    )

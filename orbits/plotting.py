@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from .bodies import Body, REGION_BOX, region_moments
+from .bodies import REGION_BOX, Body, region_moments
 from .motion import Motion, _as_body, herpolhode, polhode
 from .phases import critical_angle, phase_limits, phases, total_phase
 
@@ -36,8 +36,9 @@ def herpolhode_points(n, q=1):
     return int(max(2001, 600 * n * q + 1))
 
 
-def plot_herpolhode(ax, body, theta=None, *, dtheta=None, phi=0.0, periods=1,
-                    points=None, label_axes=True, **line):
+def plot_herpolhode(
+    ax, body, theta=None, *, dtheta=None, phi=0.0, periods=1, points=None, label_axes=True, **line
+):
     """Draw a herpolhode (space-frame omega in the invariable plane).
 
     Parameters
@@ -67,8 +68,7 @@ def plot_herpolhode(ax, body, theta=None, *, dtheta=None, phi=0.0, periods=1,
         if points is None:
             turns = abs(float(total_phase(body, theta, dtheta=dtheta, phi=phi))) / TWO_PI
             points = herpolhode_points(turns, periods)
-        _, omega = herpolhode(body, theta, dtheta=dtheta, phi=phi, periods=periods,
-                              points=points)
+        _, omega = herpolhode(body, theta, dtheta=dtheta, phi=phi, periods=periods, points=points)
     style = dict(color="tab:purple", linewidth=0.8)
     style.update(line)
     (curve,) = ax.plot(omega[:, 0], omega[:, 1], **style)
@@ -141,35 +141,57 @@ def mark_herpolhode(ax, curve, radii, *, arrow_length=0.18, color=None, centre_l
         axis), ``circles`` (two Circle patches, r_min and r_max).
     """
     from matplotlib.patches import Circle
+
     color = color or curve.get_color()
     xy = curve.get_xydata()
     circles = []
     for radius in radii:
-        circle = Circle((0.0, 0.0), radius, fill=False, linestyle=(0, (4, 3)),
-                        linewidth=0.6, edgecolor="0.55", zorder=1)
+        circle = Circle(
+            (0.0, 0.0),
+            radius,
+            fill=False,
+            linestyle=(0, (4, 3)),
+            linewidth=0.6,
+            edgecolor="0.55",
+            zorder=1,
+        )
         ax.add_patch(circle)
         circles.append(circle)
-    (centre,) = ax.plot([0.0], [0.0], marker="+", color="black", markersize=6,
-                        markeredgewidth=0.9, linestyle="none", zorder=3)
+    (centre,) = ax.plot(
+        [0.0],
+        [0.0],
+        marker="+",
+        color="black",
+        markersize=6,
+        markeredgewidth=0.9,
+        linestyle="none",
+        zorder=3,
+    )
     if centre_label:
-        ax.annotate("L", (0.0, 0.0), xytext=(3, 3), textcoords="offset points",
-                    fontsize="x-small")
-    (start,) = ax.plot(xy[:1, 0], xy[:1, 1], marker="o", color=color, markersize=4,
-                       linestyle="none", zorder=4)
+        ax.annotate("L", (0.0, 0.0), xytext=(3, 3), textcoords="offset points", fontsize="x-small")
+    (start,) = ax.plot(
+        xy[:1, 0], xy[:1, 1], marker="o", color=color, markersize=4, linestyle="none", zorder=4
+    )
     steps = np.hypot(*np.diff(xy, axis=0).T)
     travelled = np.concatenate([[0.0], np.cumsum(steps)])
     end = int(np.searchsorted(travelled, arrow_length * max(radii[1], 1e-300)))
     end = min(max(end, 1), len(xy) - 1)
-    arrow = ax.annotate("", xy=tuple(xy[end]), xytext=tuple(xy[0]),
-                        arrowprops=dict(arrowstyle="-|>", color=color, linewidth=1.0,
-                                        mutation_scale=9, shrinkA=0, shrinkB=0),
-                        zorder=4)
+    arrow = ax.annotate(
+        "",
+        xy=tuple(xy[end]),
+        xytext=tuple(xy[0]),
+        arrowprops=dict(
+            arrowstyle="-|>", color=color, linewidth=1.0, mutation_scale=9, shrinkA=0, shrinkB=0
+        ),
+        zorder=4,
+    )
     return {"start": start, "arrow": arrow, "centre": centre, "circles": circles}
 
 
 def drawn_periods(row):
     """Periods over which a catalog row's herpolhode closes (``closes_after``, else q)."""
     from fractions import Fraction
+
     value = getattr(row, "closes_after", None)
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return float(row.q)
@@ -189,9 +211,12 @@ def orbit_label(row, body_name=None, precision=6):
     """A figure title for a catalog row: multiple, branch, theta, body, closure."""
     multiple = f"{row.n}" if row.q == 1 else f"{row.n}/{row.q}"
     name = f"{body_name}: " if body_name else ""
-    text = (rf"{name}$\Delta\alpha = 2\pi\cdot{multiple}$, {row.branch}, "
-            rf"$\theta$ = {row.theta:.{precision}f}" + "\n"
-            + rf"$\theta-\theta_c$ = {row.dtheta:.3e} rad")
+    text = (
+        rf"{name}$\Delta\alpha = 2\pi\cdot{multiple}$, {row.branch}, "
+        rf"$\theta$ = {row.theta:.{precision}f}"
+        + "\n"
+        + rf"$\theta-\theta_c$ = {row.dtheta:.3e} rad"
+    )
     periods = drawn_periods(row)
     if periods != row.q:
         closes = getattr(row, "closes_after", periods)
@@ -223,9 +248,11 @@ def plot_phase_curves(ax, body, *, points=1500, period_axis=True):
         return np.insert(np.asarray(table[column], dtype=float), split, np.nan)
 
     lines = {}
-    for name, column, label in (("total", "total_phase", r"total $\Delta\alpha$"),
-                                ("dynamic", "dynamic_phase", r"dynamic $2ET/M$"),
-                                ("geometric", "geometric_phase", r"geometric $\Omega$")):
+    for name, column, label in (
+        ("total", "total_phase", r"total $\Delta\alpha$"),
+        ("dynamic", "dynamic_phase", r"dynamic $2ET/M$"),
+        ("geometric", "geometric_phase", r"geometric $\Omega$"),
+    ):
         (lines[name],) = ax.plot(theta, broken(column), label=label, **STYLES[name])
     ax.axvline(theta_c, color="0.6", linewidth=1.0)
     ax.set_xlabel(r"polar angle of $\omega_0$ from the body $z$ axis, $\theta$ (rad)")
@@ -236,8 +263,9 @@ def plot_phase_curves(ax, body, *, points=1500, period_axis=True):
     handles = list(lines.values())
     if period_axis:
         twin = ax.twinx()
-        (lines["period"],) = twin.plot(theta, broken("period"), label="period $T$",
-                                       **STYLES["period"])
+        (lines["period"],) = twin.plot(
+            theta, broken("period"), label="period $T$", **STYLES["period"]
+        )
         twin.set_ylabel(r"period $T$ (s, for $|\omega_0| = 1$ rad/s)")
         twin.set_ylim(0.0, float(np.nanpercentile(table["period"], 90)))
         lines["period_axes"] = twin
@@ -276,8 +304,9 @@ def plot_total_phase(ax, body, orbits=None, *, n_levels=None, points=2000, legen
     theta_c = critical_angle(body)
     theta = _theta_grid(theta_c, points)
     values = total_phase(body, theta)
-    (curve,) = ax.plot(theta, values, label=r"total phase $\Delta\alpha(\theta)$",
-                       **STYLES["total"])
+    (curve,) = ax.plot(
+        theta, values, label=r"total phase $\Delta\alpha(\theta)$", **STYLES["total"]
+    )
     top = 2 * np.pi * (n_levels + 0.5) if n_levels else float(np.percentile(values, 85))
     ax.set_ylim(0.0, top)
     ax.set_xlim(0.0, 0.5 * np.pi)
@@ -287,15 +316,22 @@ def plot_total_phase(ax, body, orbits=None, *, n_levels=None, points=2000, legen
         levels.append(ax.axhline(TWO_PI * n, color="0.75", linewidth=0.6, zorder=0))
     # the levels are named on a right-hand axis, outside the data (nothing covers them)
     named = ax.secondary_yaxis("right")
-    named.set_yticks(TWO_PI * np.arange(1, count + 1),
-                     [rf"$2\pi\cdot{n}$" for n in range(1, count + 1)])
+    named.set_yticks(
+        TWO_PI * np.arange(1, count + 1), [rf"$2\pi\cdot{n}$" for n in range(1, count + 1)]
+    )
     named.tick_params(labelsize="small", colors="0.3")
     ax.axvline(theta_c, color="0.6", linewidth=1.0)
     roots = None
     if orbits is not None and len(orbits):
         shown = orbits[orbits["total_phase"] <= top]
-        roots = ax.scatter(shown["theta"], shown["total_phase"], s=14, color="black",
-                           zorder=3, label=r"closed orbits, $\Delta\alpha = 2\pi n$")
+        roots = ax.scatter(
+            shown["theta"],
+            shown["total_phase"],
+            s=14,
+            color="black",
+            zorder=3,
+            label=r"closed orbits, $\Delta\alpha = 2\pi n$",
+        )
     ax.set_xlabel(r"polar angle of $\omega_0$ from the body $z$ axis, $\theta$ (rad)")
     ax.set_ylabel(r"total phase $\Delta\alpha$ (rad)")
     if legend:
@@ -316,6 +352,7 @@ def body_space_grid(resolution=300):
         outside the region.
     """
     from .search import minimum_phase
+
     (lo1, hi1), (lo2, hi2) = REGION_BOX
     axis1 = np.linspace(lo1, hi1, resolution)
     axis2 = np.linspace(lo2, hi2, resolution)
@@ -350,11 +387,14 @@ def kink_locus(samples=400):
     (I1, I2) arrays of the curve inside the region.
     """
     from scipy.optimize import brentq
+
     points = []
     for value in np.linspace(1e-4, 1.0 / np.sqrt(3.0) - 1e-6, samples):
+
         def gap(i2):
             i3 = np.sqrt(max(1.0 - value**2 - i2**2, 0.0))
             return value * (i2 - value) - i3 * (i3 - i2)
+
         lo = max(value, 0.5 * (np.sqrt(2.0 - 3.0 * value**2) - value))
         hi = np.sqrt((1.0 - value**2) / 2.0)
         if lo < hi and gap(lo) * gap(hi) < 0:
@@ -385,9 +425,14 @@ def plot_body_space(ax, grid=None, *, resolution=300, levels=None, colorbar=True
     i1, i2, minimum = grid if grid is not None else body_space_grid(resolution)
     levels = DEFAULT_CONTOURS if levels is None else np.asarray(levels)
     ceiling = TWO_PI * 8.0
-    filled = ax.contourf(i1, i2, np.minimum(minimum, ceiling),
-                         levels=np.concatenate([[TWO_PI], levels, [ceiling]]),
-                         cmap="viridis", extend="max")
+    filled = ax.contourf(
+        i1,
+        i2,
+        np.minimum(minimum, ceiling),
+        levels=np.concatenate([[TWO_PI], levels, [ceiling]]),
+        cmap="viridis",
+        extend="max",
+    )
     contours = ax.contour(i1, i2, minimum, levels=levels, colors="white", linewidths=0.7)
     ax.clabel(contours, fmt=lambda v: rf"{v / TWO_PI:.2f}$\cdot 2\pi$", fontsize="xx-small")
     boundaries = {}
@@ -397,8 +442,14 @@ def plot_body_space(ax, grid=None, *, resolution=300, levels=None, colorbar=True
     for name, (x, y) in label_at.items():
         ax.annotate(name, (x, y), color="tab:red", fontsize="small", va="bottom")
     x, y = kink_locus()
-    (kink,) = ax.plot(x, y, color="white", linestyle="--", linewidth=1.0,
-                      label=r"kinks: $\Delta\alpha_{\theta\to0} = \Delta\alpha_{\theta\to\pi/2}$")
+    (kink,) = ax.plot(
+        x,
+        y,
+        color="white",
+        linestyle="--",
+        linewidth=1.0,
+        label=r"kinks: $\Delta\alpha_{\theta\to0} = \Delta\alpha_{\theta\to\pi/2}$",
+    )
     ax.set_xlabel(r"$I_1$ (J s$^2$, $|I| = 1$)")
     ax.set_ylabel(r"$I_2$ (J s$^2$)")
     ax.set_aspect("equal")
@@ -412,8 +463,13 @@ def plot_body_space(ax, grid=None, *, resolution=300, levels=None, colorbar=True
         bar.set_ticks(levels)
         bar.set_ticklabels([rf"{v / TWO_PI:.2f}$\cdot 2\pi$" for v in levels])
         bar.set_label(r"minimum total phase over all spins, $\min_\theta \Delta\alpha$ (rad)")
-    return {"contours": contours, "filled": filled, "boundaries": boundaries,
-            "kink": kink, "colorbar": bar}
+    return {
+        "contours": contours,
+        "filled": filled,
+        "boundaries": boundaries,
+        "kink": kink,
+        "colorbar": bar,
+    }
 
 
 def _ellipsoid_surface(semi_axes, center=(0.0, 0.0, 0.0), resolution=40):
@@ -427,15 +483,23 @@ def _ellipsoid_surface(semi_axes, center=(0.0, 0.0, 0.0), resolution=40):
 
 def _box_faces(lo, hi):
     (x0, y0, z0), (x1, y1, z1) = lo, hi
-    corners = np.array([[x0, y0, z0], [x1, y0, z0], [x1, y1, z0], [x0, y1, z0],
-                        [x0, y0, z1], [x1, y0, z1], [x1, y1, z1], [x0, y1, z1]])
-    faces = [[0, 1, 2, 3], [4, 5, 6, 7], [0, 1, 5, 4], [2, 3, 7, 6], [1, 2, 6, 5],
-             [0, 3, 7, 4]]
+    corners = np.array(
+        [
+            [x0, y0, z0],
+            [x1, y0, z0],
+            [x1, y1, z0],
+            [x0, y1, z0],
+            [x0, y0, z1],
+            [x1, y0, z1],
+            [x1, y1, z1],
+            [x0, y1, z1],
+        ]
+    )
+    faces = [[0, 1, 2, 3], [4, 5, 6, 7], [0, 1, 5, 4], [2, 3, 7, 6], [1, 2, 6, 5], [0, 3, 7, 4]]
     return [corners[f] for f in faces]
 
 
-def plot_t_handle(ax3d, l1=8.0, l2=4.0, w=1.0, *, shrink=0.25, bars="solid",
-                  ellipsoid=True):
+def plot_t_handle(ax3d, l1=8.0, l2=4.0, w=1.0, *, shrink=0.25, bars="solid", ellipsoid=True):
     """The T-handle and its equivalent ellipsoid, in 3-D (Fig. 1).
 
     The cross piece lies along x, the shaft along y (from the cross piece's
@@ -458,24 +522,30 @@ def plot_t_handle(ax3d, l1=8.0, l2=4.0, w=1.0, *, shrink=0.25, bars="solid",
         a, b, c).
     """
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
     total = l1 + l2
     com_y = (l2 / total) * 0.5 * (w + l2)
-    boxes = [((-l1 / 2, -w / 2 - com_y, -w / 2), (l1 / 2, w / 2 - com_y, w / 2)),
-             ((-w / 2, w / 2 - com_y, -w / 2), (w / 2, w / 2 + l2 - com_y, w / 2))]
+    boxes = [
+        ((-l1 / 2, -w / 2 - com_y, -w / 2), (l1 / 2, w / 2 - com_y, w / 2)),
+        ((-w / 2, w / 2 - com_y, -w / 2), (w / 2, w / 2 + l2 - com_y, w / 2)),
+    ]
     faces = _box_faces(*boxes[0]) + _box_faces(*boxes[1])
     if bars == "outline":
-        drawn = Poly3DCollection(faces, facecolor=(0, 0, 0, 0), edgecolor="darkgreen",
-                                 linewidths=0.6)
+        drawn = Poly3DCollection(
+            faces, facecolor=(0, 0, 0, 0), edgecolor="darkgreen", linewidths=0.6
+        )
     else:
-        drawn = Poly3DCollection(faces, facecolor="tab:green", edgecolor="darkgreen",
-                                 alpha=0.35, linewidths=0.8)
+        drawn = Poly3DCollection(
+            faces, facecolor="tab:green", edgecolor="darkgreen", alpha=0.35, linewidths=0.8
+        )
     ax3d.add_collection3d(drawn)
     semi = Body.t_handle(l1, l2, w).equivalent_ellipsoid()
     surface = None
     if ellipsoid:
         x, y, z = _ellipsoid_surface(np.array(semi) * shrink, resolution=60)
-        surface = ax3d.plot_surface(x, y, z, color="tab:orange", alpha=0.55, linewidth=0,
-                                    shade=True)
+        surface = ax3d.plot_surface(
+            x, y, z, color="tab:orange", alpha=0.55, linewidth=0, shade=True
+        )
     ax3d.view_init(elev=30, azim=-58)
     # the box fits the larger of the T and the drawn ellipsoid, z kept to scale
     span_x = 0.52 * max(l1, 2.0 * shrink * semi[0] if ellipsoid else 0.0)
@@ -508,7 +578,8 @@ def plot_binet(ax3d, body, theta=None, *, dtheta=None, phi=0.0):
     """The momentum sphere meeting the Binet ellipsoid, and the polhode (Fig. 3a).
 
     Both surfaces in angular-momentum space for the given spin (``|I| = 1``,
-    ``|omega0| = 1``; or ``body`` a :class:`orbits.Motion`, as given): the sphere ``|M| = M`` and the ellipsoid
+    ``|omega0| = 1``; or ``body`` a :class:`orbits.Motion`, as given): the
+    sphere ``|M| = M`` and the ellipsoid
     ``M1^2/I1 + M2^2/I2 + M3^2/I3 = 2E``; their intersection is the polhode.
 
     Returns
@@ -531,15 +602,25 @@ def plot_binet(ax3d, body, theta=None, *, dtheta=None, phi=0.0):
     semi = np.sqrt(2.0 * row.energy * unit)
     x, y, z = _ellipsoid_surface(semi, resolution=50)
     ellipsoid = ax3d.plot_surface(x, y, z, color="gold", alpha=0.35, linewidth=0)
-    (curve,) = ax3d.plot(momentum[:, 0], momentum[:, 1], momentum[:, 2], color="black",
-                         linewidth=1.5, label="polhode")
+    (curve,) = ax3d.plot(
+        momentum[:, 0],
+        momentum[:, 1],
+        momentum[:, 2],
+        color="black",
+        linewidth=1.5,
+        label="polhode",
+    )
     _momentum_axes(ax3d, 1.05 * semi.max())
-    return {"sphere": sphere, "ellipsoid": ellipsoid, "polhode": curve,
-            "energy": row.energy, "momentum": row.momentum}
+    return {
+        "sphere": sphere,
+        "ellipsoid": ellipsoid,
+        "polhode": curve,
+        "energy": row.energy,
+        "momentum": row.momentum,
+    }
 
 
-def plot_omega_components(ax, body, theta=None, *, dtheta=None, phi=0.0, periods=2.0,
-                          points=3001):
+def plot_omega_components(ax, body, theta=None, *, dtheta=None, phi=0.0, periods=2.0, points=3001):
     """The body-frame components of omega against time, period marked (Fig. 3b).
 
     ``body`` may be a :class:`orbits.Motion` (no angles): its spin as given.
@@ -557,12 +638,17 @@ def plot_omega_components(ax, body, theta=None, *, dtheta=None, phi=0.0, periods
         motion = Motion.from_spin(_as_body(body), theta, dtheta=dtheta, phi=phi)
     t = np.linspace(0.0, periods * motion.period, points)
     omega = motion.omega(t)
-    styles = (dict(color="tab:red", linestyle="-"), dict(color="tab:green", linestyle="--"),
-              dict(color="tab:blue", linestyle="-."))
-    lines = [ax.plot(t, omega[:, k], label=rf"$\omega_{axis}$ ({name})", **style)[0]
-             for k, (axis, name, style) in enumerate(zip("xyz", ("smallest $I$",
-                                                                   "intermediate $I$",
-                                                                   "largest $I$"), styles))]
+    styles = (
+        dict(color="tab:red", linestyle="-"),
+        dict(color="tab:green", linestyle="--"),
+        dict(color="tab:blue", linestyle="-."),
+    )
+    lines = [
+        ax.plot(t, omega[:, k], label=rf"$\omega_{axis}$ ({name})", **style)[0]
+        for k, (axis, name, style) in enumerate(
+            zip("xyz", ("smallest $I$", "intermediate $I$", "largest $I$"), styles)
+        )
+    ]
     ax.axvline(motion.period, color="0.6", linewidth=1.2)
     # the period is named by a tick on a top axis: outside the data (the curves
     # fill the box) and away from the time axis
@@ -573,13 +659,15 @@ def plot_omega_components(ax, body, theta=None, *, dtheta=None, phi=0.0, periods
     ax.set_ylabel(r"body angular velocity $\omega_i$ (rad/s)")
     ax.set_xlim(0.0, t[-1])
     # the legend goes under the axes: the curves fill the whole box
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncols=3,
-              fontsize="x-small", frameon=False)
+    ax.legend(
+        loc="upper center", bbox_to_anchor=(0.5, -0.14), ncols=3, fontsize="x-small", frameon=False
+    )
     return {"lines": lines, "period": motion.period, "period_axis": marker}
 
 
-def plot_polhode_foliation(ax3d, body, *, count=28, energy=0.5, cmap="twilight",
-                           elev=22.0, azim=-62.0):
+def plot_polhode_foliation(
+    ax3d, body, *, count=28, energy=0.5, cmap="twilight", elev=22.0, azim=-62.0
+):
     """The Binet ellipsoid foliated by polhodes coloured by Delta alpha mod 2 pi (Fig. 4).
 
     Polhodes for ``count`` spins over both branches, each scaled to the
@@ -597,12 +685,16 @@ def plot_polhode_foliation(ax3d, body, *, count=28, energy=0.5, cmap="twilight",
         ``view`` (unit vector towards the viewer).
     """
     import matplotlib as mpl
+
     body = _as_body(body)
     unit = body.normalized_moments
     theta_c = critical_angle(unit)
-    thetas = np.concatenate([np.linspace(0.04, 0.985, count // 2) * theta_c,
-                             theta_c + np.linspace(0.015, 0.96, count // 2)
-                             * (0.5 * np.pi - theta_c)])
+    thetas = np.concatenate(
+        [
+            np.linspace(0.04, 0.985, count // 2) * theta_c,
+            theta_c + np.linspace(0.015, 0.96, count // 2) * (0.5 * np.pi - theta_c),
+        ]
+    )
     table = phases(unit, thetas)
     colormap = mpl.colormaps[cmap]
     norm = mpl.colors.Normalize(0.0, TWO_PI)
@@ -631,16 +723,22 @@ def plot_polhode_foliation(ax3d, body, *, count=28, energy=0.5, cmap="twilight",
                 # keep one neighbour on each side so that the pieces join
                 shown = side | np.roll(side, 1) | np.roll(side, -1)
                 piece = np.where(shown[:, None], mirrored, np.nan)
-                (line,) = ax3d.plot(*piece.T, color=color, linewidth=width, alpha=alpha,
-                                    zorder=3 if alpha == 1.0 else 1)
+                (line,) = ax3d.plot(
+                    *piece.T,
+                    color=color,
+                    linewidth=width,
+                    alpha=alpha,
+                    zorder=3 if alpha == 1.0 else 1,
+                )
                 drawn.append((line, phase))
     for k, name in enumerate(("$M_1$", "$M_2$", "$M_3$")):
         tip = np.zeros(3)
         tip[k] = 1.3 * semi[k]
         ax3d.plot(*np.stack([-tip, tip]).T, color="0.3", linewidth=0.7)
         ax3d.text(*(1.08 * tip), name, fontsize="small", color="0.2")
-    bar = ax3d.figure.colorbar(mpl.cm.ScalarMappable(norm=norm, cmap=colormap), ax=ax3d,
-                               shrink=0.7, pad=0.02)
+    bar = ax3d.figure.colorbar(
+        mpl.cm.ScalarMappable(norm=norm, cmap=colormap), ax=ax3d, shrink=0.7, pad=0.02
+    )
     bar.set_label(r"total phase $\Delta\alpha$ mod $2\pi$ (rad)")
     bar.set_ticks([0, np.pi / 2, np.pi, 1.5 * np.pi, TWO_PI])
     bar.set_ticklabels(["0", r"$\pi/2$", r"$\pi$", r"$3\pi/2$", r"$2\pi$"])

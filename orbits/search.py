@@ -20,10 +20,28 @@ from .core import search as _kernels
 from .errors import InputError
 from .phases import phases
 
-CATALOG_COLUMNS = ("body", "I1", "I2", "I3", "theta_crit", "branch", "n", "q",
-                   "theta", "dtheta", "total_phase", "dynamic_phase",
-                   "geometric_phase", "period", "energy", "momentum", "D", "m",
-                   "residual", "closes_after")
+CATALOG_COLUMNS = (
+    "body",
+    "I1",
+    "I2",
+    "I3",
+    "theta_crit",
+    "branch",
+    "n",
+    "q",
+    "theta",
+    "dtheta",
+    "total_phase",
+    "dynamic_phase",
+    "geometric_phase",
+    "period",
+    "energy",
+    "momentum",
+    "D",
+    "m",
+    "residual",
+    "closes_after",
+)
 # every root must satisfy |Delta alpha - 2 pi p/q| <= RESIDUAL_TOLERANCE * 2 pi p/q
 RESIDUAL_TOLERANCE = 1e-10
 
@@ -52,11 +70,13 @@ def phase_levels(n_max, q_max=1):
         machine (:func:`orbits.catalog.check_search_bounds`).
     """
     from .catalog import check_search_bounds
+
     n_max = _count("n_max", n_max)
     q_max = _count("q_max", q_max)
     check_search_bounds(n_max, q_max, 0, "the phase levels")
-    fractions = sorted({Fraction(p, q) for q in range(1, q_max + 1)
-                        for p in range(1, n_max * q + 1)})
+    fractions = sorted(
+        {Fraction(p, q) for q in range(1, q_max + 1) for p in range(1, n_max * q + 1)}
+    )
     p = np.array([f.numerator for f in fractions], dtype=np.int64)
     q = np.array([f.denominator for f in fractions], dtype=np.int64)
     return p, q, 2.0 * np.pi * p / q
@@ -103,8 +123,9 @@ def find_roots(moments, levels):
         branch = np.empty(capacity, dtype=np.int8)
         level = np.empty(capacity, dtype=np.int64)
         offset = np.empty(capacity)
-        count = _kernels.search_body(moments[0], moments[1], moments[2],
-                                     levels, branch, level, offset, info)
+        count = _kernels.search_body(
+            moments[0], moments[1], moments[2], levels, branch, level, offset, info
+        )
         if count >= 0:
             return branch[:count], level[:count], offset[:count], info
         capacity *= 4
@@ -152,12 +173,12 @@ def closed_orbits(body, n_max=10, q_max=1):
     ``|Delta alpha - 2 pi p/q| <= 1e-10 * 2 pi p/q``.
     """
     from .catalog import check_search_bounds
+
     n_max, q_max = _count("n_max", n_max), _count("q_max", q_max)
     check_search_bounds(n_max, q_max, 1, "this search")
     moments, _ = unit_moments(body)
     if moments.shape != (3,):
-        raise InputError("closed_orbits takes one body; use orbits.catalog.catalog "
-                         "for many")
+        raise InputError("closed_orbits takes one body; use orbits.catalog.catalog for many")
     p, q, values = phase_levels(n_max, q_max)
     _, level, offset, info = find_roots_at(moments, p, q, values)
     unreached = int(info[_kernels.INFO_UNREACHED_SAM] + info[_kernels.INFO_UNREACHED_LAM])
@@ -166,16 +187,21 @@ def closed_orbits(body, n_max=10, q_max=1):
             f"{unreached} closed orbit(s) with 2 pi p/q <= 2 pi {n_max} lie "
             "closer than |dtheta| = 2.2e-308 to the separatrix and cannot be "
             "stored in double precision; they are left out",
-            UnresolvedOrbitsWarning, stacklevel=2)
+            UnresolvedOrbitsWarning,
+            stacklevel=2,
+        )
     order = np.argsort(offset, kind="stable")
-    frame = catalog_rows(_label(body, moments), moments, level[order], offset[order],
-                         p, q, values)
+    frame = catalog_rows(_label(body, moments), moments, level[order], offset[order], p, q, values)
     frame.attrs["unresolved"] = unreached
     frame.attrs["minimum_phase"] = {
-        "SAM": (_at_least_two_pi(info[_kernels.INFO_MIN_SAM]),
-                float(info[_kernels.INFO_MIN_AT_SAM])),
-        "LAM": (_at_least_two_pi(info[_kernels.INFO_MIN_LAM]),
-                float(info[_kernels.INFO_MIN_AT_LAM])),
+        "SAM": (
+            _at_least_two_pi(info[_kernels.INFO_MIN_SAM]),
+            float(info[_kernels.INFO_MIN_AT_SAM]),
+        ),
+        "LAM": (
+            _at_least_two_pi(info[_kernels.INFO_MIN_LAM]),
+            float(info[_kernels.INFO_MIN_AT_LAM]),
+        ),
     }
     return frame
 
@@ -210,8 +236,7 @@ def closes_after(p, q):
     both_odd = (p_arr % 2 == 1) & (q_arr % 2 == 1)
     # few distinct (q, both odd) pairs: format each once (a catalog has ~1e6 rows)
     key, inverse = np.unique(2 * q_arr.ravel() + both_odd.ravel(), return_inverse=True)
-    names = np.array([str(Fraction(int(k // 2), 2 if k % 2 else 1)) for k in key],
-                     dtype=object)
+    names = np.array([str(Fraction(int(k // 2), 2 if k % 2 else 1)) for k in key], dtype=object)
     text = names[inverse.reshape(-1)].reshape(q_arr.shape)
     return str(text[()]) if text.ndim == 0 else text
 
@@ -241,24 +266,32 @@ def catalog_rows(body, moments, level, offset, p, q, levels):
     bad = np.abs(residual) > RESIDUAL_TOLERANCE * target
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
-        raise RuntimeError(f"root {offset[k]!r} misses its level {target[k]!r} "
-                           f"by {residual[k]!r}")
-    return pd.DataFrame({
-        "body": body,
-        "I1": table["I1"], "I2": table["I2"], "I3": table["I3"],
-        "theta_crit": table["theta_crit"],
-        "branch": table["branch"].astype(str),
-        "n": p[level], "q": q[level],
-        "theta": table["theta"], "dtheta": offset,
-        "total_phase": table["total_phase"],
-        "dynamic_phase": table["dynamic_phase"],
-        "geometric_phase": table["geometric_phase"],
-        "period": table["period"],
-        "energy": table["energy"], "momentum": table["momentum"],
-        "D": table["D"], "m": table["m"],
-        "residual": residual,
-        "closes_after": closes_after(p[level], q[level]),
-    }, columns=list(CATALOG_COLUMNS))
+        raise RuntimeError(f"root {offset[k]!r} misses its level {target[k]!r} by {residual[k]!r}")
+    return pd.DataFrame(
+        {
+            "body": body,
+            "I1": table["I1"],
+            "I2": table["I2"],
+            "I3": table["I3"],
+            "theta_crit": table["theta_crit"],
+            "branch": table["branch"].astype(str),
+            "n": p[level],
+            "q": q[level],
+            "theta": table["theta"],
+            "dtheta": offset,
+            "total_phase": table["total_phase"],
+            "dynamic_phase": table["dynamic_phase"],
+            "geometric_phase": table["geometric_phase"],
+            "period": table["period"],
+            "energy": table["energy"],
+            "momentum": table["momentum"],
+            "D": table["D"],
+            "m": table["m"],
+            "residual": residual,
+            "closes_after": closes_after(p[level], q[level]),
+        },
+        columns=list(CATALOG_COLUMNS),
+    )
 
 
 def minimum_phase(body):

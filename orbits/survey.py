@@ -41,9 +41,23 @@ FORMATS = ("csv", "parquet")
 DEFAULT_CHUNK = 20_000
 # seconds to wait for a dask scheduler before giving up
 CONNECT_TIMEOUT = 10
-BODY_COLUMNS = ("body", "I1", "I2", "I3", "theta_crit", "limit_theta_zero",
-                "limit_theta_half_pi", "min_total_phase", "min_dtheta", "min_theta",
-                "min_at_end", "orbits", "n_smallest", "n_largest", "unresolved")
+BODY_COLUMNS = (
+    "body",
+    "I1",
+    "I2",
+    "I3",
+    "theta_crit",
+    "limit_theta_zero",
+    "limit_theta_half_pi",
+    "min_total_phase",
+    "min_dtheta",
+    "min_theta",
+    "min_at_end",
+    "orbits",
+    "n_smallest",
+    "n_largest",
+    "unresolved",
+)
 # relative slack for "the numerical minimum is the end value"
 _END_TOLERANCE = 1e-12
 
@@ -81,11 +95,11 @@ def compute_chunk(moments, n_max, q_max=1, first_id=0):
     offset = np.empty((count, capacity))
     found = np.empty(count, dtype=np.int64)
     _kernels.search_many(moments, levels, branch, level, offset, found, info)
-    rows_body, rows_level, rows_offset = _flatten(moments, levels, level, offset,
-                                                  found, info)
+    rows_body, rows_level, rows_offset = _flatten(moments, levels, level, offset, found, info)
     ids = first_id + np.arange(count)
-    orbits = catalog_rows(ids[rows_body], moments[rows_body], rows_level, rows_offset,
-                          p, q, levels)
+    orbits = catalog_rows(
+        ids[rows_body], moments[rows_body], rows_level, rows_offset, p, q, levels
+    )
     bodies = _body_rows(moments, ids, info, orbits, rows_body)
     return bodies, orbits
 
@@ -98,7 +112,7 @@ def _flatten(moments, levels, level, offset, found, info):
     """
     body, rows_level, rows_offset = _kernels.flatten_roots(level, offset, found)
     if not (found < 0).any():
-        return body, rows_level, rows_offset       # already by body, then dtheta
+        return body, rows_level, rows_offset  # already by body, then dtheta
     for b in np.flatnonzero(found < 0):
         size = 8 * level.shape[1]
         extra = (np.empty(size, np.int8), np.empty(size, np.int64), np.empty(size))
@@ -119,13 +133,12 @@ def _body_rows(moments, ids, info, orbits, body_of_row):
     use_sam = sam_min <= lam_min
     # >= 2 pi for every body (orbits.search._at_least_two_pi)
     minimum = np.maximum(np.where(use_sam, sam_min, lam_min), 2.0 * np.pi)
-    where = np.where(use_sam, info[:, _kernels.INFO_MIN_AT_SAM],
-                     info[:, _kernels.INFO_MIN_AT_LAM])
+    where = np.where(use_sam, info[:, _kernels.INFO_MIN_AT_SAM], info[:, _kernels.INFO_MIN_AT_LAM])
     end_value = np.minimum(limits.theta_zero, limits.theta_half_pi)
-    at_end = ((np.abs(np.abs(where) - np.where(use_sam, theta_c,
-                                               info[:, _kernels.INFO_WIDTH_LAM]))
-               <= 1e-9 * np.pi)
-              & (minimum >= end_value * (1.0 - _END_TOLERANCE)))
+    at_end = (
+        np.abs(np.abs(where) - np.where(use_sam, theta_c, info[:, _kernels.INFO_WIDTH_LAM]))
+        <= 1e-9 * np.pi
+    ) & (minimum >= end_value * (1.0 - _END_TOLERANCE))
     integer = orbits["q"].to_numpy() == 1 if len(orbits) else np.zeros(0, bool)
     counts = np.bincount(body_of_row, minlength=len(ids))
     n_small = np.full(len(ids), -1, dtype=np.int64)
@@ -135,31 +148,38 @@ def _body_rows(moments, ids, info, orbits, body_of_row):
         grouped = frame.groupby("b")["n"]
         n_small[grouped.min().index] = grouped.min().to_numpy()
         n_large[grouped.max().index] = grouped.max().to_numpy()
-    return pd.DataFrame({
-        "body": ids,
-        "I1": moments[:, 0] / norm, "I2": moments[:, 1] / norm, "I3": moments[:, 2] / norm,
-        "theta_crit": theta_c,
-        "limit_theta_zero": limits.theta_zero,
-        "limit_theta_half_pi": limits.theta_half_pi,
-        "min_total_phase": minimum,
-        "min_dtheta": where,
-        "min_theta": theta_c + where,
-        "min_at_end": at_end,
-        "orbits": counts,
-        "n_smallest": n_small,
-        "n_largest": n_large,
-        "unresolved": (info[:, _kernels.INFO_UNREACHED_SAM]
-                       + info[:, _kernels.INFO_UNREACHED_LAM]).astype(np.int64),
-    }, columns=list(BODY_COLUMNS))
+    return pd.DataFrame(
+        {
+            "body": ids,
+            "I1": moments[:, 0] / norm,
+            "I2": moments[:, 1] / norm,
+            "I3": moments[:, 2] / norm,
+            "theta_crit": theta_c,
+            "limit_theta_zero": limits.theta_zero,
+            "limit_theta_half_pi": limits.theta_half_pi,
+            "min_total_phase": minimum,
+            "min_dtheta": where,
+            "min_theta": theta_c + where,
+            "min_at_end": at_end,
+            "orbits": counts,
+            "n_smallest": n_small,
+            "n_largest": n_large,
+            "unresolved": (
+                info[:, _kernels.INFO_UNREACHED_SAM] + info[:, _kernels.INFO_UNREACHED_LAM]
+            ).astype(np.int64),
+        },
+        columns=list(BODY_COLUMNS),
+    )
 
 
 # --------------------------------------------------------------- bounds
-# measured here: 1,000,828 bodies with n_max = 10 in 42.8 s on 2 cores
-_SECONDS_PER_BODY = 4e-5
+# measured here (Newton search, Parquet): 10,005,794 bodies with n_max = 10 in
+# 232 s on 2 cores, i.e. 2.3e-5 s per body with about 16 levels
+_SECONDS_PER_BODY = 2e-5
 _SECONDS_PER_BODY_LEVEL = 2e-7
-_BYTES_PER_ROW = 600           # an orbit row: kernel arrays, DataFrame, CSV text
-_BYTES_PER_GRID_POINT = 200    # region_grid: meshgrid, moments and masks
-_GRID_INSIDE = 0.39            # fraction of the bounding box inside the region
+_BYTES_PER_ROW = 600  # an orbit row: kernel arrays, DataFrame, CSV text
+_BYTES_PER_GRID_POINT = 200  # region_grid: meshgrid, moments and masks
+_GRID_INSIDE = 0.39  # fraction of the bounding box inside the region
 
 
 def survey_estimate(bodies, n_max, q_max, chunk):
@@ -169,8 +189,9 @@ def survey_estimate(bodies, n_max, q_max, chunk):
     chunk's rows (chunks are written and dropped one by one).
     """
     from .catalog import search_estimate
+
     level_memory, _ = search_estimate(n_max, q_max, bodies=0)
-    levels = float(n_max) * q_max * (q_max + 1) / 2.0 * 6.0 / np.pi ** 2 + n_max
+    levels = float(n_max) * q_max * (q_max + 1) / 2.0 * 6.0 / np.pi**2 + n_max
     per_chunk = min(chunk, bodies)
     memory = level_memory + per_chunk * (2.0 * levels * _BYTES_PER_ROW + 34.0 * levels)
     seconds = bodies * (_SECONDS_PER_BODY + levels * _SECONDS_PER_BODY_LEVEL)
@@ -186,34 +207,41 @@ def check_survey_bounds(bodies, n_max, q_max, chunk):
         With the estimate and the largest ``chunk`` that would fit.
     """
     from .catalog import MAX_SECONDS, _bytes, _duration, memory_budget
+
     memory, seconds = survey_estimate(bodies, n_max, q_max, chunk)
     budget = memory_budget()
     if memory > budget:
         one, _ = survey_estimate(1, n_max, q_max, 1)
         fits = int(budget // max(one, 1.0))
-        advice = (f"use --chunk {fits} or less" if fits >= 1 else
-                  "lower --n-max or --q-max")
-        raise InputError(f"this survey (n_max={n_max}, q_max={q_max}, chunk={chunk}) "
-                         f"would need about {_bytes(memory)} of memory per chunk, more "
-                         f"than the {_bytes(budget)} allowed (half of this machine's); "
-                         f"{advice}")
+        advice = f"use --chunk {fits} or less" if fits >= 1 else "lower --n-max or --q-max"
+        raise InputError(
+            f"this survey (n_max={n_max}, q_max={q_max}, chunk={chunk}) "
+            f"would need about {_bytes(memory)} of memory per chunk, more "
+            f"than the {_bytes(budget)} allowed (half of this machine's); "
+            f"{advice}"
+        )
     if seconds > MAX_SECONDS:
-        raise InputError(f"this survey ({bodies} bodies, n_max={n_max}, q_max={q_max}) "
-                         f"would take about {_duration(seconds)}; use fewer bodies or "
-                         "a lower --n-max")
+        raise InputError(
+            f"this survey ({bodies} bodies, n_max={n_max}, q_max={q_max}) "
+            f"would take about {_duration(seconds)}; use fewer bodies or "
+            "a lower --n-max"
+        )
     return memory, seconds
 
 
 def check_resolution(resolution):
     """Refuse a grid whose construction alone would exceed the machine."""
     from .catalog import _bytes, memory_budget
+
     resolution = integer("resolution", resolution, minimum=2)
     # integer arithmetic: float(resolution) ** 2 overflows for absurd grids
     memory = float(min(resolution * resolution * _BYTES_PER_GRID_POINT, 10**300))
     if memory > memory_budget():
-        raise InputError(f"--resolution {resolution} would need about {_bytes(memory)} "
-                         f"of memory for the grid alone, more than the "
-                         f"{_bytes(memory_budget())} allowed (half of this machine's)")
+        raise InputError(
+            f"--resolution {resolution} would need about {_bytes(memory)} "
+            f"of memory for the grid alone, more than the "
+            f"{_bytes(memory_budget())} allowed (half of this machine's)"
+        )
     return int(resolution)
 
 
@@ -238,14 +266,26 @@ class Survey:
     writes a directory (an exclusive ``fcntl`` lock on ``DIR/.lock``).
     """
 
-    def __init__(self, out_dir, moments, source, n_max, q_max=1, fmt="parquet",
-                 chunk=DEFAULT_CHUNK, names=None, skipped=()):
+    def __init__(
+        self,
+        out_dir,
+        moments,
+        source,
+        n_max,
+        q_max=1,
+        fmt="parquet",
+        chunk=DEFAULT_CHUNK,
+        names=None,
+        skipped=(),
+    ):
         if fmt not in FORMATS:
             raise InputError(f"format must be one of {', '.join(FORMATS)}, got {fmt!r}")
         if fmt == "parquet":
             _require_pyarrow()
-        n_max, q_max, chunk = (integer(name, value) for name, value in
-                               (("n_max", n_max), ("q_max", q_max), ("chunk", chunk)))
+        n_max, q_max, chunk = (
+            integer(name, value)
+            for name, value in (("n_max", n_max), ("q_max", q_max), ("chunk", chunk))
+        )
         self.out_dir = Path(path_argument("out_dir", out_dir))
         self.moments = np.ascontiguousarray(as_moments(moments), dtype=float).reshape(-1, 3)
         if self.moments.shape[0] == 0:
@@ -265,9 +305,13 @@ class Survey:
             "bodies": {"grid": int(source["grid"])} if "grid" in source else "list",
             "body_count": int(self.moments.shape[0]),
             "bodies_sha256": hashlib.sha256(self.moments.tobytes()).hexdigest(),
-            "names_sha256": None if names is None else hashlib.sha256(
-                "\n".join(names).encode("utf-8", "surrogatepass")).hexdigest(),
-            "n_max": self.n_max, "q_max": self.q_max, "format": fmt, "chunk": self.chunk,
+            "names_sha256": None
+            if names is None
+            else hashlib.sha256("\n".join(names).encode("utf-8", "surrogatepass")).hexdigest(),
+            "n_max": self.n_max,
+            "q_max": self.q_max,
+            "format": fmt,
+            "chunk": self.chunk,
         }
 
     @classmethod
@@ -285,15 +329,19 @@ class Survey:
         in the bodies table) unless ``names`` is given.
         """
         if isinstance(bodies, (str, bytes)) or not hasattr(bodies, "__iter__"):
-            raise ArgumentTypeError(f"bodies must be an iterable of Body objects or "
-                                    f"moments, got {type(bodies).__name__}")
+            raise ArgumentTypeError(
+                f"bodies must be an iterable of Body objects or "
+                f"moments, got {type(bodies).__name__}"
+            )
         bodies = list(bodies)
         if not bodies:
             raise InputError("a survey needs at least one body")
-        moments = real_array("bodies", [getattr(b, "moments", b) for b in bodies],
-                             InputError)
-        if "names" not in kwargs and bodies and all(
-                getattr(b, "name", None) is not None for b in bodies):
+        moments = real_array("bodies", [getattr(b, "moments", b) for b in bodies], InputError)
+        if (
+            "names" not in kwargs
+            and bodies
+            and all(getattr(b, "name", None) is not None for b in bodies)
+        ):
             kwargs["names"] = [b.name for b in bodies]
         return cls(out_dir, moments, {"file": str(source)}, n_max, **kwargs)
 
@@ -307,6 +355,7 @@ class Survey:
     # ------------------------------------------------------------ directory
     def _refuse_foreign_directory(self):
         import re
+
         if self.out_dir.exists() and not self.out_dir.is_dir():
             raise InputError(f"{self.out_dir} exists and is not a directory")
         if not self.out_dir.is_dir() or (self.out_dir / MANIFEST).exists():
@@ -343,9 +392,13 @@ class Survey:
             self._write_manifest()
 
     def _write_manifest(self):
-        document = {"orbits_survey": SURVEY_FORMAT, "parameters": self.parameters,
-                    "source": self.source, "skipped_rows": self.skipped,
-                    "parts": self._ledger}
+        document = {
+            "orbits_survey": SURVEY_FORMAT,
+            "parameters": self.parameters,
+            "source": self.source,
+            "skipped_rows": self.skipped,
+            "parts": self._ledger,
+        }
         write_text_atomic(self.out_dir / MANIFEST, json.dumps(document, indent=1) + "\n")
 
     def lock(self):
@@ -361,6 +414,7 @@ class Survey:
     def clean_partial(self):
         """Remove temporary files of killed runs (never parts, never a live run's)."""
         from .atomic import remove_stale_temporaries
+
         for table in TABLES:
             remove_stale_temporaries(self.out_dir / table, r"part-\d+\.\w+", regex=True)
         remove_stale_temporaries(self.out_dir, MANIFEST)
@@ -387,25 +441,32 @@ class Survey:
         """Indices of the chunks not (verifiably) written."""
         ledger = getattr(self, "_ledger", None)
         if ledger is None:
-            ledger = load_manifest(self.out_dir)["parts"] if (
-                self.out_dir / MANIFEST).exists() else {}
+            ledger = (
+                load_manifest(self.out_dir)["parts"] if (self.out_dir / MANIFEST).exists() else {}
+            )
         return [k for k in range(self.chunks) if str(k) not in ledger]
 
     def chunk_moments(self, index):
-        return self.moments[index * self.chunk:(index + 1) * self.chunk]
+        return self.moments[index * self.chunk : (index + 1) * self.chunk]
 
     def write_chunk(self, index, bodies, orbits):
         """Write one chunk (orbits, then bodies), then its ledger entry."""
         if self.names is not None:
-            bodies.insert(1, "name", self.names[index * self.chunk:
-                                               index * self.chunk + len(bodies)])
-        entry = {"first_body": int(index * self.chunk),
-                 "last_body": int(index * self.chunk + len(bodies) - 1)}
+            bodies.insert(
+                1, "name", self.names[index * self.chunk : index * self.chunk + len(bodies)]
+            )
+        entry = {
+            "first_body": int(index * self.chunk),
+            "last_body": int(index * self.chunk + len(bodies) - 1),
+        }
         for table, frame in (("orbits", orbits), ("bodies", bodies)):
             path = self._part(table, index)
             _write_table(frame, path, self.format)
-            entry[table] = {"file": f"{table}/{path.name}", "rows": int(len(frame)),
-                            "sha256": _sha256(path)}
+            entry[table] = {
+                "file": f"{table}/{path.name}",
+                "rows": int(len(frame)),
+                "sha256": _sha256(path),
+            }
         self._ledger[str(index)] = entry
         self._write_manifest()
 
@@ -463,7 +524,8 @@ class Survey:
             changed = sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
             raise InputError(
                 f"{self.out_dir} holds a survey with different parameters "
-                f"({', '.join(changed)}); use a new directory")
+                f"({', '.join(changed)}); use a new directory"
+            )
 
     def _run_locked(self, client, progress, notify):
         try:
@@ -477,14 +539,18 @@ class Survey:
             if damaged:
                 self._write_manifest()
                 if notify is not None:
-                    notify(f"{len(damaged)} part(s) missing or damaged, recomputing: "
-                           + "; ".join(damaged[:3]) + (" ..." if len(damaged) > 3 else ""))
+                    notify(
+                        f"{len(damaged)} part(s) missing or damaged, recomputing: "
+                        + "; ".join(damaged[:3])
+                        + (" ..." if len(damaged) > 3 else "")
+                    )
             todo = self.missing()
             self.last_todo = todo
             if client is None:
                 for index in todo:
-                    bodies, orbits = compute_chunk(self.chunk_moments(index), self.n_max,
-                                                   self.q_max, index * self.chunk)
+                    bodies, orbits = compute_chunk(
+                        self.chunk_moments(index), self.n_max, self.q_max, index * self.chunk
+                    )
                     self.write_chunk(index, bodies, orbits)
                     if progress is not None:
                         progress(len(bodies))
@@ -505,36 +571,52 @@ class Survey:
         try:
             from distributed import Client
         except ImportError:
-            raise InputError("--scheduler needs dask.distributed: "
-                             "pip install 'orbits[distributed]'") from None
+            raise InputError(
+                "--scheduler needs dask.distributed: pip install 'orbits[distributed]'"
+            ) from None
         if isinstance(scheduler, Client):
             client, own = scheduler, False
         else:
             if status is not None:
-                status(f"connecting to the dask scheduler at {scheduler} "
-                       f"(timeout {CONNECT_TIMEOUT} s)...")
+                status(
+                    f"connecting to the dask scheduler at {scheduler} "
+                    f"(timeout {CONNECT_TIMEOUT} s)..."
+                )
             try:
                 client, own = Client(scheduler, timeout=CONNECT_TIMEOUT), True
-            except Exception as error:          # noqa: BLE001 - any failure to connect
-                raise InputError(f"cannot reach the dask scheduler at {scheduler} "
-                                 f"within {CONNECT_TIMEOUT} s: {_one_line(error)}") from None
+            except Exception as error:  # noqa: BLE001 - any failure to connect
+                raise InputError(
+                    f"cannot reach the dask scheduler at {scheduler} "
+                    f"within {CONNECT_TIMEOUT} s: {_one_line(error)}"
+                ) from None
         try:
             if status is not None and not client.scheduler_info().get("workers"):
                 status(f"waiting up to {CONNECT_TIMEOUT} s for a dask worker...")
             client.wait_for_workers(1, timeout=CONNECT_TIMEOUT)
-        except Exception:                       # noqa: BLE001 - dask raises TimeoutError
+        except Exception:  # noqa: BLE001 - dask raises TimeoutError
             if own:
                 client.close()
-            raise InputError(f"the dask scheduler at {scheduler} has no workers "
-                             f"(waited {CONNECT_TIMEOUT} s); start one with "
-                             f"'dask worker ADDRESS'") from None
+            raise InputError(
+                f"the dask scheduler at {scheduler} has no workers "
+                f"(waited {CONNECT_TIMEOUT} s); start one with "
+                f"'dask worker ADDRESS'"
+            ) from None
         return client
 
     def _run_distributed(self, client, todo, progress):
         from distributed import as_completed
-        futures = {client.submit(compute_chunk, self.chunk_moments(index), self.n_max,
-                                 self.q_max, index * self.chunk, pure=False): index
-                   for index in todo}
+
+        futures = {
+            client.submit(
+                compute_chunk,
+                self.chunk_moments(index),
+                self.n_max,
+                self.q_max,
+                index * self.chunk,
+                pure=False,
+            ): index
+            for index in todo
+        }
         for future in as_completed(futures):
             bodies, orbits = future.result()
             self.write_chunk(futures[future], bodies, orbits)
@@ -548,15 +630,19 @@ class Survey:
         report = {
             "bodies": int(len(bodies)),
             "orbits": int(bodies["orbits"].sum()),
-            "n_max": self.n_max, "q_max": self.q_max,
+            "n_max": self.n_max,
+            "q_max": self.q_max,
             "conjecture_minimum_at_the_ends": {
                 "held_on_every_body": bool(failed.empty),
-                "counterexamples": failed[["body", "I1", "I2", "I3", "min_total_phase",
-                                           "min_theta"]].to_dict("records"),
+                "counterexamples": failed[
+                    ["body", "I1", "I2", "I3", "min_total_phase", "min_theta"]
+                ].to_dict("records"),
             },
             "bodies_with_a_two_pi_orbit": int((bodies["n_smallest"] == 1).sum()),
-            "min_total_phase_range": [float(bodies["min_total_phase"].min()),
-                                      float(bodies["min_total_phase"].max())],
+            "min_total_phase_range": [
+                float(bodies["min_total_phase"].min()),
+                float(bodies["min_total_phase"].max()),
+            ],
             "bodies_with_unresolved_orbits": int((bodies["unresolved"] > 0).sum()),
             "skipped_rows": len(self.skipped),
         }
@@ -573,6 +659,7 @@ class _DirectoryLock:
     def __enter__(self):
         import fcntl
         import os
+
         try:
             self.handle = open(self.path, "a+")
         except OSError as error:
@@ -583,9 +670,11 @@ class _DirectoryLock:
             self.handle.seek(0)
             owner = self.handle.read().strip() or "unknown"
             self.handle.close()
-            raise InputError(f"{self.path.parent} is being written by another orbits run "
-                             f"(pid {owner}); wait for it to finish or use another "
-                             "directory") from None
+            raise InputError(
+                f"{self.path.parent} is being written by another orbits run "
+                f"(pid {owner}); wait for it to finish or use another "
+                "directory"
+            ) from None
         self.handle.seek(0)
         self.handle.truncate()
         self.handle.write(f"{os.getpid()}\n")
@@ -593,7 +682,7 @@ class _DirectoryLock:
         return self
 
     def __exit__(self, *exc):
-        self.handle.close()          # closing releases the lock
+        self.handle.close()  # closing releases the lock
         return False
 
 
@@ -604,13 +693,17 @@ def _one_line(error):
 def _check_scheduler(scheduler):
     """Refuse an address that cannot be a dask scheduler before connecting."""
     import re
+
     if not isinstance(scheduler, str):
         return
-    match = re.fullmatch(r"(?:(?:tcp|tls|ucx|inproc|ws|wss)://)?[\w.\-\[\]:]+:(\d{1,5})",
-                         scheduler)
+    match = re.fullmatch(
+        r"(?:(?:tcp|tls|ucx|inproc|ws|wss)://)?[\w.\-\[\]:]+:(\d{1,5})", scheduler
+    )
     if not match or not 0 < int(match.group(1)) < 65536:
-        raise InputError(f"--scheduler {scheduler!r} is not a dask scheduler address "
-                         "(expected tcp://HOST:PORT, port 1-65535)")
+        raise InputError(
+            f"--scheduler {scheduler!r} is not a dask scheduler address "
+            "(expected tcp://HOST:PORT, port 1-65535)"
+        )
 
 
 def _sha256(path):
@@ -624,6 +717,7 @@ def _sha256(path):
 def _check_part(out_dir, entry):
     """The first problem of a ledger entry's files, or '' if they match."""
     import re
+
     try:
         for table in TABLES:
             item = entry[table]
@@ -663,16 +757,23 @@ def load_manifest(out_dir):
     except OSError as error:
         raise InputError(f"cannot read {manifest}: {error.strerror}") from None
     if not isinstance(document, dict) or document.get("orbits_survey") != SURVEY_FORMAT:
-        raise InputError(f"{manifest} is not a survey manifest of this orbits version "
-                         "(no ledger); rerun the survey into a new directory")
+        raise InputError(
+            f"{manifest} is not a survey manifest of this orbits version "
+            "(no ledger); rerun the survey into a new directory"
+        )
     parameters = document.get("parameters")
     parts = document.get("parts")
     required = ("bodies", "body_count", "n_max", "q_max", "format", "chunk")
-    if (not isinstance(parameters, dict) or not isinstance(parts, dict)
-            or any(key not in parameters for key in required)
-            or parameters["format"] not in FORMATS
-            or not all(isinstance(parameters[k], int) and parameters[k] >= 1
-                       for k in ("body_count", "n_max", "q_max", "chunk"))):
+    if (
+        not isinstance(parameters, dict)
+        or not isinstance(parts, dict)
+        or any(key not in parameters for key in required)
+        or parameters["format"] not in FORMATS
+        or not all(
+            isinstance(parameters[k], int) and parameters[k] >= 1
+            for k in ("body_count", "n_max", "q_max", "chunk")
+        )
+    ):
         raise InputError(f"{manifest} is incomplete or damaged")
     if not all(str(key).isdigit() and isinstance(entry, dict) for key, entry in parts.items()):
         raise InputError(f"{manifest} has a damaged ledger")
@@ -704,14 +805,18 @@ def check_survey(out_dir):
         else:
             verified += 1
     missing = [f"chunk {k}" for k in range(chunks) if str(k) not in ledger]
-    return {"chunks": chunks, "verified": verified, "damaged": damaged,
-            "missing": missing, "complete": not damaged and not missing}
+    return {
+        "chunks": chunks,
+        "verified": verified,
+        "damaged": damaged,
+        "missing": missing,
+        "complete": not damaged and not missing,
+    }
 
 
 def _require_pyarrow():
     if not _have_pyarrow():
-        raise InputError("--format parquet needs pyarrow: "
-                         "pip install 'orbits[parquet]'")
+        raise InputError("--format parquet needs pyarrow: pip install 'orbits[parquet]'")
 
 
 def _write_table(frame, path, fmt, engine=None):
@@ -726,6 +831,7 @@ def _write_table(frame, path, fmt, engine=None):
         engine = "arrow" if _have_pyarrow() else "pandas"
     if fmt == "csv" and "name" in frame.columns:
         from .catalog import neutralize
+
         frame = frame.assign(name=[neutralize(str(v)) for v in frame["name"]])
     with atomic_path(path) as temporary:
         if fmt == "parquet":
@@ -736,6 +842,7 @@ def _write_table(frame, path, fmt, engine=None):
         elif engine == "arrow":
             from pyarrow import Table
             from pyarrow.csv import write_csv
+
             write_csv(Table.from_pandas(frame, preserve_index=False), temporary)
         else:
             frame.to_csv(temporary, index=False, float_format=FLOAT_FORMAT)
@@ -743,14 +850,20 @@ def _write_table(frame, path, fmt, engine=None):
 
 def _have_pyarrow():
     from importlib.util import find_spec
+
     return find_spec("pyarrow") is not None
 
 
 def _csv_dtypes():
     from .search import CATALOG_COLUMNS
+
     types = {name: np.float64 for name in BODY_COLUMNS + CATALOG_COLUMNS}
-    types.update({name: np.int64 for name in ("body", "orbits", "n_smallest", "n_largest",
-                                              "unresolved", "n", "q")})
+    types.update(
+        {
+            name: np.int64
+            for name in ("body", "orbits", "n_smallest", "n_largest", "unresolved", "n", "q")
+        }
+    )
     types.update(name=str, branch=str, closes_after=str, min_at_end=object)
     return types
 
@@ -761,17 +874,18 @@ _CSV_DTYPES = _csv_dtypes()
 def _read_part(path):
     from .atomic import csv_float_options
     from .catalog import unneutralize
+
     if path.suffix == ".parquet":
         return pd.read_parquet(path)
     # Types by schema, not by inference: a part whose float column holds only
     # "-0" or "0" would otherwise come back as integers (losing the sign).
-    frame = pd.read_csv(path, dtype=_CSV_DTYPES, keep_default_na=False,
-                        **csv_float_options())
+    frame = pd.read_csv(path, dtype=_CSV_DTYPES, keep_default_na=False, **csv_float_options())
     if "name" in frame.columns:
         frame["name"] = frame["name"].map(unneutralize).astype(frame["name"].dtype)
     if "min_at_end" in frame.columns and frame["min_at_end"].dtype == object:
-        frame["min_at_end"] = frame["min_at_end"].map({"true": True, "false": False,
-                                                       "True": True, "False": False})
+        frame["min_at_end"] = frame["min_at_end"].map(
+            {"true": True, "false": False, "True": True, "False": False}
+        )
     return frame
 
 
@@ -793,20 +907,24 @@ def read_table(out_dir, table, verify=True):
     status = check_survey(out_dir) if verify else None
     if status is not None and not status["complete"]:
         problems = status["damaged"] + [f"{m} missing" for m in status["missing"]]
-        raise InputError(f"{out_dir} is damaged or incomplete ({len(problems)} "
-                         f"problem(s), first: {problems[0]}); rerun the survey command "
-                         "to recompute, or check it with 'orbits survey --check'")
+        raise InputError(
+            f"{out_dir} is damaged or incomplete ({len(problems)} "
+            f"problem(s), first: {problems[0]}); rerun the survey command "
+            "to recompute, or check it with 'orbits survey --check'"
+        )
     ledger = document["parts"]
     frames = []
     for key in sorted(ledger, key=int):
         try:
             frames.append(_read_part(Path(out_dir) / ledger[key][table]["file"]))
         except (OSError, ValueError, KeyError) as error:
-            raise InputError(f"{out_dir}: cannot read chunk {key} of {table}: "
-                             f"{_one_line(error)}") from None
-        except Exception as error:          # noqa: BLE001 - pyarrow's own errors
-            raise InputError(f"{out_dir}: chunk {key} of {table} is damaged: "
-                             f"{_one_line(error)}") from None
+            raise InputError(
+                f"{out_dir}: cannot read chunk {key} of {table}: {_one_line(error)}"
+            ) from None
+        except Exception as error:  # noqa: BLE001 - pyarrow's own errors
+            raise InputError(
+                f"{out_dir}: chunk {key} of {table} is damaged: {_one_line(error)}"
+            ) from None
     if not frames:
         raise InputError(f"no {table} table in {out_dir}")
     return pd.concat(frames, ignore_index=True)
@@ -841,6 +959,7 @@ def survey_grid(out_dir):
     if len(bodies) != parameters["body_count"]:
         raise InputError(f"{out_dir}: the survey is not complete")
     from .bodies import REGION_BOX
+
     (lo1, hi1), (lo2, hi2) = REGION_BOX
     # grid cells are centred: i = lo + (k + 1/2) (hi - lo) / N
     k1 = np.rint((bodies["I1"].to_numpy() - lo1) / (hi1 - lo1) * resolution - 0.5).astype(int)

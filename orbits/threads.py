@@ -26,6 +26,7 @@ _requested = None
 
 def _numba():
     import numba
+
     return numba
 
 
@@ -38,11 +39,13 @@ def set_num_threads(count):
         ``count`` not an integer in that range.
     """
     from .errors import InputError
+
     numba = _numba()
     top = numba.config.NUMBA_NUM_THREADS
     if isinstance(count, bool) or not float(count).is_integer() or not 1 <= count <= top:
-        raise InputError(f"threads must be an integer from 1 to {top} "
-                         f"(NUMBA_NUM_THREADS), got {count!r}")
+        raise InputError(
+            f"threads must be an integer from 1 to {top} (NUMBA_NUM_THREADS), got {count!r}"
+        )
     global _requested
     _requested = int(count)
     numba.set_num_threads(_requested)
@@ -79,10 +82,11 @@ def _size(value):
 
 def size_aware(function):
     """Decorator: run ``function`` serially when its largest array argument is small."""
+
     @functools.wraps(function)
     def wrapper(*args, **kwargs):
-        size = max([_size(a) for a in args] + [_size(v) for v in kwargs.values()]
-                   + [1])
+        size = max([_size(a) for a in args] + [_size(v) for v in kwargs.values()] + [1])
         with threads_for(size):
             return function(*args, **kwargs)
+
     return wrapper

@@ -30,8 +30,9 @@ def _positive_finite(name, value):
 
 def _solve(moments, targets):
     """Roots for per-branch targets ``{"SAM": X or None, "LAM": X or None}``."""
-    from .search import UnresolvedOrbitsWarning, find_roots
     from .core import search as _kernels
+    from .search import UnresolvedOrbitsWarning, find_roots
+
     found = []
     unreached = 0
     info = None
@@ -48,17 +49,23 @@ def _solve(moments, targets):
         warnings.warn(
             f"{unreached} spin(s) with this total phase lie closer than "
             "|dtheta| = 2.2e-308 to the separatrix and cannot be stored in "
-            "double precision; they are left out", UnresolvedOrbitsWarning,
-            stacklevel=3)
+            "double precision; they are left out",
+            UnresolvedOrbitsWarning,
+            stacklevel=3,
+        )
     offsets = np.sort(np.concatenate(found)) if found else np.empty(0)
     return offsets, info
 
 
 def _table(moments, offsets, targets):
     from .phases import phases
+
     table = phases(moments, dtheta=offsets)
-    goal = np.where(table["branch"].astype(str) == "SAM", targets.get("SAM") or np.nan,
-                    targets.get("LAM") or np.nan)
+    goal = np.where(
+        table["branch"].astype(str) == "SAM",
+        targets.get("SAM") or np.nan,
+        targets.get("LAM") or np.nan,
+    )
     table["target"] = goal
     table["residual"] = table["total_phase"].to_numpy() - goal
     return table
@@ -66,11 +73,13 @@ def _table(moments, offsets, targets):
 
 def _no_spin(moments, what):
     from .search import minimum_phase
+
     low, where = minimum_phase(moments)
     return InputError(
         f"no spin of this body has {what}: the total phase is at least "
         f"{low:.17g} rad ({low / TWO_PI:.12g} turns, at dtheta = {where:.6g}) "
-        "and grows without bound towards the separatrix")
+        "and grows without bound towards the separatrix"
+    )
 
 
 def spins_with_total_phase(body_or_moments, total_phase):
@@ -132,8 +141,10 @@ def spins_with_period_ratio(body_or_moments, ratio):
     if moments.shape != (3,):
         raise InputError("spins_with_period_ratio takes one body")
     ratio = _positive_finite("ratio", ratio)
-    targets = {"SAM": TWO_PI * (ratio - 1.0) if ratio > 1.0 else None,
-               "LAM": TWO_PI * (ratio + 1.0)}
+    targets = {
+        "SAM": TWO_PI * (ratio - 1.0) if ratio > 1.0 else None,
+        "LAM": TWO_PI * (ratio + 1.0),
+    }
     offsets, _ = _solve(moments, targets)
     if offsets.size == 0:
         raise _no_spin(moments, f"period ratio P_psi/P_phi = {ratio:.17g}")

@@ -30,6 +30,9 @@ def period_and_total_phase(i1, i2, i3, two_e, m_sq, sam=None):
     k2, rate, n, shift = elliptic_parameters(i1, i2, i3, two_e, m_sq, sam)
     momentum = mp.sqrt(m_sq)
     period = 4 * mp.ellipk(k2) / rate
-    total = (momentum * period / i3
-             + 4 * momentum * (i3 - i1) * mp.ellippi(n, k2) / (i1 * i3 * rate) - shift)
+    total = (
+        momentum * period / i3
+        + 4 * momentum * (i3 - i1) * mp.ellippi(n, k2) / (i1 * i3 * rate)
+        - shift
+    )
     return period, total

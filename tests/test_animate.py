@@ -55,8 +55,9 @@ def test_orientation_drawn_is_motion_rotation(orbit_anim):
         inertia = expected[k] @ np.diag(moments) @ expected[k].T
         for line in anim.artists["ellipsoid"]:
             points = np.stack([np.asarray(v) for v in line.get_data_3d()], axis=-1)
-            np.testing.assert_allclose(np.einsum("ni,ij,nj->n", points, inertia, points),
-                                       1.0, rtol=TIGHT)
+            np.testing.assert_allclose(
+                np.einsum("ni,ij,nj->n", points, inertia, points), 1.0, rtol=TIGHT
+            )
 
 
 def test_closed_orbit_returns_to_its_start(orbit_anim):
@@ -87,8 +88,12 @@ def test_ellipsoid_touches_the_plane_at_omega_over_sqrt_2e(scale, speed):
         data = anim.frame(k)
         x, y, z = (np.asarray(v)[0] for v in anim.artists["contact"].get_data_3d())
         contact = np.array([x, y, z])
-        np.testing.assert_allclose(contact, omega_space[k] / np.sqrt(2 * energy),
-                                   rtol=0, atol=TIGHT * np.abs(contact).max())
+        np.testing.assert_allclose(
+            contact,
+            omega_space[k] / np.sqrt(2 * energy),
+            rtol=0,
+            atol=TIGHT * np.abs(contact).max(),
+        )
         # on the plane, and on the drawn ellipsoid
         assert contact[2] == pytest.approx(height, rel=TIGHT)
         rotation = drawn_rotation(anim)
@@ -103,8 +108,7 @@ def test_ellipsoid_touches_the_plane_at_omega_over_sqrt_2e(scale, speed):
         for line in anim.artists["ellipsoid"]:
             assert np.max(line.get_data_3d()[2]) <= height * (1 + 1e-12)
         # the body-frame contact point is on x.I.x = 1 (the polhode)
-        assert data.contact_body @ (moments * data.contact_body) == pytest.approx(1.0,
-                                                                                  rel=TIGHT)
+        assert data.contact_body @ (moments * data.contact_body) == pytest.approx(1.0, rel=TIGHT)
 
 
 def test_contact_point_lies_on_the_herpolhode(orbit_anim):
@@ -113,18 +117,20 @@ def test_contact_point_lies_on_the_herpolhode(orbit_anim):
     energy, _ = invariants(motion)
     for k in (1, 4, 10):
         data = anim.frame(k)
-        traced = np.stack([np.asarray(v) for v in anim.artists["herpolhode"].get_data_3d()],
-                          axis=-1)
+        traced = np.stack(
+            [np.asarray(v) for v in anim.artists["herpolhode"].get_data_3d()], axis=-1
+        )
         np.testing.assert_array_equal(traced[-1], data.contact)
         np.testing.assert_allclose(traced[:, 2], anim.plane_height, rtol=TIGHT)
         # the traced points are the herpolhode omega_space(t)/sqrt(2E) on [0, t_k]
         times = np.linspace(0.0, anim.times[k], len(traced))
-        np.testing.assert_allclose(traced, motion.omega_space(times) / np.sqrt(2 * energy),
-                                   rtol=0, atol=1e-12)
-        polhode = np.stack([np.asarray(v) for v in anim.artists["polhode"].get_data_3d()],
-                           axis=-1)
-        np.testing.assert_allclose(np.einsum("ni,i,ni->n", polhode, motion.body.moments,
-                                             polhode), 1.0, rtol=TIGHT)
+        np.testing.assert_allclose(
+            traced, motion.omega_space(times) / np.sqrt(2 * energy), rtol=0, atol=1e-12
+        )
+        polhode = np.stack([np.asarray(v) for v in anim.artists["polhode"].get_data_3d()], axis=-1)
+        np.testing.assert_allclose(
+            np.einsum("ni,i,ni->n", polhode, motion.body.moments, polhode), 1.0, rtol=TIGHT
+        )
 
 
 def test_t_handle_solid_has_the_body_moments():
@@ -133,7 +139,7 @@ def test_t_handle_solid_has_the_body_moments():
     tensor = np.zeros((3, 3))
     mass = 0.0
     for box in range(2):
-        corners = np.concatenate(faces[6 * box:6 * box + 6])
+        corners = np.concatenate(faces[6 * box : 6 * box + 6])
         lo, hi = corners.min(axis=0), corners.max(axis=0)
         volume = np.prod(hi - lo)
         centre = 0.5 * (lo + hi)
@@ -161,9 +167,11 @@ def test_real_bodies_are_drawn_as_their_solids(tmp_path):
     kind, faces = animate.solid_faces(phone)
     assert kind == "box"
     a, b, c = _principal_extent(faces)
-    np.testing.assert_allclose(0.17 / 12 * np.array([b * b + c * c, a * a + c * c,
-                                                     a * a + b * b]),
-                               phone.moments, rtol=1e-13)
+    np.testing.assert_allclose(
+        0.17 / 12 * np.array([b * b + c * c, a * a + c * c, a * a + b * b]),
+        phone.moments,
+        rtol=1e-13,
+    )
     # an elliptic cylinder (a = 0.3 along x, b = 0.2 along y, length 1 along z):
     # I_z < I_x < I_y, so the length lies along I1, 2a along I2, 2b along I3
     rod = Body.cylinder(0.3, 1.0, 2.0, radius_y=0.2)
@@ -198,9 +206,30 @@ def test_catalog_row_of_a_real_body_keeps_its_solid_and_units(tmp_path):
     with pytest.raises(InputError, match="not of the given body"):
         animate.poinsot_animation(row, frames=3, body=FIG6)
     out = tmp_path / "phone_n3.gif"
-    assert main(["animate", "--box", "0.071", "0.147", "0.0078", "--mass", "0.17",
-                 "--n", "3", "--branch", "SAM", "--frames", "3", "--dpi", "20",
-                 "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "animate",
+                "--box",
+                "0.071",
+                "0.147",
+                "0.0078",
+                "--mass",
+                "0.17",
+                "--n",
+                "3",
+                "--branch",
+                "SAM",
+                "--frames",
+                "3",
+                "--dpi",
+                "20",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert out.stat().st_size > 0
 
 
@@ -208,7 +237,7 @@ def test_flip_turns_the_intermediate_axis_over():
     motion = animate.flip_motion()
     assert motion.body == T_HANDLE
     t = np.linspace(0.0, motion.period, 801)
-    axis_along_l = motion.rotation(t)[:, 2, 1]         # z component of the I2 axis
+    axis_along_l = motion.rotation(t)[:, 2, 1]  # z component of the I2 axis
     assert axis_along_l.min() < -0.95 and axis_along_l.max() > 0.95
     with pytest.raises(InputError):
         animate.flip_motion(offset=1.0)
@@ -261,33 +290,42 @@ def test_orbit_row_selection():
 
 
 class TestCli:
-    @pytest.mark.parametrize("argv", [
-        ["--preset", "fig6", "--n", "5", "--branch", "SAM"],
-        ["--preset", "fig6", "--p", "7", "--q", "2", "--branch", "LAM"],
-        ["--preset", "t-handle", "--flip"],
-        ["--t-handle", "8", "4", "1", "--theta", "0.3"],
-        ["--moments", "2", "3", "4", "--dtheta", "-0.01", "--phi", "0.2"],
-    ])
+    @pytest.mark.parametrize(
+        "argv",
+        [
+            ["--preset", "fig6", "--n", "5", "--branch", "SAM"],
+            ["--preset", "fig6", "--p", "7", "--q", "2", "--branch", "LAM"],
+            ["--preset", "t-handle", "--flip"],
+            ["--t-handle", "8", "4", "1", "--theta", "0.3"],
+            ["--moments", "2", "3", "4", "--dtheta", "-0.01", "--phi", "0.2"],
+        ],
+    )
     def test_writes(self, tmp_path, capsys, argv):
         out = tmp_path / "x.gif"
-        assert main(["animate", *argv, "--frames", "3", "--dpi", "20",
-                     "--out", str(out)]) == 0
+        assert main(["animate", *argv, "--frames", "3", "--dpi", "20", "--out", str(out)]) == 0
         with Image.open(out) as image:
             assert image.n_frames == 3
         assert "written to" in capsys.readouterr().err
 
-    @pytest.mark.parametrize("argv, fragment", [
-        (["--preset", "fig6", "--out", "a.gif"], "exactly one spin"),
-        (["--preset", "fig6", "--n", "2", "--theta", "1", "--out", "a.gif"], "exactly one"),
-        (["--preset", "fig6", "--n", "5", "--out", "a.gif"], "--branch"),
-        (["--preset", "fig6", "--q", "2", "--theta", "1", "--out", "a.gif"], "--q needs --p"),
-        (["--preset", "fig6", "--theta", "0.5", "--out", "a.png"], "use .gif or .mp4"),
-        (["--preset", "fig6", "--flip", "2", "--out", "a.gif"], "(0, pi/4)"),
-        (["--preset", "fig6", "--theta", "0.5", "--frames", "1", "--out", "a.gif"],
-         "frames must be"),
-        (["--preset", "fig6", "--theta", "0.5", "--out", "/nonexistent/a.gif"],
-         "does not exist"),
-    ])
+    @pytest.mark.parametrize(
+        "argv, fragment",
+        [
+            (["--preset", "fig6", "--out", "a.gif"], "exactly one spin"),
+            (["--preset", "fig6", "--n", "2", "--theta", "1", "--out", "a.gif"], "exactly one"),
+            (["--preset", "fig6", "--n", "5", "--out", "a.gif"], "--branch"),
+            (["--preset", "fig6", "--q", "2", "--theta", "1", "--out", "a.gif"], "--q needs --p"),
+            (["--preset", "fig6", "--theta", "0.5", "--out", "a.png"], "use .gif or .mp4"),
+            (["--preset", "fig6", "--flip", "2", "--out", "a.gif"], "(0, pi/4)"),
+            (
+                ["--preset", "fig6", "--theta", "0.5", "--frames", "1", "--out", "a.gif"],
+                "frames must be",
+            ),
+            (
+                ["--preset", "fig6", "--theta", "0.5", "--out", "/nonexistent/a.gif"],
+                "does not exist",
+            ),
+        ],
+    )
     def test_bad_input(self, tmp_path, capsys, monkeypatch, argv, fragment):
         monkeypatch.chdir(tmp_path)
         code = main(["animate", *argv])

@@ -58,8 +58,7 @@ def surveys(tmp_path_factory):
     root = tmp_path_factory.mktemp("surveys")
     orbits.survey.Survey.grid(root / "grid", 4, 2, fmt="csv", chunk=2).run()
     moments = np.loadtxt(_write(root / "list.csv", LIST_BODIES), delimiter=",", skiprows=1)
-    orbits.survey.Survey(root / "list", moments, {"file": "list.csv"}, 2, fmt="csv",
-                         chunk=2).run()
+    orbits.survey.Survey(root / "list", moments, {"file": "list.csv"}, 2, fmt="csv", chunk=2).run()
     return root
 
 
@@ -101,7 +100,7 @@ def _damage(directory, damage):
         part.unlink()
     elif damage == "part-truncated":
         data = orbits_part.read_bytes()
-        orbits_part.write_bytes(data[:len(data) // 2])
+        orbits_part.write_bytes(data[: len(data) // 2])
     elif damage == "part-empty":
         part.write_bytes(b"")
     elif damage == "part-changed":
@@ -110,10 +109,10 @@ def _damage(directory, damage):
     elif damage == "stray-bak-and-truncated":
         shutil.copy(part, part.with_name(part.name + ".bak"))
         data = part.read_bytes()
-        part.write_bytes(data[:len(data) - 20])
+        part.write_bytes(data[: len(data) - 20])
     elif damage == "stale-temporary":
         # a SIGKILLed run's temporary (pid 2**22 + 1 does not exist) next to a missing part
-        (part.parent / f".{part.name}.{2 ** 22 + 1}.abc.part").write_bytes(b"x" * 100)
+        (part.parent / f".{part.name}.{2**22 + 1}.abc.part").write_bytes(b"x" * 100)
         part.unlink()
     else:
         raise AssertionError(damage)
@@ -157,8 +156,11 @@ def snapshot(directory):
                 state[key] = ("link", os.readlink(path))
             elif stat.S_ISREG(info.st_mode):
                 with open(path, "rb") as handle:
-                    state[key] = ("file", stat.S_IMODE(info.st_mode),
-                                  hashlib.sha256(handle.read()).hexdigest())
+                    state[key] = (
+                        "file",
+                        stat.S_IMODE(info.st_mode),
+                        hashlib.sha256(handle.read()).hexdigest(),
+                    )
             else:
                 state[key] = (stat.S_IFMT(info.st_mode), stat.S_IMODE(info.st_mode))
     return state
@@ -195,38 +197,66 @@ CLI_CASES = [
     ("moments-two", [P, "--moments", "1", "2", "--theta", "0.3"], {}, "--moments"),
     ("moments-negative", [P, "--moments", "-1", "2", "2.5", "--theta", "0.3"], {}, ""),
     ("moments-zero", [P, "--moments", "0", "1", "1.5", "--theta", "0.3"], {}, ""),
-    ("moments-symmetric", [P, "--moments", "1", "1", "2", "--theta", "0.3"], {},
-     "symmetric"),
-    ("moments-triangle", [P, "--moments", "1", "2", "4", "--theta", "0.3"], {},
-     "triangle"),
-    ("moments-1e200-overflow", [P, "--moments", "1e200", "2e200", "1e308",
-                                "--theta", "0.3"], {}, ""),
-    ("moments-1e-320", [P, "--moments", "1e-320", "2e-320", "2.5e-320",
-                        "--theta", "0.3"], {}, ""),
+    ("moments-symmetric", [P, "--moments", "1", "1", "2", "--theta", "0.3"], {}, "symmetric"),
+    ("moments-triangle", [P, "--moments", "1", "2", "4", "--theta", "0.3"], {}, "triangle"),
+    (
+        "moments-1e200-overflow",
+        [P, "--moments", "1e200", "2e200", "1e308", "--theta", "0.3"],
+        {},
+        "",
+    ),
+    ("moments-1e-320", [P, "--moments", "1e-320", "2e-320", "2.5e-320", "--theta", "0.3"], {}, ""),
     ("t-handle-1e200", [P, "--t-handle", "1e200", "4", "1", "--theta", "0.3"], {}, ""),
     ("t-handle-zero", [P, "--t-handle", "0", "4", "1", "--theta", "0.3"], {}, ""),
     ("ellipsoid-negative", [P, "--ellipsoid", "-1", "2", "--theta", "0.3"], {}, ""),
     ("ellipsoid-symmetric", [P, "--ellipsoid", "0.5", "0.5", "--theta", "0.3"], {}, ""),
     ("box-cube", [P, "--box", "1", "1", "1", "--theta", "0.3"], {}, "symmetric"),
-    ("box-negative-mass", [P, "--box", "1", "2", "3", "--mass", "-1", "--theta", "0.3"],
-     {}, ""),
+    ("box-negative-mass", [P, "--box", "1", "2", "3", "--mass", "-1", "--theta", "0.3"], {}, ""),
     ("box-1e200", [P, "--box", "1e200", "2e200", "3e200", "--theta", "0.3"], {}, ""),
     ("cylinder-one-value", [P, "--cylinder", "1", "--theta", "0.3"], {}, "--cylinder"),
-    ("cylinder-four-values", [P, "--cylinder", "1", "2", "3", "4", "--theta", "0.3"], {},
-     "--cylinder"),
-    ("point-masses-missing", [P, "--point-masses", "{d}/none.csv", "--theta", "0.3"], {},
-     "none.csv"),
-    ("point-masses-columns", [P, "--point-masses", "{d}/m.csv", "--theta", "0.3"],
-     {"m.csv": "mass,x,y\n1,0,0\n"}, "missing z"),
-    ("point-masses-text", [P, "--point-masses", "{d}/m.csv", "--theta", "0.3"],
-     {"m.csv": "mass,x,y,z\n1,0,0,abc\n"}, "numbers"),
+    (
+        "cylinder-four-values",
+        [P, "--cylinder", "1", "2", "3", "4", "--theta", "0.3"],
+        {},
+        "--cylinder",
+    ),
+    (
+        "point-masses-missing",
+        [P, "--point-masses", "{d}/none.csv", "--theta", "0.3"],
+        {},
+        "none.csv",
+    ),
+    (
+        "point-masses-columns",
+        [P, "--point-masses", "{d}/m.csv", "--theta", "0.3"],
+        {"m.csv": "mass,x,y\n1,0,0\n"},
+        "missing z",
+    ),
+    (
+        "point-masses-text",
+        [P, "--point-masses", "{d}/m.csv", "--theta", "0.3"],
+        {"m.csv": "mass,x,y,z\n1,0,0,abc\n"},
+        "numbers",
+    ),
     ("mesh-missing", [P, "--mesh", "{d}/none.stl", "--theta", "0.3"], {}, ""),
-    ("rotational-constants-equal", [P, "--rotational-constants", "1", "1", "1",
-                                    "--theta", "0.3"], {}, ""),
-    ("rotational-constants-negative", [P, "--rotational-constants", "-1", "2", "3",
-                                       "--theta", "0.3"], {}, ""),
-    ("two-bodies", [P, "--preset", "fig6", "--moments", "1", "2", "2.5", "--theta", "1"],
-     {}, "not allowed"),
+    (
+        "rotational-constants-equal",
+        [P, "--rotational-constants", "1", "1", "1", "--theta", "0.3"],
+        {},
+        "",
+    ),
+    (
+        "rotational-constants-negative",
+        [P, "--rotational-constants", "-1", "2", "3", "--theta", "0.3"],
+        {},
+        "",
+    ),
+    (
+        "two-bodies",
+        [P, "--preset", "fig6", "--moments", "1", "2", "2.5", "--theta", "1"],
+        {},
+        "not allowed",
+    ),
     ("preset-unknown", [P, "--preset", "nope", "--theta", "1"], {}, "invalid choice"),
     ("no-angle", [P] + FIG6, {}, "required"),
     ("theta-nan", [P] + FIG6 + ["--theta", "nan"], {}, "finite"),
@@ -237,21 +267,36 @@ CLI_CASES = [
     ("phi-inf", [P] + FIG6 + ["--theta", "1", "--phi", "inf"], {}, "finite"),
     ("omega-zero", [P] + FIG6 + ["--omega", "0", "0", "0"], {}, ""),
     ("omega-1e200", [P] + FIG6 + ["--omega", "1e200", "1e200", "1e200"], {}, ""),
-    ("omega-units", [P] + FIG6 + ["--omega", "1", "1", "1", "--units", "furlong"], {},
-     "invalid choice"),
+    (
+        "omega-units",
+        [P] + FIG6 + ["--omega", "1", "1", "1", "--units", "furlong"],
+        {},
+        "invalid choice",
+    ),
     ("total-phase-negative", [P] + FIG6 + ["--total-phase", "-1"], {}, ""),
     ("period-ratio-zero", [P] + FIG6 + ["--period-ratio", "0"], {}, ""),
     ("name-empty", [P] + FIG6 + ["--theta", "1", "--name", " "], {}, "--name"),
     # ------------------------------------------------------- catalog: sizes
     ("n-max-zero", [C] + FIG6 + ["--n-max", "0", "--out", "{d}/c.csv"], {}, ">= 1"),
-    ("n-max-1e23", [C] + FIG6 + ["--n-max", "99999999999999999999999", "--out",
-                                 "{d}/c.csv"], {}, "memory"),
-    ("n-max-float", [C] + FIG6 + ["--n-max", "1e3", "--out", "{d}/c.csv"], {},
-     "not an integer"),
-    ("q-max-100000", [C] + FIG6 + ["--n-max", "30", "--q-max", "100000", "--out",
-                                   "{d}/c.csv"], {}, ""),
-    ("q-max-zero", [C] + FIG6 + ["--n-max", "3", "--q-max", "0", "--out", "{d}/c.csv"],
-     {}, ">= 1"),
+    (
+        "n-max-1e23",
+        [C] + FIG6 + ["--n-max", "99999999999999999999999", "--out", "{d}/c.csv"],
+        {},
+        "memory",
+    ),
+    ("n-max-float", [C] + FIG6 + ["--n-max", "1e3", "--out", "{d}/c.csv"], {}, "not an integer"),
+    (
+        "q-max-100000",
+        [C] + FIG6 + ["--n-max", "30", "--q-max", "100000", "--out", "{d}/c.csv"],
+        {},
+        "",
+    ),
+    (
+        "q-max-zero",
+        [C] + FIG6 + ["--n-max", "3", "--q-max", "0", "--out", "{d}/c.csv"],
+        {},
+        ">= 1",
+    ),
     ("catalog-no-out", [C] + FIG6 + ["--n-max", "3"], {}, "--out"),
     # ------------------------------------------------------- catalog: targets
     ("out-no-directory", CAT + ["{d}/none/c.csv"], {}, "does not exist"),
@@ -271,15 +316,17 @@ CLI_CASES = [
     # ------------------------------------------------------- --bodies files
     ("bodies-missing", BODIES[:-1] + ["{d}/none.csv"], {}, "no bodies file"),
     ("bodies-directory", BODIES, {"b.csv": DIRECTORY}, "directory"),
-    ("bodies-fifo-out", [C, "--n-max", "2", "--out", "{d}/fifo", "--bodies", "{d}/b.csv"],
-     {"fifo": FIFO, **bodies(GOOD_BODIES)}, "FIFO"),
+    (
+        "bodies-fifo-out",
+        [C, "--n-max", "2", "--out", "{d}/fifo", "--bodies", "{d}/b.csv"],
+        {"fifo": FIFO, **bodies(GOOD_BODIES)},
+        "FIFO",
+    ),
     ("bodies-empty-file", BODIES, bodies(""), "no header"),
     ("bodies-header-only", BODIES, bodies("I1,I2,I3\n"), "no bodies"),
     ("bodies-comments-only", BODIES, bodies("# a\n# b\n"), "no header"),
-    ("bodies-implicit-index", BODIES, bodies("I1,I2,I3\n0.1,0.26,0.55,0.793662\n"),
-     "row 1"),
-    ("bodies-short-row", BODIES, bodies("I1,I2,I3\n0.26,0.55,0.793662\n0.26,0.55\n"),
-     "row 2"),
+    ("bodies-implicit-index", BODIES, bodies("I1,I2,I3\n0.1,0.26,0.55,0.793662\n"), "row 1"),
+    ("bodies-short-row", BODIES, bodies("I1,I2,I3\n0.26,0.55,0.793662\n0.26,0.55\n"), "row 2"),
     ("bodies-true", BODIES, bodies("I1,I2,I3\nTrue,0.55,0.793662\n"), "'True'"),
     ("bodies-underscore", BODIES, bodies("I1,I2,I3\n1_000,1200,1500\n"), "'1_000'"),
     ("bodies-hex", BODIES, bodies("I1,I2,I3\n0x10,20,25\n"), "'0x10'"),
@@ -288,8 +335,7 @@ CLI_CASES = [
     ("bodies-empty-cell", BODIES, bodies("I1,I2,I3\n0.26,,0.793662\n"), "row 1"),
     ("bodies-overflow", BODIES, bodies("I1,I2,I3\n1e400,2e400,2.5e400\n"), "row 1"),
     ("bodies-1e200", BODIES, bodies("I1,I2,I3\n1e200,2e200,1e308\n"), "row 1"),
-    ("bodies-symmetric", BODIES, bodies("I1,I2,I3\n0.26,0.55,0.793662\n1,1,2\n"),
-     "row 2"),
+    ("bodies-symmetric", BODIES, bodies("I1,I2,I3\n0.26,0.55,0.793662\n1,1,2\n"), "row 2"),
     ("bodies-negative", BODIES, bodies("I1,I2,I3\n-1,2,2.5\n"), "row 1"),
     ("bodies-triangle", BODIES, bodies("I1,I2,I3\n1,2,4\n"), "triangle"),
     ("bodies-missing-column", BODIES, bodies("I1,I2\n1,2\n"), "missing column"),
@@ -297,16 +343,26 @@ CLI_CASES = [
     ("bodies-repeated-column", BODIES, bodies("I1,I2,I3,I3\n1,2,2.5,2.5\n"), "repeated"),
     ("bodies-not-utf8", BODIES, {"b.csv": b"I1,I2,I3,name\n1,2,2.5,\xff\xfe\n"}, "UTF-8"),
     ("bodies-bad-quote", BODIES, bodies('I1,I2,I3,name\n1,2,2.5,"a"b\n'), ""),
-    ("bodies-hash-row-bad", BODIES,
-     bodies('I1,I2,I3,name\n0.26,0.55,0.793662,"body#1"\n1,1,2,"body#2"\n'), "body#2"),
-    ("bodies-all-invalid-skip", BODIES + ["--skip-invalid"],
-     bodies("I1,I2,I3\n1,1,2\nnan,1,2\n"), "all 2 rows"),
+    (
+        "bodies-hash-row-bad",
+        BODIES,
+        bodies('I1,I2,I3,name\n0.26,0.55,0.793662,"body#1"\n1,1,2,"body#2"\n'),
+        "body#2",
+    ),
+    (
+        "bodies-all-invalid-skip",
+        BODIES + ["--skip-invalid"],
+        bodies("I1,I2,I3\n1,1,2\nnan,1,2\n"),
+        "all 2 rows",
+    ),
     ("bodies-with-name", BODIES + ["--name", "x"], bodies(GOOD_BODIES), "--name"),
-    ("skip-invalid-without-bodies", CAT + ["{d}/c.csv", "--skip-invalid"], {},
-     "--skip-invalid"),
-    ("bodies-too-many-orbits", [C, "--n-max", "100000", "--q-max", "100", "--out",
-                                "{d}/c.csv", "--bodies", "{d}/b.csv"],
-     bodies(GOOD_BODIES), "memory"),
+    ("skip-invalid-without-bodies", CAT + ["{d}/c.csv", "--skip-invalid"], {}, "--skip-invalid"),
+    (
+        "bodies-too-many-orbits",
+        [C, "--n-max", "100000", "--q-max", "100", "--out", "{d}/c.csv", "--bodies", "{d}/b.csv"],
+        bodies(GOOD_BODIES),
+        "memory",
+    ),
     # ------------------------------------------------------- verify
     ("verify-tolerance-negative", [V, "--tolerance", "-1"], {}, "--tolerance"),
     ("verify-tolerance-zero", [V, "--tolerance", "0"], {}, "--tolerance"),
@@ -315,107 +371,275 @@ CLI_CASES = [
     ("verify-angles-1e9", [V, "--angles", "1000000000"], {}, "memory"),
     ("verify-angles-zero", [V, "--angles", "0"], {}, ">= 1"),
     ("verify-symmetric-body", [V, "--moments", "1", "1", "2"], {}, "symmetric"),
-    ("verify-table-fifo", [V, "--bodies", "2", "--angles", "2", "--table", "{d}/fifo"],
-     {"fifo": FIFO}, "FIFO"),
-    ("verify-table-trailing-slash", [V, "--bodies", "2", "--angles", "2", "--table",
-                                     "{d}/t/"], {}, "directory"),
-    ("verify-table-no-directory", [V, "--bodies", "2", "--angles", "2", "--table",
-                                   "{d}/none/t.csv"], {}, "does not exist"),
+    (
+        "verify-table-fifo",
+        [V, "--bodies", "2", "--angles", "2", "--table", "{d}/fifo"],
+        {"fifo": FIFO},
+        "FIFO",
+    ),
+    (
+        "verify-table-trailing-slash",
+        [V, "--bodies", "2", "--angles", "2", "--table", "{d}/t/"],
+        {},
+        "directory",
+    ),
+    (
+        "verify-table-no-directory",
+        [V, "--bodies", "2", "--angles", "2", "--table", "{d}/none/t.csv"],
+        {},
+        "does not exist",
+    ),
     # ------------------------------------------------------- figures
     ("figures-nothing", [F, "--out", "{d}/o"], {}, "exactly one"),
     ("figures-paper-and-body", [F, "--paper", "--out", "{d}/o"] + FIG6, {}, "exactly one"),
     ("figures-body-no-n-max", [F, "--out", "{d}/o"] + FIG6, {}, "--n-max"),
-    ("figures-huge-n-max", [F, "--out", "{d}/o", "--n-max", "99999999999999999999"] + FIG6,
-     {}, "memory"),
-    ("figures-out-is-file", [F, "--paper", "--out", "{d}/f"], {"f": "x"},
-     "exists and is not a directory"),
-    ("figures-out-dev-null", [F, "--paper", "--out", "/dev/null"], {},
-     "exists and is not a directory"),
+    (
+        "figures-huge-n-max",
+        [F, "--out", "{d}/o", "--n-max", "99999999999999999999"] + FIG6,
+        {},
+        "memory",
+    ),
+    (
+        "figures-out-is-file",
+        [F, "--paper", "--out", "{d}/f"],
+        {"f": "x"},
+        "exists and is not a directory",
+    ),
+    (
+        "figures-out-dev-null",
+        [F, "--paper", "--out", "/dev/null"],
+        {},
+        "exists and is not a directory",
+    ),
     ("figures-out-proc", [F, "--paper", "--out", "/proc/orbits-figures"], {}, ""),
-    ("figures-format", [F, "--paper", "--out", "{d}/o", "--formats", "gif"], {},
-     "invalid choice"),
+    ("figures-format", [F, "--paper", "--out", "{d}/o", "--formats", "gif"], {}, "invalid choice"),
     ("figures-survey-missing", [F, "--survey", "{d}/none", "--out", "{d}/o"], {}, "none"),
-    ("figures-survey-list", [F, "--survey", "{d}/s", "--out", "{d}/o"],
-     {"s": survey("list")}, "grid"),
-    *[(f"figures-survey-{damage}", [F, "--survey", "{d}/s", "--out", "{d}/o"],
-       {"s": survey("grid", damage)}, "")
-      for damage in ("no-manifest", "manifest-not-json", "manifest-empty",
-                     "manifest-incomplete", "manifest-old-format", "ledger-damaged",
-                     "part-missing", "part-truncated", "part-empty", "part-changed",
-                     "stray-bak-and-truncated", "stale-temporary")],
+    (
+        "figures-survey-list",
+        [F, "--survey", "{d}/s", "--out", "{d}/o"],
+        {"s": survey("list")},
+        "grid",
+    ),
+    *[
+        (
+            f"figures-survey-{damage}",
+            [F, "--survey", "{d}/s", "--out", "{d}/o"],
+            {"s": survey("grid", damage)},
+            "",
+        )
+        for damage in (
+            "no-manifest",
+            "manifest-not-json",
+            "manifest-empty",
+            "manifest-incomplete",
+            "manifest-old-format",
+            "ledger-damaged",
+            "part-missing",
+            "part-truncated",
+            "part-empty",
+            "part-changed",
+            "stray-bak-and-truncated",
+            "stale-temporary",
+        )
+    ],
     # ------------------------------------------------------- survey
-    ("survey-resolution-100000", [S, "--resolution", "100000", "--n-max", "2",
-                                  "--out", "{d}/s"], {}, "memory"),
-    ("survey-resolution-300-n-max-1000", [S, "--resolution", "300", "--n-max", "1000",
-                                          "--out", "{d}/s"], {}, ""),
-    ("survey-resolution-1", [S, "--resolution", "1", "--n-max", "2", "--out", "{d}/s"],
-     {}, ">= 2"),
+    (
+        "survey-resolution-100000",
+        [S, "--resolution", "100000", "--n-max", "2", "--out", "{d}/s"],
+        {},
+        "memory",
+    ),
+    (
+        "survey-resolution-300-n-max-1000",
+        [S, "--resolution", "300", "--n-max", "1000", "--out", "{d}/s"],
+        {},
+        "",
+    ),
+    (
+        "survey-resolution-1",
+        [S, "--resolution", "1", "--n-max", "2", "--out", "{d}/s"],
+        {},
+        ">= 2",
+    ),
     ("survey-chunk-zero", GRID[:-1] + ["0", "--out", "{d}/s"], {}, ">= 1"),
-    ("survey-huge-chunk-q", [S, "--resolution", "300", "--n-max", "50", "--q-max", "300",
-                             "--chunk", "100000", "--out", "{d}/s"], {}, ""),
+    (
+        "survey-huge-chunk-q",
+        [
+            S,
+            "--resolution",
+            "300",
+            "--n-max",
+            "50",
+            "--q-max",
+            "300",
+            "--chunk",
+            "100000",
+            "--out",
+            "{d}/s",
+        ],
+        {},
+        "",
+    ),
     ("survey-no-source", [S, "--n-max", "2", "--out", "{d}/s"], {}, "--resolution"),
     ("survey-no-n-max", [S, "--resolution", "4", "--out", "{d}/s"], {}, "--n-max"),
     ("survey-no-out", [S, "--resolution", "4", "--n-max", "2"], {}, "--out"),
-    ("survey-two-sources", GRID + ["--out", "{d}/s", "--bodies", "{d}/b.csv"],
-     bodies(GOOD_BODIES), "not allowed"),
-    ("survey-format", [S, "--resolution", "4", "--n-max", "2", "--format", "xlsx",
-                       "--out", "{d}/s"], {}, "invalid choice"),
-    ("survey-skip-invalid-grid", GRID + ["--out", "{d}/s", "--skip-invalid"], {},
-     "--skip-invalid"),
+    (
+        "survey-two-sources",
+        GRID + ["--out", "{d}/s", "--bodies", "{d}/b.csv"],
+        bodies(GOOD_BODIES),
+        "not allowed",
+    ),
+    (
+        "survey-format",
+        [S, "--resolution", "4", "--n-max", "2", "--format", "xlsx", "--out", "{d}/s"],
+        {},
+        "invalid choice",
+    ),
+    (
+        "survey-skip-invalid-grid",
+        GRID + ["--out", "{d}/s", "--skip-invalid"],
+        {},
+        "--skip-invalid",
+    ),
     ("survey-bodies-bad", SURVEY_B, bodies("I1,I2,I3\nTrue,2,2.5\n"), "row 1"),
     ("survey-bodies-name", SURVEY_B + ["--name", "x"], bodies(GOOD_BODIES), "--name"),
-    ("scheduler-garbage", GRID + ["--out", "{d}/s", "--scheduler", "garbage"], {},
-     "scheduler"),
+    ("scheduler-garbage", GRID + ["--out", "{d}/s", "--scheduler", "garbage"], {}, "scheduler"),
     ("scheduler-empty", GRID + ["--out", "{d}/s", "--scheduler", ""], {}, "scheduler"),
-    ("scheduler-http", GRID + ["--out", "{d}/s", "--scheduler", "http://localhost:8787"],
-     {}, "scheduler"),
-    ("scheduler-port-too-big", GRID + ["--out", "{d}/s", "--scheduler",
-                                       "tcp://127.0.0.1:99999"], {}, "scheduler"),
-    ("scheduler-unreachable", GRID + ["--out", "{d}/s", "--scheduler",
-                                      "tcp://127.0.0.1:9"], {}, "within"),
+    (
+        "scheduler-http",
+        GRID + ["--out", "{d}/s", "--scheduler", "http://localhost:8787"],
+        {},
+        "scheduler",
+    ),
+    (
+        "scheduler-port-too-big",
+        GRID + ["--out", "{d}/s", "--scheduler", "tcp://127.0.0.1:99999"],
+        {},
+        "scheduler",
+    ),
+    (
+        "scheduler-unreachable",
+        GRID + ["--out", "{d}/s", "--scheduler", "tcp://127.0.0.1:9"],
+        {},
+        "within",
+    ),
     ("survey-out-file", GRID + ["--out", "{d}/f"], {"f": "x"}, "not a directory"),
     ("survey-out-dev-null", GRID + ["--out", "/dev/null"], {}, ""),
     ("survey-out-proc", GRID + ["--out", "/proc/orbits-survey"], {}, ""),
-    ("survey-out-foreign", GRID + ["--out", "{d}/s"], {"s/notes.txt": "mine"},
-     "not a survey directory"),
-    ("survey-other-parameters", [S, "--resolution", "4", "--n-max", "3", "--format", "csv",
-                                 "--chunk", "2", "--out", "{d}/s"],
-     {"s": survey("grid")}, "different parameters"),
-    ("survey-other-bodies", SURVEY_B + ["--chunk", "2"],
-     {"s": survey("list"), **bodies(GOOD_BODIES)}, "different parameters"),
-    ("survey-rerun-bad-manifest", GRID + ["--out", "{d}/s"],
-     {"s": survey("grid", "manifest-not-json")}, "not valid JSON"),
-    ("survey-rerun-incomplete-manifest", GRID + ["--out", "{d}/s"],
-     {"s": survey("grid", "manifest-incomplete")}, "damaged"),
-    ("survey-rerun-old-manifest", GRID + ["--out", "{d}/s"],
-     {"s": survey("grid", "manifest-old-format")}, "new directory"),
-    ("survey-rerun-no-manifest", GRID + ["--out", "{d}/s"],
-     {"s": survey("grid", "no-manifest")}, "not a survey directory"),
+    (
+        "survey-out-foreign",
+        GRID + ["--out", "{d}/s"],
+        {"s/notes.txt": "mine"},
+        "not a survey directory",
+    ),
+    (
+        "survey-other-parameters",
+        [
+            S,
+            "--resolution",
+            "4",
+            "--n-max",
+            "3",
+            "--format",
+            "csv",
+            "--chunk",
+            "2",
+            "--out",
+            "{d}/s",
+        ],
+        {"s": survey("grid")},
+        "different parameters",
+    ),
+    (
+        "survey-other-bodies",
+        SURVEY_B + ["--chunk", "2"],
+        {"s": survey("list"), **bodies(GOOD_BODIES)},
+        "different parameters",
+    ),
+    (
+        "survey-rerun-bad-manifest",
+        GRID + ["--out", "{d}/s"],
+        {"s": survey("grid", "manifest-not-json")},
+        "not valid JSON",
+    ),
+    (
+        "survey-rerun-incomplete-manifest",
+        GRID + ["--out", "{d}/s"],
+        {"s": survey("grid", "manifest-incomplete")},
+        "damaged",
+    ),
+    (
+        "survey-rerun-old-manifest",
+        GRID + ["--out", "{d}/s"],
+        {"s": survey("grid", "manifest-old-format")},
+        "new directory",
+    ),
+    (
+        "survey-rerun-no-manifest",
+        GRID + ["--out", "{d}/s"],
+        {"s": survey("grid", "no-manifest")},
+        "not a survey directory",
+    ),
     ("survey-check-missing", [S, "--check", "{d}/none"], {}, "not a directory"),
     ("survey-check-not-survey", [S, "--check", "{d}"], {}, "not a survey directory"),
-    ("survey-check-bad-manifest", [S, "--check", "{d}/s"],
-     {"s": survey("grid", "manifest-not-json")}, "not valid JSON"),
-    ("survey-check-ledger", [S, "--check", "{d}/s"],
-     {"s": survey("grid", "ledger-damaged")}, "ledger"),
-    ("survey-check-extra-option", [S, "--check", "{d}/s", "--n-max", "3"],
-     {"s": survey("grid")}, "only the directory"),
+    (
+        "survey-check-bad-manifest",
+        [S, "--check", "{d}/s"],
+        {"s": survey("grid", "manifest-not-json")},
+        "not valid JSON",
+    ),
+    (
+        "survey-check-ledger",
+        [S, "--check", "{d}/s"],
+        {"s": survey("grid", "ledger-damaged")},
+        "ledger",
+    ),
+    (
+        "survey-check-extra-option",
+        [S, "--check", "{d}/s", "--n-max", "3"],
+        {"s": survey("grid")},
+        "only the directory",
+    ),
     # ------------------------------------------------------- animate
     ("animate-no-spin", [A] + FIG6 + ["--out", "{d}/a.gif"], {}, "exactly one spin"),
-    ("animate-two-spins", [A] + FIG6 + ["--theta", "1", "--n", "2", "--out", "{d}/a.gif"],
-     {}, "exactly one spin"),
-    ("animate-q-without-p", [A] + FIG6 + ["--q", "2", "--theta", "1", "--out",
-                                          "{d}/a.gif"], {}, ""),
-    ("animate-flip-large", [A] + FIG6 + ["--flip", "1", "--out", "{d}/a.gif"], {},
-     "pi/4"),
-    ("animate-frames-zero", [A] + FIG6 + ["--theta", "1", "--frames", "0", "--out",
-                                          "{d}/a.gif"], {}, ">= 1"),
+    (
+        "animate-two-spins",
+        [A] + FIG6 + ["--theta", "1", "--n", "2", "--out", "{d}/a.gif"],
+        {},
+        "exactly one spin",
+    ),
+    (
+        "animate-q-without-p",
+        [A] + FIG6 + ["--q", "2", "--theta", "1", "--out", "{d}/a.gif"],
+        {},
+        "",
+    ),
+    ("animate-flip-large", [A] + FIG6 + ["--flip", "1", "--out", "{d}/a.gif"], {}, "pi/4"),
+    (
+        "animate-frames-zero",
+        [A] + FIG6 + ["--theta", "1", "--frames", "0", "--out", "{d}/a.gif"],
+        {},
+        ">= 1",
+    ),
     ("animate-suffix", [A] + FIG6 + ["--theta", "1", "--out", "{d}/a.txt"], {}, ""),
-    ("animate-out-fifo", [A] + FIG6 + ["--theta", "1", "--frames", "2", "--out",
-                                       "{d}/a.gif"], {"a.gif": FIFO}, "FIFO"),
-    ("animate-out-no-directory", [A] + FIG6 + ["--theta", "1", "--frames", "2", "--out",
-                                               "{d}/none/a.gif"], {}, "does not exist"),
-    ("animate-periods-inf", [A] + FIG6 + ["--theta", "1", "--periods", "inf", "--out",
-                                          "{d}/a.gif"], {}, "finite"),
+    (
+        "animate-out-fifo",
+        [A] + FIG6 + ["--theta", "1", "--frames", "2", "--out", "{d}/a.gif"],
+        {"a.gif": FIFO},
+        "FIFO",
+    ),
+    (
+        "animate-out-no-directory",
+        [A] + FIG6 + ["--theta", "1", "--frames", "2", "--out", "{d}/none/a.gif"],
+        {},
+        "does not exist",
+    ),
+    (
+        "animate-periods-inf",
+        [A] + FIG6 + ["--theta", "1", "--periods", "inf", "--out", "{d}/a.gif"],
+        {},
+        "finite",
+    ),
     ("animate-no-orbit", [A] + FIG6 + ["--n", "1", "--out", "{d}/a.gif"], {}, ""),
 ]
 
@@ -452,10 +676,18 @@ def test_cli(case, tmp_path, capsys, monkeypatch, surveys):
         server.close()
 
 
-SUBPROCESS_CASES = ["t-handle-1e200", "scheduler-garbage", "out-fifo", "out-dev-null",
-                    "out-trailing-slash", "n-max-1e23", "bodies-true",
-                    "verify-tolerance-negative", "figures-survey-manifest-incomplete",
-                    "survey-rerun-bad-manifest"]
+SUBPROCESS_CASES = [
+    "t-handle-1e200",
+    "scheduler-garbage",
+    "out-fifo",
+    "out-dev-null",
+    "out-trailing-slash",
+    "n-max-1e23",
+    "bodies-true",
+    "verify-tolerance-negative",
+    "figures-survey-manifest-incomplete",
+    "survey-rerun-bad-manifest",
+]
 
 
 @pytest.mark.parametrize("name", SUBPROCESS_CASES)
@@ -467,9 +699,15 @@ def test_cli_subprocess(name, tmp_path, surveys):
     keep = prepare(directory, files, surveys)
     before = snapshot(directory)
     env = dict(os.environ, PYTHONPATH=str(Path(orbits.__file__).parent.parent))
-    done = subprocess.run([sys.executable, "-m", "orbits", *_argv(argv, directory)],
-                          cwd=directory, env=env, capture_output=True, text=True,
-                          timeout=300, check=False)
+    done = subprocess.run(
+        [sys.executable, "-m", "orbits", *_argv(argv, directory)],
+        cwd=directory,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
     check_clean_failure(done.returncode, done.stderr, fragment)
     assert done.stdout == ""
     assert snapshot(directory) == before
@@ -509,13 +747,14 @@ def _abc_in_period(raw):
 
 
 def _drop_checksum(raw):
-    return b"".join(line for line in raw.splitlines(keepends=True)
-                    if not line.startswith(b"# sha256"))
+    return b"".join(
+        line for line in raw.splitlines(keepends=True) if not line.startswith(b"# sha256")
+    )
 
 
 def _flip_a_digit(raw):
-    k = raw.rindex(b"e-")            # a digit of the last row's exponent
-    return raw[:k - 1] + bytes([raw[k - 1] ^ 1]) + raw[k:]
+    k = raw.rindex(b"e-")  # a digit of the last row's exponent
+    return raw[: k - 1] + bytes([raw[k - 1] ^ 1]) + raw[k:]
 
 
 def call(function, *args, **kwargs):
@@ -525,9 +764,11 @@ def call(function, *args, **kwargs):
 
 def on_file(make, function, **kwargs):
     """A case that first writes a file (``make(directory)`` returns its path)."""
+
     def setup(directory, surveys):
         path = make(directory)
         return lambda: function(path, **kwargs)
+
     return setup
 
 
@@ -535,6 +776,7 @@ def on_survey(kind, damage, function):
     def setup(directory, surveys):
         prepare(directory, {"s": survey(kind, damage)}, surveys)
         return lambda: function(directory / "s")
+
     return setup
 
 
@@ -554,6 +796,7 @@ def _bodies_file(text):
 
 def _read_bodies(path, **kwargs):
     from orbits.catalog import read_bodies_csv
+
     return read_bodies_csv(path, **kwargs)
 
 
@@ -570,56 +813,79 @@ API_CASES = [
     ("Body-1e200-overflow", call(orbits.Body, [1e200, 2e200, 1e308])),
     ("total_phase-nan", lambda d, s: lambda: orbits.total_phase(_body(), np.nan)),
     ("total_phase-unfoldable", lambda d, s: lambda: orbits.total_phase(_body(), 1e20)),
-    ("closed_orbits-n-max-zero", lambda d, s: lambda: orbits.closed_orbits(_body(),
-                                                                           n_max=0)),
+    ("closed_orbits-n-max-zero", lambda d, s: lambda: orbits.closed_orbits(_body(), n_max=0)),
     # orbits.closed_orbits itself has no bound yet (see the note at the end)
-    ("catalog-n-max-1e22", lambda d, s: lambda: orbits.catalog(_body(), n_max=10 ** 22)),
-    ("catalog-q-max-100000", lambda d, s: lambda: orbits.catalog(_body(), n_max=30,
-                                                                 q_max=100000)),
+    ("catalog-n-max-1e22", lambda d, s: lambda: orbits.catalog(_body(), n_max=10**22)),
+    ("catalog-q-max-100000", lambda d, s: lambda: orbits.catalog(_body(), n_max=30, q_max=100000)),
     ("catalog-no-bodies", call(orbits.catalog, [], n_max=2)),
     ("catalog-n-max-float", lambda d, s: lambda: orbits.catalog(_body(), n_max=1.5)),
-    ("write_catalog-dev-null", lambda d, s: lambda: orbits.write_catalog(_frame(),
-                                                                         "/dev/null")),
+    ("write_catalog-dev-null", lambda d, s: lambda: orbits.write_catalog(_frame(), "/dev/null")),
     ("write_catalog-fifo", on_file(_fifo, lambda p: orbits.write_catalog(_frame(), p))),
-    ("write_catalog-link-to-device", on_file(_zero_link,
-                                             lambda p: orbits.write_catalog(_frame(), p))),
-    ("write_catalog-trailing-slash", lambda d, s: lambda: orbits.write_catalog(
-        _frame(), f"{d}/new/")),
+    (
+        "write_catalog-link-to-device",
+        on_file(_zero_link, lambda p: orbits.write_catalog(_frame(), p)),
+    ),
+    (
+        "write_catalog-trailing-slash",
+        lambda d, s: lambda: orbits.write_catalog(_frame(), f"{d}/new/"),
+    ),
     ("read_catalog-missing", lambda d, s: lambda: orbits.read_catalog(d / "none.csv")),
     ("read_catalog-directory", lambda d, s: lambda: orbits.read_catalog(d)),
-    ("read_catalog-cut-at-line", on_file(lambda d: _catalog_file(d, _cut_at_line),
-                                         orbits.read_catalog)),
-    ("read_catalog-abc", on_file(lambda d: _catalog_file(d, _abc_in_period),
-                                 orbits.read_catalog)),
-    ("read_catalog-abc-unchecked", on_file(lambda d: _catalog_file(d, _abc_in_period),
-                                           orbits.read_catalog, check=False)),
-    ("read_catalog-no-checksum", on_file(lambda d: _catalog_file(d, _drop_checksum),
-                                         orbits.read_catalog)),
-    ("read_catalog-changed-digit", on_file(lambda d: _catalog_file(d, _flip_a_digit),
-                                           orbits.read_catalog)),
-    ("read_bodies_csv-index", on_file(_bodies_file("I1,I2,I3\n0.1,0.26,0.55,0.793662\n"),
-                                      _read_bodies)),
-    ("read_bodies_csv-true", on_file(_bodies_file("I1,I2,I3\nTrue,2,2.5\n"),
-                                     _read_bodies)),
-    ("read_bodies_csv-underscore", on_file(_bodies_file("I1,I2,I3\n1_000,1200,1500\n"),
-                                           _read_bodies)),
-    *[(f"read_survey-{damage}", on_survey("grid", damage, orbits.survey.read_survey))
-      for damage in ("no-manifest", "manifest-not-json", "manifest-incomplete",
-                     "ledger-damaged", "ledger-outside", "part-missing", "part-truncated",
-                     "part-empty",
-                     "part-changed", "stray-bak-and-truncated")],
+    (
+        "read_catalog-cut-at-line",
+        on_file(lambda d: _catalog_file(d, _cut_at_line), orbits.read_catalog),
+    ),
+    ("read_catalog-abc", on_file(lambda d: _catalog_file(d, _abc_in_period), orbits.read_catalog)),
+    (
+        "read_catalog-abc-unchecked",
+        on_file(lambda d: _catalog_file(d, _abc_in_period), orbits.read_catalog, check=False),
+    ),
+    (
+        "read_catalog-no-checksum",
+        on_file(lambda d: _catalog_file(d, _drop_checksum), orbits.read_catalog),
+    ),
+    (
+        "read_catalog-changed-digit",
+        on_file(lambda d: _catalog_file(d, _flip_a_digit), orbits.read_catalog),
+    ),
+    (
+        "read_bodies_csv-index",
+        on_file(_bodies_file("I1,I2,I3\n0.1,0.26,0.55,0.793662\n"), _read_bodies),
+    ),
+    ("read_bodies_csv-true", on_file(_bodies_file("I1,I2,I3\nTrue,2,2.5\n"), _read_bodies)),
+    (
+        "read_bodies_csv-underscore",
+        on_file(_bodies_file("I1,I2,I3\n1_000,1200,1500\n"), _read_bodies),
+    ),
+    *[
+        (f"read_survey-{damage}", on_survey("grid", damage, orbits.survey.read_survey))
+        for damage in (
+            "no-manifest",
+            "manifest-not-json",
+            "manifest-incomplete",
+            "ledger-damaged",
+            "ledger-outside",
+            "part-missing",
+            "part-truncated",
+            "part-empty",
+            "part-changed",
+            "stray-bak-and-truncated",
+        )
+    ],
     ("survey_grid-list", on_survey("list", None, orbits.survey.survey_grid)),
     ("check_survey-ledger", on_survey("grid", "ledger-damaged", orbits.survey.check_survey)),
-    ("check_survey-not-json", on_survey("grid", "manifest-not-json",
-                                        orbits.survey.check_survey)),
+    ("check_survey-not-json", on_survey("grid", "manifest-not-json", orbits.survey.check_survey)),
     ("Survey-resolution-100000", lambda d, s: lambda: _grid(d, 100000, 2)),
     ("Survey-n-max-1000-resolution-300", lambda d, s: lambda: _grid(d, 300, 1000)),
     ("Survey-chunk-zero", lambda d, s: lambda: _grid(d, 4, 2, chunk=0)),
     ("Survey-format", lambda d, s: lambda: _grid(d, 4, 2, fmt="xlsx")),
-    ("Survey-scheduler-garbage", lambda d, s: lambda: _grid(d, 4, 2).run(
-        scheduler="garbage")),
-    ("Survey-other-parameters", on_survey("grid", None, lambda p: orbits.survey.Survey.grid(
-        p, 4, 3, fmt="csv", chunk=2).run())),
+    ("Survey-scheduler-garbage", lambda d, s: lambda: _grid(d, 4, 2).run(scheduler="garbage")),
+    (
+        "Survey-other-parameters",
+        on_survey(
+            "grid", None, lambda p: orbits.survey.Survey.grid(p, 4, 3, fmt="csv", chunk=2).run()
+        ),
+    ),
 ]
 
 
@@ -642,12 +908,13 @@ def test_scheduler_without_workers(tmp_path, capsys, monkeypatch):
     """A scheduler with no worker: one line stating the timeout, nothing written."""
     distributed = pytest.importorskip("distributed")
     monkeypatch.setattr(orbits.survey, "CONNECT_TIMEOUT", 1)
-    with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=None,
-                                  protocol="tcp",
-                                  scheduler_port=0) as cluster:
+    with distributed.LocalCluster(
+        n_workers=0, processes=False, dashboard_address=None, protocol="tcp", scheduler_port=0
+    ) as cluster:
         capsys.readouterr()
-        code = main(GRID + ["--out", str(tmp_path / "s"), "--scheduler",
-                            cluster.scheduler_address])
+        code = main(
+            GRID + ["--out", str(tmp_path / "s"), "--scheduler", cluster.scheduler_address]
+        )
         _, err = capsys.readouterr()
     check_clean_failure(code, err, "has no workers (waited 1 s)")
     assert not (tmp_path / "s").exists()

@@ -22,22 +22,45 @@ def test_load_check_times_each_row_and_stops_the_busy_process(monkeypatch):
     monkeypatch.setattr(bench, "_busy_process", spy)
     calls = []
     rows = [
-        {"task": "a", "ours_s": 1e-3, "baseline": "b", "baseline_s": 2e-3, "speedup": 2.0,
-         "note": "n", "_ours": (lambda: calls.append("a") or sum(range(20000)), 5)},
-        {"task": "no task of its own", "ours_s": 1.0, "baseline": "b",
-         "baseline_s": math.nan, "speedup": math.nan, "note": "n"},
+        {
+            "task": "a",
+            "ours_s": 1e-3,
+            "baseline": "b",
+            "baseline_s": 2e-3,
+            "speedup": 2.0,
+            "note": "n",
+            "_ours": (lambda: calls.append("a") or sum(range(20000)), 5),
+        },
+        {
+            "task": "no task of its own",
+            "ours_s": 1.0,
+            "baseline": "b",
+            "baseline_s": math.nan,
+            "speedup": math.nan,
+            "note": "n",
+        },
     ]
     bench.load_check(rows)
-    assert len(started) == 1 and started[0].poll() is not None   # stopped
+    assert len(started) == 1 and started[0].poll() is not None  # stopped
     load = rows[0]["load"]
     assert set(load) == {"idle_s", "loaded_s", "slowdown", "holds"}
     assert load["slowdown"] == load["loaded_s"] / load["idle_s"]
     assert load["holds"] == (load["slowdown"] <= bench.LOAD_LIMIT)
-    assert len(calls) == 2 * (1 + 5)            # warm-up + 5, idle and loaded
+    assert len(calls) == 2 * (1 + 5)  # warm-up + 5, idle and loaded
     assert "_ours" not in rows[0] and "load" not in rows[1]
-    text = bench.format_table({"machine": {"cpu_count": 2, "numba_threads": 2,
-                                           "python": "3", "numpy": "2", "scipy": "1",
-                                           "numba": "0"}, "results": rows})
+    text = bench.format_table(
+        {
+            "machine": {
+                "cpu_count": 2,
+                "numba_threads": 2,
+                "python": "3",
+                "numpy": "2",
+                "scipy": "1",
+                "numba": "0",
+            },
+            "results": rows,
+        }
+    )
     assert "under-load check:" in text and "of 1 rows hold within 2x" in text
 
 

@@ -32,18 +32,17 @@ class TestTHandle:
     def test_paper_normalised_moments(self):
         # Fig. 3 caption: I = (0.286827, 0.533256, 0.795844)
         body = Body.t_handle(8, 4, 1)
-        np.testing.assert_allclose(body.normalized_moments,
-                                   [0.286827, 0.533256, 0.795844], atol=5e-7)
+        np.testing.assert_allclose(
+            body.normalized_moments, [0.286827, 0.533256, 0.795844], atol=5e-7
+        )
 
-    @pytest.mark.parametrize("dims", [(8, 4, 1), (3, 5, 0.5), (1, 1, 0.2),
-                                      (2, 9, 1.5)])
+    @pytest.mark.parametrize("dims", [(8, 4, 1), (3, 5, 0.5), (1, 1, 0.2), (2, 9, 1.5)])
     def test_eqn_isfort_matches_parallel_axis_theorem(self, dims):
         tensor = t_handle_by_parts(*dims)
         # the T is symmetric about the y axis: the tensor is diagonal
         assert np.max(np.abs(tensor - np.diag(np.diag(tensor)))) < 1e-13 * np.max(tensor)
         body = Body.t_handle(*dims)
-        np.testing.assert_allclose(body.moments, np.sort(np.diag(tensor)),
-                                   rtol=1e-14)
+        np.testing.assert_allclose(body.moments, np.sort(np.diag(tensor)), rtol=1e-14)
 
     def test_short_cross_piece_is_relabelled(self):
         # l1 short: the moment about x is no longer the smallest
@@ -58,8 +57,15 @@ class TestTHandle:
         assert (a, b, c) == pytest.approx((4.23281, 3.07318, 0.645497), abs=5e-6)
         l1, l2, w = 8.0, 4.0, 1.0
         k = math.sqrt(5.0 / 3.0)
-        assert a == pytest.approx(k * math.sqrt(l2 * w * w + l1**3) / (2 * math.sqrt(l1 + l2)), rel=1e-14)
-        assert b == pytest.approx(k * math.sqrt(2 * l1 * l2 * (3 * l2 * w + 2 * l2**2 + 2 * w**2) + l1**2 * w**2 + l2**4) / (2 * (l1 + l2)), rel=1e-14)
+        assert a == pytest.approx(
+            k * math.sqrt(l2 * w * w + l1**3) / (2 * math.sqrt(l1 + l2)), rel=1e-14
+        )
+        assert b == pytest.approx(
+            k
+            * math.sqrt(2 * l1 * l2 * (3 * l2 * w + 2 * l2**2 + 2 * w**2) + l1**2 * w**2 + l2**4)
+            / (2 * (l1 + l2)),
+            rel=1e-14,
+        )
         assert c == pytest.approx(0.5 * k * w, rel=1e-14)
 
     @pytest.mark.parametrize("bad", [(0, 4, 1), (8, -1, 1), (8, 4, math.nan)])
@@ -71,8 +77,7 @@ class TestTHandle:
 class TestEllipsoids:
     def test_semi_axes_round_trip(self):
         body = Body.from_semi_axes(3.0, 2.0, 0.5)
-        np.testing.assert_allclose(body.equivalent_ellipsoid(), (3.0, 2.0, 0.5),
-                                   rtol=1e-14)
+        np.testing.assert_allclose(body.equivalent_ellipsoid(), (3.0, 2.0, 0.5), rtol=1e-14)
 
     def test_semi_axes_in_caller_order(self):
         body = Body.from_semi_axes(0.5, 3.0, 2.0)
@@ -94,8 +99,8 @@ class TestEllipsoids:
         a = math.sqrt(root - b * b - c * c) / math.sqrt(2)
         # moments are those of a solid ellipsoid (mass 5) with semi-axes a, b, c
         np.testing.assert_allclose(
-            body.moments, sorted([b * b + c * c, a * a + c * c, a * a + b * b]),
-            rtol=1e-14)
+            body.moments, sorted([b * b + c * c, a * a + c * c, a * a + b * b]), rtol=1e-14
+        )
 
     def test_flat_ellipsoid_is_a_valid_body(self):
         body = Body.ellipsoid(0.4, 0.0)
@@ -117,8 +122,9 @@ class TestInertiaTensor:
         body = Body.from_inertia_tensor(tensor)
         np.testing.assert_allclose(body.moments, moments, rtol=1e-13)
         # frame rows are the principal axes: frame T frame^T is diagonal
-        np.testing.assert_allclose(body.frame @ tensor @ body.frame.T,
-                                   np.diag(moments), atol=1e-12)
+        np.testing.assert_allclose(
+            body.frame @ tensor @ body.frame.T, np.diag(moments), atol=1e-12
+        )
         assert np.linalg.det(body.frame) == pytest.approx(1.0)
 
     def test_rejects_asymmetric(self):
@@ -131,8 +137,9 @@ class TestInertiaTensor:
 
 
 class TestOrderingAndFrame:
-    @pytest.mark.parametrize("given", [(3.0, 1.0, 2.5), (1.0, 2.5, 3.0),
-                                       (2.5, 3.0, 1.0), (3.0, 2.5, 1.0)])
+    @pytest.mark.parametrize(
+        "given", [(3.0, 1.0, 2.5), (1.0, 2.5, 3.0), (2.5, 3.0, 1.0), (3.0, 2.5, 1.0)]
+    )
     def test_sorted_with_permutation(self, given):
         body = Body(given)
         assert list(body.moments) == sorted(given)
@@ -140,8 +147,7 @@ class TestOrderingAndFrame:
         frame = body.frame
         assert np.linalg.det(frame) == pytest.approx(1.0)
         # the frame maps the caller's inertia tensor to the sorted one
-        np.testing.assert_array_equal(frame @ np.diag(given) @ frame.T,
-                                      np.diag(body.moments))
+        np.testing.assert_array_equal(frame @ np.diag(given) @ frame.T, np.diag(body.moments))
 
     def test_moments_are_read_only(self):
         body = Body((1.0, 2.0, 2.5))
@@ -156,19 +162,21 @@ class TestOrderingAndFrame:
 
 
 class TestValidation:
-    @pytest.mark.parametrize("moments, message", [
-        ((1.0, 2.0, math.nan), "not all finite"),
-        ((1.0, math.inf, 2.0), "not all finite"),
-        ((0.0, 1.0, 1.0), "positive"),
-        ((-1.0, 2.0, 2.5), "positive"),
-        ((1.0, 1.5, 3.0), "triangle inequality"),
-    ])
+    @pytest.mark.parametrize(
+        "moments, message",
+        [
+            ((1.0, 2.0, math.nan), "not all finite"),
+            ((1.0, math.inf, 2.0), "not all finite"),
+            ((0.0, 1.0, 1.0), "positive"),
+            ((-1.0, 2.0, 2.5), "positive"),
+            ((1.0, 1.5, 3.0), "triangle inequality"),
+        ],
+    )
     def test_non_physical(self, moments, message):
         with pytest.raises(NonPhysicalBodyError, match=message):
             Body(moments)
 
-    @pytest.mark.parametrize("moments", [(1.0, 1.0, 1.5), (1.0, 1.5, 1.5),
-                                         (2.0, 2.0, 2.0)])
+    @pytest.mark.parametrize("moments", [(1.0, 1.0, 1.5), (1.0, 1.5, 1.5), (2.0, 2.0, 2.0)])
     def test_symmetric_top_explains_why(self, moments):
         with pytest.raises(SymmetricTopError, match="symmetric top.*I1 < I2 < I3"):
             Body(moments)

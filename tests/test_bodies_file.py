@@ -25,6 +25,7 @@ def parser(request, monkeypatch):
         # these files need no fallback: the pyarrow path alone must read them
         def no_fallback(*args):
             raise AssertionError("fell back to the csv module")
+
         monkeypatch.setattr(module, "_python_cells", no_fallback)
     return request.param
 
@@ -36,8 +37,9 @@ def write(tmp_path, text):
 
 
 def test_hash_inside_quoted_names_is_kept(tmp_path, parser):
-    path = write(tmp_path, '# a comment\nI1,I2,I3,name\n'
-                           '0.26,0.55,0.793662,"body#1"\n0.3,0.5,0.7,"body#2"\n')
+    path = write(
+        tmp_path, '# a comment\nI1,I2,I3,name\n0.26,0.55,0.793662,"body#1"\n0.3,0.5,0.7,"body#2"\n'
+    )
     table = read_bodies_csv(path)
     assert table.names == ["body#1", "body#2"]
     np.testing.assert_array_equal(table.moments, [[0.26, 0.55, 0.793662], [0.3, 0.5, 0.7]])
@@ -51,12 +53,15 @@ def test_quoted_comma_and_newline_in_a_name(tmp_path, parser):
 
 
 def test_row_numbers_after_quoted_newlines_and_blank_lines(tmp_path, parser):
-    path = write(tmp_path, 'name,I1,I2,I3\n"two\nlines",1,2,2.5\n\n"x",1,2\n'
-                           '"y",1,1,2\n"z",0.3,0.5,0.7\n')
+    path = write(
+        tmp_path, 'name,I1,I2,I3\n"two\nlines",1,2,2.5\n\n"x",1,2\n"y",1,1,2\n"z",0.3,0.5,0.7\n'
+    )
     table = read_bodies_csv(path, skip_invalid=True)
     assert table.names == ["two\nlines", "z"] and table.rows.tolist() == [1, 4]
     assert [message.split(": ", 1)[0] for _, message in table.skipped] == [
-        f"{path}, row 2", f"{path}, row 3 ('y')"]
+        f"{path}, row 2",
+        f"{path}, row 3 ('y')",
+    ]
 
 
 def test_no_implicit_index_column(tmp_path, parser):
@@ -65,8 +70,10 @@ def test_no_implicit_index_column(tmp_path, parser):
         read_bodies_csv(path)
 
 
-@pytest.mark.parametrize("cell", ["True", "1_000", "0x10", "nan", "NaN", "inf", "-inf",
-                                  "infinity", "", "1e", "1,5", "١"])
+@pytest.mark.parametrize(
+    "cell",
+    ["True", "1_000", "0x10", "nan", "NaN", "inf", "-inf", "infinity", "", "1e", "1,5", "١"],
+)
 def test_cells_must_be_plain_decimal_numbers(tmp_path, parser, cell):
     text = f'I1,I2,I3\n0.26,0.55,0.793662\n"{cell}",1200,1500\n'
     with pytest.raises(InputError) as error:
@@ -79,12 +86,16 @@ def test_cells_must_be_plain_decimal_numbers(tmp_path, parser, cell):
 def test_numbers_read_bit_for_bit(tmp_path, parser):
     """Each cell parses to the double Python's float() gives (correct rounding)."""
     rng = np.random.default_rng(7)
-    values = np.sort(rng.uniform(0.2, 1.0, size=(300, 3)) * 10.0 ** rng.integers(
-        -200, 200, size=(300, 1)), axis=1)
+    values = np.sort(
+        rng.uniform(0.2, 1.0, size=(300, 3)) * 10.0 ** rng.integers(-200, 200, size=(300, 1)),
+        axis=1,
+    )
     values[:, 2] = np.minimum(values[:, 2], 0.999 * (values[:, 0] + values[:, 1]))
-    cells = [[repr(v), f"{v:.17g}", f"{v:.25e}", f"{v:.3f}"][k % 4]
-             for k, v in enumerate(values.ravel().tolist())]
-    rows = ["{},{},{}".format(*cells[3 * k:3 * k + 3]) for k in range(300)]
+    cells = [
+        [repr(v), f"{v:.17g}", f"{v:.25e}", f"{v:.3f}"][k % 4]
+        for k, v in enumerate(values.ravel().tolist())
+    ]
+    rows = ["{},{},{}".format(*cells[3 * k : 3 * k + 3]) for k in range(300)]
     path = write(tmp_path, "I1,I2,I3\n" + "\n".join(rows) + "\n")
     expected = np.array([float(c) for c in cells]).reshape(300, 3)
     keep = np.all(expected > 0, axis=1) & (expected[:, 2] < expected[:, 0] + expected[:, 1])
@@ -94,13 +105,15 @@ def test_numbers_read_bit_for_bit(tmp_path, parser):
 
 
 def test_one_message_per_bad_row_and_skip_invalid(tmp_path, parser):
-    text = ("I1,I2,I3,name\n"
-            '0.26,0.55,0.793662,"ok"\n'          # row 1
-            '1,1,2,"symmetric"\n'                # row 2
-            '\n'                                 # blank: not a row
-            'True,2,2.5,"bool"\n'                # row 3
-            '0.3,0.5,0.7,"ok2"\n'                # row 4
-            '1,2,2.5\n')                         # row 5: 3 fields
+    text = (
+        "I1,I2,I3,name\n"
+        '0.26,0.55,0.793662,"ok"\n'  # row 1
+        '1,1,2,"symmetric"\n'  # row 2
+        "\n"  # blank: not a row
+        'True,2,2.5,"bool"\n'  # row 3
+        '0.3,0.5,0.7,"ok2"\n'  # row 4
+        "1,2,2.5\n"
+    )  # row 5: 3 fields
     path = write(tmp_path, text)
     with pytest.raises(InputError, match=r"row 2 \('symmetric'\): .*; 2 more bad row"):
         read_bodies_csv(path)
@@ -114,25 +127,43 @@ def test_one_message_per_bad_row_and_skip_invalid(tmp_path, parser):
 
 
 def test_skip_invalid_on_the_command_line(tmp_path, capsys):
-    path = write(tmp_path, 'I1,I2,I3,name\n0.26,0.55,0.793662,"=cmd|\' /C calc\'!A0"\n'
-                           '1,1,2,"bad"\n')
+    path = write(
+        tmp_path, 'I1,I2,I3,name\n0.26,0.55,0.793662,"=cmd|\' /C calc\'!A0"\n1,1,2,"bad"\n'
+    )
     out = tmp_path / "c.csv"
-    assert main(["catalog", "--bodies", str(path), "--skip-invalid", "--n-max", "3",
-                 "--out", str(out)]) == 0
+    assert (
+        main(
+            ["catalog", "--bodies", str(path), "--skip-invalid", "--n-max", "3", "--out", str(out)]
+        )
+        == 0
+    )
     err = capsys.readouterr().err
     assert "skipped" in err and "row 2 ('bad')" in err
     text = out.read_text()
     assert "# skipped 1 invalid row(s)" in text and "(--skip-invalid): 2" in text
-    assert "\"'=cmd|' /C calc'!A0\"" in text           # neutralised in the file
+    assert "\"'=cmd|' /C calc'!A0\"" in text  # neutralised in the file
     frame = orbits.read_catalog(out)
     assert set(frame["body"]) == {"=cmd|' /C calc'!A0"}  # and read back unchanged
 
 
 def test_names_are_kept_through_a_survey(tmp_path):
-    path = write(tmp_path, 'I1,I2,I3,name\n0.26,0.55,0.793662,"+SUM(1,2)"\n'
-                           '0.3,0.5,0.7,"b#2"\n')
-    assert main(["survey", "--bodies", str(path), "--n-max", "3", "--format", "csv",
-                 "--out", str(tmp_path / "s")]) == 0
+    path = write(tmp_path, 'I1,I2,I3,name\n0.26,0.55,0.793662,"+SUM(1,2)"\n0.3,0.5,0.7,"b#2"\n')
+    assert (
+        main(
+            [
+                "survey",
+                "--bodies",
+                str(path),
+                "--n-max",
+                "3",
+                "--format",
+                "csv",
+                "--out",
+                str(tmp_path / "s"),
+            ]
+        )
+        == 0
+    )
     bodies, _ = orbits.survey.read_survey(tmp_path / "s")
     assert bodies["name"].tolist() == ["+SUM(1,2)", "b#2"]
     raw = (tmp_path / "s" / "bodies" / "part-00000.csv").read_text()
@@ -145,7 +176,6 @@ def test_same_bodies_by_another_path_resume(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     argv = ["survey", "--n-max", "3", "--format", "csv", "--out", "s", "--bodies"]
     assert main(argv + ["b.csv"]) == 0
-    (tmp_path / "copy.csv").write_text("# same\nI1 , I2,I3\n0.26,0.55,0.793662\n"
-                                       "0.3, 0.5,0.7\n")
+    (tmp_path / "copy.csv").write_text("# same\nI1 , I2,I3\n0.26,0.55,0.793662\n0.3, 0.5,0.7\n")
     assert main(argv + ["./copy.csv"]) == 0
     assert "(0 computed now" in capsys.readouterr().out

@@ -35,15 +35,34 @@ def test_schema_and_order():
     frame = orbits.closed_orbits(FIG6, n_max=4)
     assert list(frame.columns) == list(orbits.CATALOG_COLUMNS)
     assert list(orbits.CATALOG_COLUMNS) == [
-        "body", "I1", "I2", "I3", "theta_crit", "branch", "n", "q", "theta", "dtheta",
-        "total_phase", "dynamic_phase", "geometric_phase", "period", "energy", "momentum",
-        "D", "m", "residual", "closes_after"]
+        "body",
+        "I1",
+        "I2",
+        "I3",
+        "theta_crit",
+        "branch",
+        "n",
+        "q",
+        "theta",
+        "dtheta",
+        "total_phase",
+        "dynamic_phase",
+        "geometric_phase",
+        "period",
+        "energy",
+        "momentum",
+        "D",
+        "m",
+        "residual",
+        "closes_after",
+    ]
     assert frame["body"].unique().tolist() == ["fig6"]
     assert frame["n"].dtype.kind == "i" and frame["q"].dtype.kind == "i"
     np.testing.assert_allclose(frame[["I1", "I2", "I3"]].pow(2).sum(axis=1), 1.0, rtol=1e-15)
     np.testing.assert_allclose(frame["theta"], frame["theta_crit"] + frame["dtheta"], rtol=1e-15)
-    np.testing.assert_allclose(frame["geometric_phase"],
-                               frame["dynamic_phase"] - frame["total_phase"], atol=1e-12)
+    np.testing.assert_allclose(
+        frame["geometric_phase"], frame["dynamic_phase"] - frame["total_phase"], atol=1e-12
+    )
 
 
 def test_csv_round_trip_is_bit_exact(tmp_path):
@@ -54,23 +73,28 @@ def test_csv_round_trip_is_bit_exact(tmp_path):
     pd.testing.assert_frame_equal(again, frame, check_exact=True)
     # plain pandas with the documented option (none needed on pandas >= 3)
     from orbits.atomic import csv_float_options
+
     plain = pd.read_csv(path, comment="#", **csv_float_options())
     for column in frame.select_dtypes("float").columns:
-        assert np.array_equal(plain[column].to_numpy().view(np.int64),
-                              frame[column].to_numpy().view(np.int64)), column
+        assert np.array_equal(
+            plain[column].to_numpy().view(np.int64), frame[column].to_numpy().view(np.int64)
+        ), column
     header = again.attrs["header"]
     assert header[0] == f"orbits {orbits.__version__} closed-orbit catalog"
     assert header[1] == "command: orbits catalog --preset fig6"
 
 
-@pytest.mark.parametrize("mutate, message", [
-    (lambda f: f.drop(columns="theta"), "schema"),
-    (lambda f: f[list(f.columns[::-1])], "schema"),
-    (lambda f: f.assign(extra=1.0), "unexpected"),
-    (lambda f: f.assign(branch="XAM"), "SAM or LAM"),
-    (lambda f: f.assign(n=0), "integers >= 1"),
-    (lambda f: f.assign(period=np.inf), "non-finite"),
-])
+@pytest.mark.parametrize(
+    "mutate, message",
+    [
+        (lambda f: f.drop(columns="theta"), "schema"),
+        (lambda f: f[list(f.columns[::-1])], "schema"),
+        (lambda f: f.assign(extra=1.0), "unexpected"),
+        (lambda f: f.assign(branch="XAM"), "SAM or LAM"),
+        (lambda f: f.assign(n=0), "integers >= 1"),
+        (lambda f: f.assign(period=np.inf), "non-finite"),
+    ],
+)
 def test_read_catalog_checks_schema(tmp_path, mutate, message):
     path = tmp_path / "bad.csv"
     write_catalog(mutate(orbits.closed_orbits(FIG6, n_max=3)), path)
@@ -100,11 +124,14 @@ def test_many_bodies_and_bodies_file(tmp_path):
     pd.testing.assert_frame_equal(frame[frame.body == "fig6"].reset_index(drop=True), single)
 
 
-@pytest.mark.parametrize("text, message", [
-    ("I1,I2\n1,2\n", "missing column"),
-    ("I1,I2,I3\n1,2,2.5\n1,1,2\n", "row 2"),
-    ("I1,I2,I3\n", "no bodies"),
-])
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("I1,I2\n1,2\n", "missing column"),
+        ("I1,I2,I3\n1,2,2.5\n1,1,2\n", "row 2"),
+        ("I1,I2,I3\n", "no bodies"),
+    ],
+)
 def test_bad_bodies_file(tmp_path, text, message):
     path = tmp_path / "bodies.csv"
     path.write_text(text)
@@ -132,7 +159,7 @@ def test_failed_write_keeps_the_old_file(tmp_path, monkeypatch):
         def write(self, text):
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), self.name)
 
-    module = sys.modules["orbits.catalog"]     # orbits.catalog is also the function
+    module = sys.modules["orbits.catalog"]  # orbits.catalog is also the function
     monkeypatch.setattr(module, "open", Full, raising=False)
     with pytest.raises(InputError, match=f"cannot write {path}: No space left on device"):
         write_catalog(frame, path)
@@ -154,9 +181,24 @@ def test_interrupt_leaves_no_partial_file(tmp_path):
     pd.DataFrame(grid, columns=["I1", "I2", "I3"]).to_csv(bodies, index=False)
     out = tmp_path / "out.csv"
     out.write_text("previous good catalog\n")
-    proc = subprocess.Popen([sys.executable, "-m", "orbits.cli", "catalog", "--bodies",
-                             str(bodies), "--n-max", "300", "--q-max", "5", "--out", str(out)],
-                            stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "orbits.cli",
+            "catalog",
+            "--bodies",
+            str(bodies),
+            "--n-max",
+            "300",
+            "--q-max",
+            "5",
+            "--out",
+            str(out),
+        ],
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     time.sleep(4.0)
     assert proc.poll() is None, "the run ended before it could be interrupted"
     proc.send_signal(signal.SIGINT)
@@ -173,8 +215,9 @@ def committed_commands():
             yield shlex.split(line)[1:]
 
 
-@pytest.mark.parametrize("argv", list(committed_commands()),
-                         ids=lambda argv: argv[argv.index("--out") + 1])
+@pytest.mark.parametrize(
+    "argv", list(committed_commands()), ids=lambda argv: argv[argv.index("--out") + 1]
+)
 def test_committed_catalogs_regenerate(tmp_path, capsys, argv):
     committed = CATALOGS / Path(argv[argv.index("--out") + 1]).name
     fresh = tmp_path / committed.name
@@ -183,7 +226,8 @@ def test_committed_catalogs_regenerate(tmp_path, capsys, argv):
     assert main(argv) == 0
     old, new = read_catalog(committed), read_catalog(fresh)
     assert old.attrs["header"][1] == "command: orbits " + " ".join(
-        shlex.quote(w) for w in argv[:-1] + [f"catalogs/{committed.name}"])
+        shlex.quote(w) for w in argv[:-1] + [f"catalogs/{committed.name}"]
+    )
     assert (old[["body", "branch", "n", "q"]] == new[["body", "branch", "n", "q"]]).all().all()
     floats = [c for c in orbits.CATALOG_COLUMNS if old[c].dtype.kind == "f" and c != "residual"]
     np.testing.assert_allclose(new[floats], old[floats], rtol=1e-12, atol=0)
@@ -197,32 +241,75 @@ def test_committed_fig6_matches_the_paper():
     table = read_catalog(CATALOGS / "fig6_n30.csv")
     small = table[table.n <= 5]
     assert small["n"].tolist() == [2, 3, 4, 5, 5, 4, 3, 2]
-    assert np.round(small["theta"], 4).tolist() == [0.9562, 1.0043, 1.0113, 1.0124,
-                                                    1.0139, 1.0207, 1.0611, 1.2742]
+    assert np.round(small["theta"], 4).tolist() == [
+        0.9562,
+        1.0043,
+        1.0113,
+        1.0124,
+        1.0139,
+        1.0207,
+        1.0611,
+        1.2742,
+    ]
 
 
 class TestCli:
     def test_writes_a_catalog(self, tmp_path, capsys):
         out = tmp_path / "c.csv"
-        assert main(["catalog", "--ellipsoid", "0.4", "0.2", "--n-max", "6", "--q-max", "2",
-                     "--verify", "--out", str(out)]) == 0
+        assert (
+            main(
+                [
+                    "catalog",
+                    "--ellipsoid",
+                    "0.4",
+                    "0.2",
+                    "--n-max",
+                    "6",
+                    "--q-max",
+                    "2",
+                    "--verify",
+                    "--out",
+                    str(out),
+                ]
+            )
+            == 0
+        )
         table = read_catalog(out)
         assert set(table["q"]) == {1, 2} and table["closure_error"].max() <= 1e-8
         assert "closed orbits" in capsys.readouterr().err
 
-    @pytest.mark.parametrize("argv, fragment", [
-        (["catalog", "--preset", "fig6", "--n-max", "0", "--out", "x.csv"], "must be >= 1"),
-        (["catalog", "--preset", "nope", "--n-max", "3", "--out", "x.csv"], "invalid choice"),
-        (["catalog", "--moments", "1", "1", "2", "--n-max", "3", "--out", "x.csv"], "symmetric top"),
-        (["catalog", "--moments", "1", "2", "nan", "--n-max", "3", "--out", "x.csv"], "finite"),
-        (["catalog", "--moments", "1", "2", "9", "--n-max", "3", "--out", "x.csv"], "triangle"),
-        (["catalog", "--preset", "fig6", "--n-max", "3", "--out", "/no/such/dir/x.csv"],
-         "does not exist"),
-        (["catalog", "--preset", "fig6", "--n-max", "3"], "--out"),
-        (["catalog", "--bodies", "/no/such/bodies.csv", "--n-max", "3", "--out", "x.csv"],
-         "no bodies file"),
-        (["catalog", "--ellipsoid", "0.9", "0.8", "--n-max", "3", "--out", "x.csv"], "too large"),
-    ])
+    @pytest.mark.parametrize(
+        "argv, fragment",
+        [
+            (["catalog", "--preset", "fig6", "--n-max", "0", "--out", "x.csv"], "must be >= 1"),
+            (["catalog", "--preset", "nope", "--n-max", "3", "--out", "x.csv"], "invalid choice"),
+            (
+                ["catalog", "--moments", "1", "1", "2", "--n-max", "3", "--out", "x.csv"],
+                "symmetric top",
+            ),
+            (
+                ["catalog", "--moments", "1", "2", "nan", "--n-max", "3", "--out", "x.csv"],
+                "finite",
+            ),
+            (
+                ["catalog", "--moments", "1", "2", "9", "--n-max", "3", "--out", "x.csv"],
+                "triangle",
+            ),
+            (
+                ["catalog", "--preset", "fig6", "--n-max", "3", "--out", "/no/such/dir/x.csv"],
+                "does not exist",
+            ),
+            (["catalog", "--preset", "fig6", "--n-max", "3"], "--out"),
+            (
+                ["catalog", "--bodies", "/no/such/bodies.csv", "--n-max", "3", "--out", "x.csv"],
+                "no bodies file",
+            ),
+            (
+                ["catalog", "--ellipsoid", "0.9", "0.8", "--n-max", "3", "--out", "x.csv"],
+                "too large",
+            ),
+        ],
+    )
     def test_bad_input(self, tmp_path, capsys, monkeypatch, argv, fragment):
         monkeypatch.chdir(tmp_path)
         code = main(argv)
@@ -242,8 +329,9 @@ class TestCli:
         try:
             if os.access(locked, os.W_OK):
                 pytest.skip("running as a user who can write anywhere")
-            code = main(["catalog", "--preset", "fig6", "--n-max", "3",
-                         "--out", str(locked / "x.csv")])
+            code = main(
+                ["catalog", "--preset", "fig6", "--n-max", "3", "--out", str(locked / "x.csv")]
+            )
             assert_one_line_error(code, capsys.readouterr().err, "not writable")
         finally:
             locked.chmod(0o700)

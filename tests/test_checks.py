@@ -9,11 +9,12 @@ import pytest
 
 import orbits
 from orbits import Body, checks
+from orbits.atomic import csv_float_options
 from orbits.cli import main
 
 T_HANDLE = Body.t_handle(8, 4, 1)
 FIG6 = Body.preset("fig6")
-SPIN = dict(theta=math.pi / 2 - 0.15, phi=math.pi / 2 - 0.2)   # Fig. 3
+SPIN = dict(theta=math.pi / 2 - 0.15, phi=math.pi / 2 - 0.2)  # Fig. 3
 
 
 class TestTHandle:
@@ -29,7 +30,7 @@ class TestTHandle:
 
     def test_montgomery(self):
         result = checks.montgomery(T_HANDLE, **SPIN)
-        assert round(result.solid_angle, 5) == 2.12519     # not the paper's 2.1253
+        assert round(result.solid_angle, 5) == 2.12519  # not the paper's 2.1253
         assert round(result.dynamic_phase, 4) == 23.6555
         assert round(result.total_phase, 4) == 21.5303
         assert result.total_phase == pytest.approx(orbits.total_phase(T_HANDLE, **SPIN), abs=1e-12)
@@ -73,7 +74,8 @@ def test_several_periods():
     result = checks.rotation_by_integration(FIG6, 1.2, periods=3, engine="compiled")
     assert result.error <= 1e-9
     assert result.expected == pytest.approx(
-        (3 * orbits.total_phase(FIG6, 1.2)) % (2 * math.pi), abs=1e-12)
+        (3 * orbits.total_phase(FIG6, 1.2)) % (2 * math.pi), abs=1e-12
+    )
 
 
 def test_checks_detect_the_printed_lam_formula():
@@ -85,8 +87,9 @@ def test_checks_detect_the_printed_lam_formula():
     cot2 = 1 / mp.tan(theta) ** 2
     pre = 4 * mp.sqrt(i2 * (i1**2 + i3**2 * cot2) / (i1**2 * i3 * (i3 - i1) * (i2 - i1)))
     m = cot2 / beta
-    printed = float(pre * (i1 * mp.ellipk(m)
-                           + (i3 - i1) * mp.ellippi(-i3**2 * cot2 * beta / i1**2, m)))
+    printed = float(
+        pre * (i1 * mp.ellipk(m) + (i3 - i1) * mp.ellippi(-(i3**2) * cot2 * beta / i1**2, m))
+    )
     assert abs(printed - checks.montgomery(FIG6, theta).total_phase) > 1e-3
 
 
@@ -119,12 +122,28 @@ def test_cli_verify_paper_count_and_ten_times(capsys, bodies, expected):
 
 def test_cli_verify_exit_code_and_table(capsys, tmp_path):
     path = tmp_path / "ics.csv"
-    assert main(["verify", "--bodies", "3", "--angles", "2", "--tolerance", "1e-18",
-                 "--no-progress", "--table", str(path)]) == 1
+    assert (
+        main(
+            [
+                "verify",
+                "--bodies",
+                "3",
+                "--angles",
+                "2",
+                "--tolerance",
+                "1e-18",
+                "--no-progress",
+                "--table",
+                str(path),
+            ]
+        )
+        == 1
+    )
     out = capsys.readouterr().out
     assert "FAIL" in out
     import pandas as pd
-    table = pd.read_csv(path)
+
+    table = pd.read_csv(path, **csv_float_options())
     assert len(table) == 6 and "montgomery_error" in table
 
 

@@ -9,6 +9,7 @@ import sys
 import pandas as pd
 import pytest
 
+from orbits.atomic import csv_float_options
 from orbits.cli import main
 
 
@@ -30,41 +31,54 @@ def assert_usage_error(code, err, *fragments):
 
 class TestPhase:
     def test_t_handle_csv(self, capsys):
-        code, out, _ = run(capsys, "phase", "--preset", "t-handle",
-                           "--theta", "1.4207963267948966",
-                           "--phi", "1.3707963267948966", "--csv")
+        code, out, _ = run(
+            capsys,
+            "phase",
+            "--preset",
+            "t-handle",
+            "--theta",
+            "1.4207963267948966",
+            "--phi",
+            "1.3707963267948966",
+            "--csv",
+        )
         assert code == 0
-        row = pd.read_csv(io.StringIO(out)).iloc[0]
+        row = pd.read_csv(io.StringIO(out), **csv_float_options()).iloc[0]
         assert row.total_phase == pytest.approx(21.5303, abs=5e-5)
         assert row.branch == "SAM"
 
     def test_negative_exponent_offsets(self, capsys):
-        code, out, _ = run(capsys, "phase", "--preset", "fig6",
-                           "--dtheta", "-1e-300", "1e-300", "--csv")
+        code, out, _ = run(
+            capsys, "phase", "--preset", "fig6", "--dtheta", "-1e-300", "1e-300", "--csv"
+        )
         assert code == 0
-        table = pd.read_csv(io.StringIO(out))
+        table = pd.read_csv(io.StringIO(out), **csv_float_options())
         assert table.branch.tolist() == ["SAM", "LAM"]
         assert table.dtheta.tolist() == [-1e-300, 1e-300]
 
     def test_table_output(self, capsys):
-        code, out, _ = run(capsys, "phase", "--moments", "3", "1", "2",
-                           "--theta", "0.4")
+        code, out, _ = run(capsys, "phase", "--moments", "3", "1", "2", "--theta", "0.4")
         assert code == 0 and "total_phase" in out
 
-    @pytest.mark.parametrize("argv, fragments", [
-        (["phase", "--moments", "1", "1", "2", "--theta", "0.3"], ["symmetric top"]),
-        (["phase", "--moments", "1", "2", "4", "--theta", "0.3"], ["triangle"]),
-        (["phase", "--moments", "1", "2", "nan", "--theta", "0.3"], ["not a finite number"]),
-        (["phase", "--preset", "fig6", "--dtheta", "2"], ["outside [0, pi/2]", "not folded"]),
-        (["phase", "--preset", "nope", "--theta", "1"], ["invalid choice"]),
-        (["phase", "--preset", "fig6"], ["--theta", "required"]),
-        (["phase", "--preset", "fig6", "--moments", "1", "2", "2.5", "--theta", "1"],
-         ["not allowed with"]),
-        (["phase", "--preset", "fig6", "--dtheta", "0"], ["separatrix"]),
-        (["phase", "--t-handle", "8", "-4", "1", "--theta", "1"], ["positive length"]),
-        (["bench", "--only", "nope"], ["unknown benchmark"]),
-        (["nonsense"], ["invalid choice"]),
-    ])
+    @pytest.mark.parametrize(
+        "argv, fragments",
+        [
+            (["phase", "--moments", "1", "1", "2", "--theta", "0.3"], ["symmetric top"]),
+            (["phase", "--moments", "1", "2", "4", "--theta", "0.3"], ["triangle"]),
+            (["phase", "--moments", "1", "2", "nan", "--theta", "0.3"], ["not a finite number"]),
+            (["phase", "--preset", "fig6", "--dtheta", "2"], ["outside [0, pi/2]", "not folded"]),
+            (["phase", "--preset", "nope", "--theta", "1"], ["invalid choice"]),
+            (["phase", "--preset", "fig6"], ["--theta", "required"]),
+            (
+                ["phase", "--preset", "fig6", "--moments", "1", "2", "2.5", "--theta", "1"],
+                ["not allowed with"],
+            ),
+            (["phase", "--preset", "fig6", "--dtheta", "0"], ["separatrix"]),
+            (["phase", "--t-handle", "8", "-4", "1", "--theta", "1"], ["positive length"]),
+            (["bench", "--only", "nope"], ["unknown benchmark"]),
+            (["nonsense"], ["invalid choice"]),
+        ],
+    )
     def test_bad_input(self, capsys, argv, fragments):
         code, _, err = run(capsys, *argv)
         assert_usage_error(code, err, *fragments)
@@ -83,8 +97,11 @@ def test_bench_json_quick(capsys):
 def test_console_script_has_no_traceback():
     exe = shutil.which("orbits")
     argv = [exe] if exe else [sys.executable, "-m", "orbits.cli"]
-    proc = subprocess.run(argv + ["phase", "--moments", "1", "1", "2", "--theta", "1"],
-                          capture_output=True, text=True)
+    proc = subprocess.run(
+        argv + ["phase", "--moments", "1", "1", "2", "--theta", "1"],
+        capture_output=True,
+        text=True,
+    )
     assert proc.returncode == 2
     assert proc.stderr.count("\n") == 1
     assert "Traceback" not in proc.stderr
@@ -97,10 +114,10 @@ def test_phase_folds_theta_and_phi(capsys):
     import math
 
     import orbits
-    code, out, _ = run(capsys, "phase", "--preset", "fig6", "--theta", "2", "--phi", "-3",
-                       "--csv")
+
+    code, out, _ = run(capsys, "phase", "--preset", "fig6", "--theta", "2", "--phi", "-3", "--csv")
     assert code == 0
-    row = pd.read_csv(io.StringIO(out)).iloc[0]
+    row = pd.read_csv(io.StringIO(out), **csv_float_options()).iloc[0]
     assert row.theta == pytest.approx(math.pi - 2, abs=1e-15)
     want = orbits.phases(orbits.Body.preset("fig6"), math.pi - 2, math.pi - 3).iloc[0]
     assert row.phi == pytest.approx(math.pi - 3, abs=1e-15)

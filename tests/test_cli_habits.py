@@ -22,6 +22,7 @@ def run(capsys, *argv):
 
 def csv_rows(out):
     from orbits.atomic import csv_float_options
+
     return pd.read_csv(io.StringIO(out), **csv_float_options())
 
 
@@ -30,8 +31,9 @@ PHONE = ("--box", "0.146", "0.071", "0.008", "--mass", "0.17")
 
 class TestOmega:
     def test_omega_in_hz_gives_physical_outputs_and_d(self, capsys):
-        code, out, _ = run(capsys, "phase", *PHONE, "--omega", "0.3", "0.1", "3",
-                           "--units", "Hz", "--csv")
+        code, out, _ = run(
+            capsys, "phase", *PHONE, "--omega", "0.3", "0.1", "3", "--units", "Hz", "--csv"
+        )
         assert code == 0
         row = csv_rows(out).iloc[0]
         body = Body.box(0.146, 0.071, 0.008, 0.17)
@@ -41,8 +43,8 @@ class TestOmega:
         inertia_omega = body.moments * principal
         energy = 0.5 * principal @ inertia_omega
         momentum = np.linalg.norm(inertia_omega)
-        assert row.energy == pytest.approx(energy, rel=1e-14)        # J
-        assert row.momentum == pytest.approx(momentum, rel=1e-14)    # J s
+        assert row.energy == pytest.approx(energy, rel=1e-14)  # J
+        assert row.momentum == pytest.approx(momentum, rel=1e-14)  # J s
         assert row.D == pytest.approx(momentum**2 / (2 * energy), rel=1e-14)
         assert body.moments[0] <= row.D <= body.moments[2]
         # and it finds its catalog row: phases() at the same direction, |I| = 1
@@ -53,23 +55,40 @@ class TestOmega:
         unit = Motion.from_omega(body, principal / np.linalg.norm(principal))
         assert row.period == pytest.approx(unit.period / np.linalg.norm(omega), rel=1e-12)
 
-    @pytest.mark.parametrize("unit, factor", [("rad/s", 1.0), ("deg/s", math.pi / 180),
-                                              ("rpm", math.pi / 30), ("Hz", 2 * math.pi)])
+    @pytest.mark.parametrize(
+        "unit, factor",
+        [("rad/s", 1.0), ("deg/s", math.pi / 180), ("rpm", math.pi / 30), ("Hz", 2 * math.pi)],
+    )
     def test_units(self, capsys, unit, factor):
-        code, out, _ = run(capsys, "phase", "--moments", "1", "2", "2.5", "--omega", "1",
-                           "0.5", "2", "--units", unit, "--csv")
+        code, out, _ = run(
+            capsys,
+            "phase",
+            "--moments",
+            "1",
+            "2",
+            "2.5",
+            "--omega",
+            "1",
+            "0.5",
+            "2",
+            "--units",
+            unit,
+            "--csv",
+        )
         assert code == 0
         row = csv_rows(out).iloc[0]
-        np.testing.assert_allclose([row.w1, row.w2, row.w3],
-                                   factor * np.array([1.0, 0.5, 2.0]), rtol=1e-15)
+        np.testing.assert_allclose(
+            [row.w1, row.w2, row.w3], factor * np.array([1.0, 0.5, 2.0]), rtol=1e-15
+        )
 
     def test_omega_is_taken_along_the_callers_axes(self, capsys):
         # moments given out of order: omega along the given 2nd axis (I = 3)
-        code, out, _ = run(capsys, "phase", "--moments", "1", "3", "2", "--omega",
-                           "0.01", "1", "0.01", "--csv")
+        code, out, _ = run(
+            capsys, "phase", "--moments", "1", "3", "2", "--omega", "0.01", "1", "0.01", "--csv"
+        )
         assert code == 0
         row = csv_rows(out).iloc[0]
-        assert abs(row.w3) == pytest.approx(1.0)     # I3 = 3 is the largest
+        assert abs(row.w3) == pytest.approx(1.0)  # I3 = 3 is the largest
         assert row.branch == "SAM"
 
     def test_zero_omega_is_a_usage_error(self, capsys):
@@ -79,18 +98,37 @@ class TestOmega:
 
 class TestDegrees:
     def test_degrees_equal_radians(self, capsys):
-        _, out_deg, _ = run(capsys, "phase", "--preset", "fig6", "--theta", "30", "50",
-                            "--phi", "20", "--degrees", "--csv")
-        _, out_rad, _ = run(capsys, "phase", "--preset", "fig6", "--theta",
-                            repr(math.radians(30)), repr(math.radians(50)),
-                            "--phi", repr(math.radians(20)), "--csv")
+        _, out_deg, _ = run(
+            capsys,
+            "phase",
+            "--preset",
+            "fig6",
+            "--theta",
+            "30",
+            "50",
+            "--phi",
+            "20",
+            "--degrees",
+            "--csv",
+        )
+        _, out_rad, _ = run(
+            capsys,
+            "phase",
+            "--preset",
+            "fig6",
+            "--theta",
+            repr(math.radians(30)),
+            repr(math.radians(50)),
+            "--phi",
+            repr(math.radians(20)),
+            "--csv",
+        )
         pd.testing.assert_frame_equal(csv_rows(out_deg), csv_rows(out_rad))
 
 
 class TestTables:
     def test_tiny_offsets_print_in_full(self, capsys):
-        code, out, _ = run(capsys, "phase", "--preset", "fig6", "--dtheta", "1e-300",
-                           "-2.5e-310")
+        code, out, _ = run(capsys, "phase", "--preset", "fig6", "--dtheta", "1e-300", "-2.5e-310")
         assert code == 0
         line = next(line for line in out.splitlines() if line.startswith("dtheta"))
         assert line.split()[1:] == ["1e-300", "-2.5e-310"]
@@ -103,18 +141,20 @@ class TestTables:
 
 class TestTotalPhase:
     def test_total_phase_finds_every_spin(self, capsys):
-        code, out, _ = run(capsys, "phase", "--preset", "fig6", "--total-phase", "20",
-                           "--csv")
+        code, out, _ = run(capsys, "phase", "--preset", "fig6", "--total-phase", "20", "--csv")
         assert code == 0
         table = csv_rows(out)
         assert set(table.branch) == {"SAM", "LAM"}
         np.testing.assert_allclose(
             orbits.total_phase(Body.preset("fig6"), dtheta=table.dtheta.to_numpy()),
-            20.0, rtol=1e-12)
+            20.0,
+            rtol=1e-12,
+        )
 
     def test_total_phase_in_degrees(self, capsys):
-        _, out, _ = run(capsys, "phase", "--preset", "fig6", "--total-phase", "1440",
-                        "--degrees", "--csv")
+        _, out, _ = run(
+            capsys, "phase", "--preset", "fig6", "--total-phase", "1440", "--degrees", "--csv"
+        )
         np.testing.assert_allclose(csv_rows(out).total_phase, 8 * math.pi, rtol=1e-12)
 
     def test_unreachable_total_phase_is_a_usage_error(self, capsys):
@@ -128,8 +168,9 @@ class TestRealBodies:
         assert code == 0
         code, _, err = run(capsys, "phase", "--cylinder", "0.1", "1", "--theta", "0.3")
         assert code == 2 and "symmetric top" in err
-        code, _, _ = run(capsys, "phase", "--cylinder", "0.1", "1", "0.05",
-                         "--mass", "2", "--theta", "0.3")
+        code, _, _ = run(
+            capsys, "phase", "--cylinder", "0.1", "1", "0.05", "--mass", "2", "--theta", "0.3"
+        )
         assert code == 0
 
     def test_point_masses_file(self, capsys, tmp_path):
@@ -142,20 +183,19 @@ class TestRealBodies:
         assert code == 2 and "z" in err
 
     def test_rotational_constants_defect(self, capsys):
-        water = ("--rotational-constants", "835840.3", "435351.7", "278138.7",
-                 "--unit", "MHz")
+        water = ("--rotational-constants", "835840.3", "435351.7", "278138.7", "--unit", "MHz")
         code, _, err = run(capsys, "phase", *water, "--theta", "0.3")
         assert code == 2 and "--defect flatten" in err and "inertial defect" in err
-        code, _, err = run(capsys, "phase", *water, "--defect", "flatten", "--theta",
-                           "0.3")
+        code, _, err = run(capsys, "phase", *water, "--defect", "flatten", "--theta", "0.3")
         assert code == 0 and "warning: inertial defect" in err
 
     def test_mesh(self, capsys, tmp_path):
         trimesh = pytest.importorskip("trimesh")
         path = tmp_path / "box.stl"
         trimesh.creation.box(extents=(3.0, 2.0, 1.0)).export(path)
-        code, out, _ = run(capsys, "phase", "--mesh", str(path), "--density", "2",
-                           "--theta", "0.3", "--csv")
+        code, out, _ = run(
+            capsys, "phase", "--mesh", str(path), "--density", "2", "--theta", "0.3", "--csv"
+        )
         assert code == 0
         row = csv_rows(out).iloc[0]
         expected = Body.box(3.0, 2.0, 1.0).normalized_moments
@@ -163,8 +203,9 @@ class TestRealBodies:
 
     def test_name(self, capsys, tmp_path):
         out_file = tmp_path / "c.csv"
-        code, _, _ = run(capsys, "catalog", *PHONE, "--name", "phone", "--n-max", "3",
-                         "--out", str(out_file))
+        code, _, _ = run(
+            capsys, "catalog", *PHONE, "--name", "phone", "--n-max", "3", "--out", str(out_file)
+        )
         assert code == 0
         assert set(orbits.read_catalog(out_file)["body"]) == {"phone"}
 
@@ -174,6 +215,7 @@ class TestVerifyBody:
         code, out, _ = run(capsys, "verify", *PHONE, "--angles", "4", "--json")
         assert code == 0
         import json
+
         summary = json.loads(out)
         assert summary["initial_conditions"] == 4
         assert summary["passed"]
@@ -181,19 +223,28 @@ class TestVerifyBody:
 
 
 def test_python_dash_m_orbits():
-    result = subprocess.run([sys.executable, "-m", "orbits", "--version"],
-                            capture_output=True, text=True, timeout=120)
+    result = subprocess.run(
+        [sys.executable, "-m", "orbits", "--version"], capture_output=True, text=True, timeout=120
+    )
     assert result.returncode == 0
     assert result.stdout.startswith("orbits ")
 
 
 def test_threads_option(capsys):
-    code, _, err = run(capsys, "--threads", "1", "phase", "--preset", "fig6",
-                       "--theta", "0.3")
+    code, _, err = run(capsys, "--threads", "1", "phase", "--preset", "fig6", "--theta", "0.3")
     assert code == 0
     import numba
-    code, _, err = run(capsys, "--threads", str(numba.config.NUMBA_NUM_THREADS + 1),
-                       "phase", "--preset", "fig6", "--theta", "0.3")
+
+    code, _, err = run(
+        capsys,
+        "--threads",
+        str(numba.config.NUMBA_NUM_THREADS + 1),
+        "phase",
+        "--preset",
+        "fig6",
+        "--theta",
+        "0.3",
+    )
     assert code == 2 and "threads" in err
     orbits.set_num_threads(numba.config.NUMBA_NUM_THREADS)
 
@@ -205,7 +256,8 @@ class _Terminal(io.StringIO):
 
 def test_compile_note_only_on_a_terminal_with_an_empty_cache(tmp_path, monkeypatch):
     import orbits.cli as cli
-    assert announce_compilation(io.StringIO()) is False          # not a terminal
+
+    assert announce_compilation(io.StringIO()) is False  # not a terminal
     # a copy of the package layout with no cache: the note is printed
     core = tmp_path / "orbits" / "core"
     core.mkdir(parents=True)
@@ -224,6 +276,7 @@ def test_compile_note_follows_numba_cache_dir(tmp_path, monkeypatch):
     """With NUMBA_CACHE_DIR set numba caches only there: an index file next
     to the sources does not mean the kernels are compiled."""
     import orbits.cli as cli
+
     core = tmp_path / "orbits" / "core"
     (core / "__pycache__").mkdir(parents=True)
     (core / "__pycache__" / "phase.cel-1.py311.nbi").write_bytes(b"")
@@ -243,11 +296,17 @@ def test_first_run_on_a_terminal_says_it_compiles(tmp_path):
     import pty
     import subprocess
     import sys
+
     main_fd, child_fd = pty.openpty()
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
-    result = subprocess.run([sys.executable, "-m", "orbits", "phase", "--preset", "fig6",
-                             "--theta", "0.3"], stderr=child_fd, stdout=subprocess.PIPE,
-                            env=env, timeout=600, check=False)
+    result = subprocess.run(
+        [sys.executable, "-m", "orbits", "phase", "--preset", "fig6", "--theta", "0.3"],
+        stderr=child_fd,
+        stdout=subprocess.PIPE,
+        env=env,
+        timeout=600,
+        check=False,
+    )
     os.close(child_fd)
     err = b""
     while True:

@@ -122,8 +122,7 @@ def test_jacobi_functions_near_m_one(rng, one_minus_m):
             assert abs(cn - float(mp.ellipfun("cn", u, m=m))) <= 1e-13
             assert abs(dn - float(mp.ellipfun("dn", u, m=m))) <= 1e-13
             # am is continuous and equals atan2(sn, cn) up to whole turns
-            principal = float(mp.atan2(mp.ellipfun("sn", u, m=m),
-                                       mp.ellipfun("cn", u, m=m)))
+            principal = float(mp.atan2(mp.ellipfun("sn", u, m=m), mp.ellipfun("cn", u, m=m)))
             turns = round((am - principal) / (2 * math.pi))
             assert abs(am - principal - 2 * math.pi * turns) <= 1e-13 * max(1.0, abs(am))
             assert j == round(am / math.pi)

@@ -80,8 +80,10 @@ def _skip_unless_same_versions():
     if recorded is None:
         pytest.skip("no baselines recorded: run tests/baseline/regenerate.py")
     if recorded != versions():
-        pytest.skip(f"baselines drawn with {recorded}, this is {versions()}: text "
-                    "rendering differs; regenerate with tests/baseline/regenerate.py")
+        pytest.skip(
+            f"baselines drawn with {recorded}, this is {versions()}: text "
+            "rendering differs; regenerate with tests/baseline/regenerate.py"
+        )
 
 
 @pytest.mark.parametrize("name", list(CASES))
@@ -91,27 +93,29 @@ def test_figure_matches_its_baseline(name, tmp_path):
     assert expected.exists(), f"missing baseline {expected}"
     actual = render(name, tmp_path / f"{name}.png")
     failure = compare_images(str(expected), str(actual), tol=TOLERANCE, in_decorator=True)
-    assert failure is None, (f"{name}: RMS {failure['rms']:.2f} > {TOLERANCE}; diff image "
-                             f"{failure['diff']}")
+    assert failure is None, (
+        f"{name}: RMS {failure['rms']:.2f} > {TOLERANCE}; diff image {failure['diff']}"
+    )
 
 
 def test_the_tolerance_catches_a_moved_label(tmp_path, monkeypatch):
     """Move Fig. 3's period label sideways by 1 s (2 % of the axis): the comparison fails."""
     _skip_unless_same_versions()
     from orbits import plotting
+
     original = plotting.plot_omega_components
 
     def moved(ax, *args, **kwargs):
         drawn = original(ax, *args, **kwargs)
         # the tick that names T, 1 s to the right of the period's line
-        drawn["period_axis"].set_xticks([drawn["period"] + 1.0],
-                                        [f"T = {drawn['period']:.4f} s"])
+        drawn["period_axis"].set_xticks([drawn["period"] + 1.0], [f"T = {drawn['period']:.4f} s"])
         return drawn
 
     monkeypatch.setattr(plotting, "plot_omega_components", moved)
     actual = render("fig3", tmp_path / "fig3.png")
-    failure = compare_images(str(BASELINE / "fig3.png"), str(actual), tol=TOLERANCE,
-                             in_decorator=True)
+    failure = compare_images(
+        str(BASELINE / "fig3.png"), str(actual), tol=TOLERANCE, in_decorator=True
+    )
     assert failure is not None and failure["rms"] > TOLERANCE
 
 

@@ -74,8 +74,7 @@ def test_fig6_insets_are_closed_catalog_orbits(paper):
 def test_fig5_marks_the_critical_angle(paper):
     _, built = paper
     ax = built["fig5"].get_axes()[0]
-    verticals = [line.get_xdata()[0] for line in ax.get_lines()
-                 if len(set(line.get_xdata())) == 1]
+    verticals = [line.get_xdata()[0] for line in ax.get_lines() if len(set(line.get_xdata())) == 1]
     assert verticals == [pytest.approx(orbits.critical_angle(Body.preset("t-handle")))]
 
 
@@ -93,12 +92,12 @@ def test_herpolhode_set_files_order_and_closure(tmp_path):
     drawn = [ax for ax in sheet.get_axes() if ax.get_lines()]
     ordered = figures._paper_order(catalog)
     assert len(drawn) == len(ordered)
-    assert list(ordered["dtheta"]) == sorted(ordered["dtheta"])   # left to right in theta
+    assert list(ordered["dtheta"]) == sorted(ordered["dtheta"])  # left to right in theta
     for ax, row in zip(drawn, ordered.itertuples()):
         multiple = f"{row.n}" if row.q == 1 else f"{row.n}/{row.q}"
         assert rf"{row.branch} $2\pi\cdot{multiple}$" in ax.get_title()
         xy = ax.get_lines()[0].get_xydata()
-        assert np.abs(xy[-1] - xy[0]).max() <= 1e-9      # closed over closes_after
+        assert np.abs(xy[-1] - xy[0]).max() <= 1e-9  # closed over closes_after
         # one common scale on every panel
         assert ax.get_xlim() == (-sheet.limit, sheet.limit)
         assert ax.get_ylim() == (-sheet.limit, sheet.limit)
@@ -119,7 +118,7 @@ def test_fig6_leader_lines_do_not_cross(paper):
         return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
 
     for i, (p1, p2) in enumerate(segments):
-        for p3, p4 in segments[i + 1:]:
+        for p3, p4 in segments[i + 1 :]:
             d1, d2 = cross(p3, p4, p1), cross(p3, p4, p2)
             d3, d4 = cross(p1, p2, p3), cross(p1, p2, p4)
             assert not (d1 * d2 < 0 and d3 * d4 < 0)
@@ -143,21 +142,40 @@ class TestCli:
 
     def test_body_set(self, tmp_path, capsys):
         out = tmp_path / "made" / "here"
-        assert main(["figures", "--t-handle", "8", "4", "1", "--n-max", "3",
-                     "--formats", "svg", "--out", str(out)]) == 0
+        assert (
+            main(
+                [
+                    "figures",
+                    "--t-handle",
+                    "8",
+                    "4",
+                    "1",
+                    "--n-max",
+                    "3",
+                    "--formats",
+                    "svg",
+                    "--out",
+                    str(out),
+                ]
+            )
+            == 0
+        )
         names = sorted(p.name for p in out.iterdir())
         assert "contact_sheet.svg" in names and "herpolhode_SAM_n002.svg" in names
 
-    @pytest.mark.parametrize("argv, fragment", [
-        (["figures", "--out", "d"], "exactly one"),
-        (["figures", "--paper", "--preset", "fig6", "--out", "d"], "exactly one"),
-        (["figures", "--preset", "fig6", "--out", "d"], "--n-max is required"),
-        (["figures", "--preset", "fig6", "--n-max", "0", "--out", "d"], "must be >= 1"),
-        (["figures", "--moments", "1", "1", "2", "--n-max", "2", "--out", "d"], "symmetric"),
-        (["figures", "--preset", "nope", "--n-max", "2", "--out", "d"], "invalid choice"),
-        (["figures", "--paper", "--formats", "gif", "--out", "d"], "invalid choice"),
-        (["figures", "--paper", "--out", "/proc/orbits-figures"], "cannot create"),
-    ])
+    @pytest.mark.parametrize(
+        "argv, fragment",
+        [
+            (["figures", "--out", "d"], "exactly one"),
+            (["figures", "--paper", "--preset", "fig6", "--out", "d"], "exactly one"),
+            (["figures", "--preset", "fig6", "--out", "d"], "--n-max is required"),
+            (["figures", "--preset", "fig6", "--n-max", "0", "--out", "d"], "must be >= 1"),
+            (["figures", "--moments", "1", "1", "2", "--n-max", "2", "--out", "d"], "symmetric"),
+            (["figures", "--preset", "nope", "--n-max", "2", "--out", "d"], "invalid choice"),
+            (["figures", "--paper", "--formats", "gif", "--out", "d"], "invalid choice"),
+            (["figures", "--paper", "--out", "/proc/orbits-figures"], "cannot create"),
+        ],
+    )
     def test_bad_input(self, tmp_path, capsys, monkeypatch, argv, fragment):
         monkeypatch.chdir(tmp_path)
         code = main(argv)
@@ -182,8 +200,12 @@ def test_contact_sheet_titles_state_the_closure_time():
 
 
 def _inside(inner, outer, slack=1.0):
-    return (inner.x0 >= outer.x0 - slack and inner.y0 >= outer.y0 - slack
-            and inner.x1 <= outer.x1 + slack and inner.y1 <= outer.y1 + slack)
+    return (
+        inner.x0 >= outer.x0 - slack
+        and inner.y0 >= outer.y0 - slack
+        and inner.x1 <= outer.x1 + slack
+        and inner.y1 <= outer.y1 + slack
+    )
 
 
 @pytest.mark.parametrize("name", list(figures.PAPER_FIGURES))
@@ -200,7 +222,7 @@ def test_no_label_or_title_is_clipped(paper, name):
         texts.append(figure._suptitle)
     for ax in figure.get_axes():
         texts.append(ax.title)
-        if ax.axison:                        # Fig. 4 draws its own labelled axes instead
+        if ax.axison:  # Fig. 4 draws its own labelled axes instead
             texts += [ax.xaxis.label, ax.yaxis.label]
             if hasattr(ax, "zaxis"):
                 texts.append(ax.zaxis.label)
@@ -224,11 +246,15 @@ def test_fig3_period_label_and_legend_clear_of_curves_and_axis(paper):
     figure.canvas.draw()
     renderer = figure.canvas.get_renderer()
     ax = next(a for a in figure.get_axes() if a.get_xlabel().startswith("time"))
-    labels = [t for child in ax.child_axes for t in child.get_xticklabels()
-              if t.get_text().startswith("T = ")]
+    labels = [
+        t
+        for child in ax.child_axes
+        for t in child.get_xticklabels()
+        if t.get_text().startswith("T = ")
+    ]
     assert len(labels) == 1
     box = labels[0].get_window_extent(renderer)
-    assert box.y0 >= ax.bbox.y1                      # above the data area
+    assert box.y0 >= ax.bbox.y1  # above the data area
     title = ax.title.get_window_extent(renderer)
     assert box.y1 <= title.y0 or box.x1 <= title.x0 or box.x0 >= title.x1
     # the label is centred on the period's vertical line
@@ -239,8 +265,7 @@ def test_fig3_period_label_and_legend_clear_of_curves_and_axis(paper):
 
 
 def _period(ax):
-    verticals = [line.get_xdata()[0] for line in ax.get_lines()
-                 if len(set(line.get_xdata())) == 1]
+    verticals = [line.get_xdata()[0] for line in ax.get_lines() if len(set(line.get_xdata())) == 1]
     assert len(verticals) == 1
     return verticals[0]
 

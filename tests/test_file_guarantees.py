@@ -14,18 +14,21 @@ import pytest
 
 import orbits
 import orbits.survey
-from orbits.atomic import remove_stale_temporaries, write_text_atomic
+from orbits.atomic import csv_float_options, remove_stale_temporaries, write_text_atomic
 from orbits.cli import main
 from orbits.survey import check_survey, read_survey
 
 # a pid that no process has (above the kernel's pid_max of 2**22)
-DEAD_PID = 2 ** 22 + 7
+DEAD_PID = 2**22 + 7
 GRID = ["survey", "--resolution", "6", "--n-max", "3", "--format", "csv", "--chunk", "3"]
 
 
 def files(directory):
-    return {p.relative_to(directory).as_posix(): p.read_bytes()
-            for p in sorted(directory.rglob("*")) if p.is_file() and p.name != ".lock"}
+    return {
+        p.relative_to(directory).as_posix(): p.read_bytes()
+        for p in sorted(directory.rglob("*"))
+        if p.is_file() and p.name != ".lock"
+    }
 
 
 @pytest.fixture(scope="module")
@@ -52,9 +55,8 @@ def test_ledger_records_every_part(reference):
     assert sum(entry["orbits"]["rows"] for entry in ledger.values()) == len(orbits_table)
     for key, entry in ledger.items():
         assert entry["first_body"] == int(key) * parameters["chunk"]
-        part = pd.read_csv(reference / entry["bodies"]["file"])
-        assert part["body"].tolist() == list(range(entry["first_body"],
-                                                    entry["last_body"] + 1))
+        part = pd.read_csv(reference / entry["bodies"]["file"], **csv_float_options())
+        assert part["body"].tolist() == list(range(entry["first_body"], entry["last_body"] + 1))
     report = json.loads((reference / "report.json").read_text())
     assert report["bodies"] == len(bodies) and report["orbits"] == len(orbits_table)
 
@@ -96,7 +98,7 @@ def test_foreign_files_are_ignored(reference, tmp_path, capsys):
     assert main(GRID + ["--out", str(target), "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert report == json.loads((reference / "report.json").read_text())
-    assert (target / "bodies" / "part-00099.csv").exists()     # not ours: left alone
+    assert (target / "bodies" / "part-00099.csv").exists()  # not ours: left alone
 
 
 def test_a_stale_temporary_is_removed_a_live_one_kept(reference, tmp_path):
@@ -145,10 +147,26 @@ def test_a_directory_being_created_is_not_foreign(tmp_path, capsys):
 def test_concurrent_runs_never_break_each_other(tmp_path):
     """Four identical runs at once: each finishes or is refused by the lock."""
     out = tmp_path / "s"
-    argv = [sys.executable, "-m", "orbits", "survey", "--resolution", "40", "--n-max", "4",
-            "--chunk", "50", "--format", "csv", "--out", str(out)]
-    runs = [subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                             text=True) for _ in range(4)]
+    argv = [
+        sys.executable,
+        "-m",
+        "orbits",
+        "survey",
+        "--resolution",
+        "40",
+        "--n-max",
+        "4",
+        "--chunk",
+        "50",
+        "--format",
+        "csv",
+        "--out",
+        str(out),
+    ]
+    runs = [
+        subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        for _ in range(4)
+    ]
     results = [(run.wait(timeout=600), run.stderr.read()) for run in runs]
     for code, err in results:
         assert code in (0, 2), err
@@ -162,19 +180,36 @@ def test_concurrent_runs_never_break_each_other(tmp_path):
 
 
 # ------------------------------------------------------------------ atomic output
-@pytest.mark.parametrize("signum, code, message", [
-    (signal.SIGTERM, 143, "orbits: stopped by SIGTERM; no partial output was written"),
-    (signal.SIGHUP, 129, "orbits: stopped by SIGHUP; no partial output was written"),
-])
+@pytest.mark.parametrize(
+    "signum, code, message",
+    [
+        (signal.SIGTERM, 143, "orbits: stopped by SIGTERM; no partial output was written"),
+        (signal.SIGHUP, 129, "orbits: stopped by SIGHUP; no partial output was written"),
+    ],
+)
 def test_termination_leaves_no_partial_file(tmp_path, signum, code, message):
     bodies = tmp_path / "bodies.csv"
-    pd.DataFrame(orbits.region_grid(60), columns=["I1", "I2", "I3"]).to_csv(bodies,
-                                                                            index=False)
+    pd.DataFrame(orbits.region_grid(60), columns=["I1", "I2", "I3"]).to_csv(bodies, index=False)
     out = tmp_path / "out.csv"
     out.write_text("previous good catalog\n")
-    proc = subprocess.Popen([sys.executable, "-m", "orbits", "catalog", "--bodies",
-                             str(bodies), "--n-max", "300", "--q-max", "5", "--out", str(out)],
-                            stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "orbits",
+            "catalog",
+            "--bodies",
+            str(bodies),
+            "--n-max",
+            "300",
+            "--q-max",
+            "5",
+            "--out",
+            str(out),
+        ],
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     time.sleep(4.0)
     assert proc.poll() is None, "the run ended before it could be stopped"
     proc.send_signal(signum)
@@ -214,7 +249,8 @@ def test_a_symlink_to_a_regular_file_keeps_the_link(tmp_path):
     real = tmp_path / "real.csv"
     real.write_text("old\n")
     (tmp_path / "link.csv").symlink_to(real)
-    orbits.write_catalog(orbits.closed_orbits(orbits.Body.preset("fig6"), n_max=2),
-                         tmp_path / "link.csv")
+    orbits.write_catalog(
+        orbits.closed_orbits(orbits.Body.preset("fig6"), n_max=2), tmp_path / "link.csv"
+    )
     assert (tmp_path / "link.csv").is_symlink()
     assert len(orbits.read_catalog(real)) > 0

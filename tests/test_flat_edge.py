@@ -23,8 +23,9 @@ from orbits.survey import compute_chunk
 
 TWO_PI = 2.0 * math.pi
 EPS = np.finfo(float).eps
-ANGLES = np.array([0.0, 1e-300, 1e-12, 1e-6, 1e-3, 0.1, 0.5, 0.9, 1.2, 1.5,
-                   math.pi / 2 - 1e-9, math.pi / 2])
+ANGLES = np.array(
+    [0.0, 1e-300, 1e-12, 1e-6, 1e-3, 0.1, 0.5, 0.9, 1.2, 1.5, math.pi / 2 - 1e-9, math.pi / 2]
+)
 
 
 def exact_excess(moments):
@@ -57,7 +58,7 @@ def test_the_issue_body_has_no_n1_orbit():
     assert body.moments[1:].tolist() == [0.6, 0.9]
     assert Fraction(body.moments[0]) - Fraction(0.3) == exact_excess((0.3, 0.6, 0.9))
     low = check_never_below_two_pi(body)
-    assert low <= TWO_PI * (1 + 1e-14)      # the flat edge: 2 pi, at theta -> 0
+    assert low <= TWO_PI * (1 + 1e-14)  # the flat edge: 2 pi, at theta -> 0
     assert 1 not in orbits.closed_orbits([0.3, 0.6, 0.9], 3)["n"].tolist()
 
 
@@ -98,8 +99,9 @@ def test_bodies_built_as_a_b_a_plus_b(a, ratio, scale):
     excess = exact_excess(moments)
     assert exact_excess(body.moments) <= 0
     assert body.is_flat == (excess >= 0)
-    moved = [Fraction(float(x)) - Fraction(float(y))
-             for x, y in zip(body.moments, np.sort(moments))]
+    moved = [
+        Fraction(float(x)) - Fraction(float(y)) for x, y in zip(body.moments, np.sort(moments))
+    ]
     if excess > 0:
         # exactly one moment moved, by exactly the excess (<= 8 eps I3)
         assert sum(d != 0 for d in moved) == 1
@@ -118,9 +120,9 @@ def test_bodies_built_as_a_b_a_plus_b(a, ratio, scale):
 def test_rods_down_to_1e_minus_300(exponent, ulps, scale):
     """I1/I3 = 10^-exponent, I3 - I2 = ulps * 2^-53: accepted (then on or
     inside the edge, with phases >= 2 pi) or rejected as non-physical."""
-    i1 = 10.0 ** -exponent
+    i1 = 10.0**-exponent
     moments = np.ldexp([i1, 1.0 - ulps * 2.0**-53, 1.0], scale)
-    assume(moments[0] >= np.finfo(float).tiny)      # the scaled I1 still a normal double
+    assume(moments[0] >= np.finfo(float).tiny)  # the scaled I1 still a normal double
     excess = exact_excess(moments)
     try:
         body = Body(moments)
@@ -151,7 +153,7 @@ def test_thin_flat_rod_matches_the_exact_rod_of_ratio_1e_minus_300():
             m_sq = i1**2 * w1**2 + i3**2 * w3**2
             exact = float(period_and_total_phase(i1, i2, i3, two_e, m_sq)[1])
             got = float(orbits.total_phase([1e-300, 1 - 2.0**-53, 1.0], theta))
-            assert abs(got / exact - 1) <= 1e-14     # measured 2.2e-16
+            assert abs(got / exact - 1) <= 1e-14  # measured 2.2e-16
 
 
 def test_canonical_form_is_vectorised_and_exact():
@@ -164,8 +166,14 @@ def test_canonical_form_is_vectorised_and_exact():
 
 
 def test_survey_of_flat_bodies_reports_no_two_pi_orbit():
-    moments = np.array([[0.3, 0.6, 0.9], [0.1, 0.2, 0.1 + 0.2], [2.0**-53, 1 - 2.0**-53, 1.0],
-                        [0.26, 0.55, 0.793662]])
+    moments = np.array(
+        [
+            [0.3, 0.6, 0.9],
+            [0.1, 0.2, 0.1 + 0.2],
+            [2.0**-53, 1 - 2.0**-53, 1.0],
+            [0.26, 0.55, 0.793662],
+        ]
+    )
     bodies, table = compute_chunk(moments, 4, q_max=3)
     assert (bodies["min_total_phase"] >= TWO_PI).all()
     assert bodies["min_at_end"].all()

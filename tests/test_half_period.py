@@ -49,8 +49,9 @@ def test_half_period_symmetry_of_the_exact_motion(body):
         np.testing.assert_allclose(later.omega, now.omega @ mirror, rtol=0, atol=1e-13)
         # space frame: turned about M by Delta alpha/2 + pi
         turn = rot_z(0.5 * row.total_phase + np.pi)
-        np.testing.assert_allclose(later.rotation, turn @ now.rotation @ mirror,
-                                   rtol=0, atol=1e-11)
+        np.testing.assert_allclose(
+            later.rotation, turn @ now.rotation @ mirror, rtol=0, atol=1e-11
+        )
         # the herpolhode closes after `closes_after` periods, and not before
         # (only whole half periods can close it: |omega|^2 has period T/2)
         periods = Fraction(row.closes_after)
@@ -71,16 +72,25 @@ def _integrate_half_period(motion):
     def rhs(_, y):
         w = y[:3]
         rotation = y[3:].reshape(3, 3)
-        torque_free = np.array([(moments[1] - moments[2]) * w[1] * w[2] / moments[0],
-                                (moments[2] - moments[0]) * w[2] * w[0] / moments[1],
-                                (moments[0] - moments[1]) * w[0] * w[1] / moments[2]])
+        torque_free = np.array(
+            [
+                (moments[1] - moments[2]) * w[1] * w[2] / moments[0],
+                (moments[2] - moments[0]) * w[2] * w[0] / moments[1],
+                (moments[0] - moments[1]) * w[0] * w[1] / moments[2],
+            ]
+        )
         cross = np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
         return np.concatenate([torque_free, (rotation @ cross).ravel()])
 
     start = motion.rotation(np.zeros(1))[0]
-    solution = solve_ivp(rhs, (0.0, 0.5 * motion.period),
-                         np.concatenate([motion.omega0, start.ravel()]),
-                         method="DOP853", rtol=1e-12, atol=1e-14)
+    solution = solve_ivp(
+        rhs,
+        (0.0, 0.5 * motion.period),
+        np.concatenate([motion.omega0, start.ravel()]),
+        method="DOP853",
+        rtol=1e-12,
+        atol=1e-14,
+    )
     return start, solution.y[:3, -1], solution.y[3:, -1].reshape(3, 3)
 
 

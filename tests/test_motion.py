@@ -53,9 +53,15 @@ def integrate(motion, times, rtol=REFERENCE_RTOL):
         euler_rhs(inertia, y, dy)
         return dy
 
-    solution = solve_ivp(rhs, (0.0, times[-1]), np.concatenate([motion.omega0, q0]),
-                         method="DOP853", rtol=rtol, atol=REFERENCE_ATOL,
-                         t_eval=times)
+    solution = solve_ivp(
+        rhs,
+        (0.0, times[-1]),
+        np.concatenate([motion.omega0, q0]),
+        method="DOP853",
+        rtol=rtol,
+        atol=REFERENCE_ATOL,
+        t_eval=times,
+    )
     assert solution.success
     rotation = Rotation.from_quat(np.roll(solution.y[3:].T, -1, axis=-1)).as_matrix()
     return solution.y[:3].T, rotation
@@ -69,15 +75,21 @@ def random_cases():
     for k, moments in enumerate(bodies):
         body = Body(moments)
         theta_c = body.critical_angle()
-        cases.append((body, dict(theta=rng.uniform(0.05, 0.95) * theta_c,
-                                 phi=rng.uniform(-3, 3))))
-        cases.append((body, dict(theta=theta_c + rng.uniform(0.05, 0.95)
-                                 * (np.pi / 2 - theta_c), phi=rng.uniform(-3, 3))))
+        cases.append((body, dict(theta=rng.uniform(0.05, 0.95) * theta_c, phi=rng.uniform(-3, 3))))
+        cases.append(
+            (
+                body,
+                dict(
+                    theta=theta_c + rng.uniform(0.05, 0.95) * (np.pi / 2 - theta_c),
+                    phi=rng.uniform(-3, 3),
+                ),
+            )
+        )
     cases += [
-        (FIG6, dict(dtheta=-3e-3)),            # 1 - m ~ 1e-2, SAM
-        (FIG6, dict(dtheta=3e-3)),             # LAM
-        (T_HANDLE, dict(theta=1e-6)),          # near the I3 axis
-        (T_HANDLE, dict(theta=np.pi / 2 - 1e-6)),   # near the I1 axis
+        (FIG6, dict(dtheta=-3e-3)),  # 1 - m ~ 1e-2, SAM
+        (FIG6, dict(dtheta=3e-3)),  # LAM
+        (T_HANDLE, dict(theta=1e-6)),  # near the I3 axis
+        (T_HANDLE, dict(theta=np.pi / 2 - 1e-6)),  # near the I1 axis
         (T_HANDLE, dict(theta=np.pi / 2 - 0.15, phi=np.pi / 2 - 0.2)),
     ]
     return cases
@@ -117,15 +129,15 @@ def test_matches_dop853_over_ten_periods(body, spin):
 def test_matches_mpmath_down_to_one_minus_m_1e12(branch_sign, one_minus_m):
     # find the offset that gives this 1 - m (it is close to linear in dtheta)
     def gap(log_offset):
-        motion = Motion.from_spin(FIG6, dtheta=branch_sign * 10.0 ** log_offset)
+        motion = Motion.from_spin(FIG6, dtheta=branch_sign * 10.0**log_offset)
         return math.log10(motion.one_minus_m) - math.log10(one_minus_m)
+
     log_offset = brentq(gap, -20, -1, xtol=1e-3)
-    seed = Motion.from_spin(FIG6, dtheta=branch_sign * 10.0 ** log_offset)
+    seed = Motion.from_spin(FIG6, dtheta=branch_sign * 10.0**log_offset)
     motion = Motion.from_omega(FIG6, seed.omega0)
     assert 0.3 < motion.one_minus_m / one_minus_m < 3.0
     times = np.linspace(0.0, 10.0 * motion.period, 13)
-    omega, euler, omega_space = exact_motion_mpmath(FIG6.moments, motion.omega0,
-                                                    times, dps=40)
+    omega, euler, omega_space = exact_motion_mpmath(FIG6.moments, motion.omega0, times, dps=40)
     state = motion.state(times)
     assert np.abs(state.omega - omega).max() <= 1e-12
     assert np.abs(state.omega_space - omega_space).max() <= 1e-12
@@ -145,14 +157,16 @@ def test_sign_convention_rotation_after_one_period():
         np.testing.assert_allclose(state.omega_space[1], rz @ state.omega_space[0], atol=1e-12)
         # space z is along M
         momentum = motion.body.moments * state.omega
-        np.testing.assert_allclose(np.einsum("nij,nj->ni", state.rotation, momentum),
-                                   [[0, 0, motion.momentum]] * 2, atol=1e-13)
+        np.testing.assert_allclose(
+            np.einsum("nij,nj->ni", state.rotation, momentum),
+            [[0, 0, motion.momentum]] * 2,
+            atol=1e-13,
+        )
 
 
 def test_herpolhode_closes_on_a_whole_turn():
     # an independent root of Delta alpha = 4 pi on the fig6 SAM branch
-    theta = brentq(lambda t: orbits.total_phase(FIG6, t) - 4 * np.pi, 0.5, 1.0,
-                   xtol=1e-15)
+    theta = brentq(lambda t: orbits.total_phase(FIG6, t) - 4 * np.pi, 0.5, 1.0, xtol=1e-15)
     t, omega = orbits.herpolhode(FIG6, theta, points=4001)
     assert np.abs(omega[-1] - omega[0]).max() <= 1e-9
     # and does not close half-way round the next turn
@@ -211,7 +225,8 @@ def test_quaternion_is_continuous():
         np.testing.assert_allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-15)
         r = Rotation.from_quat(np.roll(q, -1, axis=-1)).as_matrix()
         np.testing.assert_allclose(
-            r, motion.rotation(np.linspace(0.0, 5 * motion.period, 20001)), atol=1e-13)
+            r, motion.rotation(np.linspace(0.0, 5 * motion.period, 20001)), atol=1e-13
+        )
 
 
 def test_scaling_omega_scales_time_only():
@@ -238,21 +253,25 @@ def test_phase_from_motion_matches_closed_form_to_1e300():
     for dtheta in (-1e-300, 1e-300, -1e-30, 1e-5):
         motion = Motion.from_spin(FIG6, dtheta=dtheta)
         assert motion.total_phase() == pytest.approx(
-            orbits.total_phase(FIG6, dtheta=dtheta), rel=1e-13)
+            orbits.total_phase(FIG6, dtheta=dtheta), rel=1e-13
+        )
 
 
-@pytest.mark.parametrize("make, error", [
-    (lambda: Motion.from_omega(FIG6, [0.0, 1.0, 0.0]), SeparatrixError),
-    (lambda: Motion.from_omega(FIG6, [0.0, 0.0, 0.0]), AngleError),
-    (lambda: Motion.from_omega(FIG6, [np.nan, 0.0, 1.0]), AngleError),
-    (lambda: Motion.from_spin(FIG6, dtheta=0.0), SeparatrixError),
-    (lambda: Motion.from_spin(FIG6, dtheta=2.0), AngleError),
-    (lambda: Motion.from_spin(FIG6, np.inf), AngleError),
-    (lambda: Motion.from_spin(FIG6, 0.5, speed=-1.0), AngleError),
-    (lambda: Motion.from_spin(FIG6, 0.5).omega([np.nan]), InputError),
-    (lambda: orbits.herpolhode(FIG6, 0.5, points=1), InputError),
-    (lambda: orbits.herpolhode(FIG6, 0.5, periods=0), InputError),
-])
+@pytest.mark.parametrize(
+    "make, error",
+    [
+        (lambda: Motion.from_omega(FIG6, [0.0, 1.0, 0.0]), SeparatrixError),
+        (lambda: Motion.from_omega(FIG6, [0.0, 0.0, 0.0]), AngleError),
+        (lambda: Motion.from_omega(FIG6, [np.nan, 0.0, 1.0]), AngleError),
+        (lambda: Motion.from_spin(FIG6, dtheta=0.0), SeparatrixError),
+        (lambda: Motion.from_spin(FIG6, dtheta=2.0), AngleError),
+        (lambda: Motion.from_spin(FIG6, np.inf), AngleError),
+        (lambda: Motion.from_spin(FIG6, 0.5, speed=-1.0), AngleError),
+        (lambda: Motion.from_spin(FIG6, 0.5).omega([np.nan]), InputError),
+        (lambda: orbits.herpolhode(FIG6, 0.5, points=1), InputError),
+        (lambda: orbits.herpolhode(FIG6, 0.5, periods=0), InputError),
+    ],
+)
 def test_bad_input(make, error):
     with pytest.raises(error):
         make()

@@ -8,6 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from orbits.atomic import csv_float_options
 from orbits.bodies import region_grid
 from orbits.core import search as kernels
 from orbits.search import phase_levels
@@ -38,9 +39,15 @@ def _bodies():
     rng = np.random.default_rng(11)
     grid = region_grid(40)
     # extremes: nearly symmetric (either pair), nearly flat, tiny and huge scales
-    extra = [(0.05, 1.0, 1.049), (1.0, 1.0 + 1e-9, 1.5), (1.0, 1.5, 1.5 + 1e-9),
-             (0.5, 0.5000001, 0.9999), (1e-3, 1.3e-3, 1.9e-3), (3e5, 4e5, 6e5),
-             (0.26, 0.55, 0.793662)]
+    extra = [
+        (0.05, 1.0, 1.049),
+        (1.0, 1.0 + 1e-9, 1.5),
+        (1.0, 1.5, 1.5 + 1e-9),
+        (0.5, 0.5000001, 0.9999),
+        (1e-3, 1.3e-3, 1.9e-3),
+        (3e5, 4e5, 6e5),
+        (0.26, 0.55, 0.793662),
+    ]
     random = np.sort(rng.uniform(0.1, 1.0, (200, 3)), axis=1)
     random = random[random[:, 2] < random[:, 0] + random[:, 1]]
     return np.concatenate([grid, np.array(extra), random])
@@ -125,14 +132,15 @@ def test_slope_against_mpmath_reference():
     The table's ``dalpha_dtheta`` (theta rows) is a central difference in
     mpmath at half the working digits.
     """
-    rows = pd.read_csv(REFERENCE, comment="#")
+    rows = pd.read_csv(REFERENCE, comment="#", **csv_float_options())
     rows = rows[(rows["mode"] == "theta") & (rows["phi"] == 0.0) & (rows["dtheta"] != 0.0)]
     assert len(rows) > 100
     for _, row in rows.iterrows():
         moments = np.sort([row.m1, row.m2, row.m3])
         d = abs(row.dtheta)
         value, slope = kernels.phase_slope_of_offset(
-            d, _params(moments, math.copysign(1.0, row.dtheta)))
+            d, _params(moments, math.copysign(1.0, row.dtheta))
+        )
         want = row.dalpha_dtheta * row.dtheta
         assert value == pytest.approx(row.total_phase, rel=1e-13)
         # the slope is a difference of O(Delta alpha) terms near the far end;
@@ -142,8 +150,7 @@ def test_slope_against_mpmath_reference():
         assert abs(slope - want) <= loose * (1e-12 * abs(want) + 1e-13 * abs(row.total_phase))
 
 
-@pytest.mark.parametrize("moments", [(0.26, 0.55, 0.793662), (1.0, 1.9, 2.3),
-                                     (0.2, 0.9, 1.05)])
+@pytest.mark.parametrize("moments", [(0.26, 0.55, 0.793662), (1.0, 1.9, 2.3), (0.2, 0.9, 1.05)])
 @pytest.mark.parametrize("sign", [-1.0, 1.0])
 def test_separatrix_expansion(moments, sign):
     """``a ln(1/d) + b`` matches the phase to O(d ln d), and exactly at 1e-300 (mpmath)."""
@@ -170,8 +177,11 @@ def test_separatrix_expansion(moments, sign):
             rate = mp.sqrt((i2 - i1) * (two_e * i3 - m_sq) / (i1 * i2 * i3))
             n, shift = -i3 * (m_sq - two_e * i1) / (i1 * (two_e * i3 - m_sq)), 0
         mom = mp.sqrt(m_sq)
-        exact = (mom * 4 * mp.ellipk(k2) / rate / i3
-                 + 4 * mom * (i3 - i1) * mp.ellippi(n, k2) / (i1 * i3 * rate) - shift)
+        exact = (
+            mom * 4 * mp.ellipk(k2) / rate / i3
+            + 4 * mom * (i3 - i1) * mp.ellippi(n, k2) / (i1 * i3 * rate)
+            - shift
+        )
     assert slope * math.log(1e300) + intercept == pytest.approx(float(exact), rel=1e-13)
 
 
@@ -181,9 +191,9 @@ def test_flatten_roots_matches_a_stable_lexsort():
     n, capacity = 3000, 12
     level = rng.integers(0, 9, (n, capacity))
     offset = rng.normal(size=(n, capacity))
-    offset[5, :4] = 0.5                       # ties
+    offset[5, :4] = 0.5  # ties
     found = rng.integers(0, capacity + 1, n)
-    found[7] = -1                             # an overflowed row is skipped
+    found[7] = -1  # an overflowed row is skipped
     body, rows_level, rows_offset = kernels.flatten_roots(level, offset, found)
     mask = np.arange(capacity)[None, :] < np.maximum(found, 0)[:, None]
     want_body, want_level, want_offset = np.nonzero(mask)[0], level[mask], offset[mask]

@@ -31,7 +31,7 @@ def paper_digits(value, expected):
     """Agreement to the digits the paper prints (half a unit in the last)."""
     text = f"{expected!r}"
     decimals = len(text.split(".")[1]) if "." in text else 0
-    return abs(value - expected) <= 0.5 * 10.0 ** -decimals
+    return abs(value - expected) <= 0.5 * 10.0**-decimals
 
 
 # --------------------------------------------------------------------------
@@ -44,14 +44,16 @@ def row():
 
 
 class TestPaperNumbers:
-
-    @pytest.mark.parametrize("column, expected", [
-        ("energy", 0.264805),          # Fig. 3 caption
-        ("momentum", 0.533252),
-        ("period", 23.8181),           # eqn:TK
-        ("dynamic_phase", 23.6555),    # 2ET/M
-        ("total_phase", 21.5303),      # eqn:GeometricPhase
-    ])
+    @pytest.mark.parametrize(
+        "column, expected",
+        [
+            ("energy", 0.264805),  # Fig. 3 caption
+            ("momentum", 0.533252),
+            ("period", 23.8181),  # eqn:TK
+            ("dynamic_phase", 23.6555),  # 2ET/M
+            ("total_phase", 21.5303),  # eqn:GeometricPhase
+        ],
+    )
     def test_t_handle_values(self, row, column, expected):
         assert paper_digits(row[column], expected), row[column]
 
@@ -94,14 +96,15 @@ def alphatheta(i1, i2, i3, theta, beta, lam_pi_has_beta):
     b = beta(i1, i2, i3)
     tan2 = mp.tan(theta) ** 2
     cot2 = 1 / tan2
-    if tan2 * b < 1:   # SAM: k^2 = beta tan^2 < 1
-        pre = 4 * mp.sqrt(b * i2 * (i3**2 + i1**2 * tan2)
-                          / (i1**2 * i3 * (i3 - i1) * (i2 - i1)))
+    if tan2 * b < 1:  # SAM: k^2 = beta tan^2 < 1
+        pre = 4 * mp.sqrt(b * i2 * (i3**2 + i1**2 * tan2) / (i1**2 * i3 * (i3 - i1) * (i2 - i1)))
         m = b * tan2
-        return pre * (i1 * mp.ellipk(m) + (i3 - i1) * mp.ellippi(-i3**2 * b / i1**2, m)) - 2 * mp.pi
+        return (
+            pre * (i1 * mp.ellipk(m) + (i3 - i1) * mp.ellippi(-(i3**2) * b / i1**2, m)) - 2 * mp.pi
+        )
     pre = 4 * mp.sqrt(i2 * (i1**2 + i3**2 * cot2) / (i1**2 * i3 * (i3 - i1) * (i2 - i1)))
     m = cot2 / b
-    n = -i3**2 * cot2 / i1**2 * (b if lam_pi_has_beta else 1)
+    n = -(i3**2) * cot2 / i1**2 * (b if lam_pi_has_beta else 1)
     return pre * (i1 * mp.ellipk(m) + (i3 - i1) * mp.ellippi(n, m))
 
 
@@ -112,9 +115,11 @@ class TestErrata:
             tc = orbits.critical_angle(body)
             w = np.array([math.sin(tc), 0.0, math.cos(tc)])
             two_e = np.dot(body.moments, w * w)
-            m_sq = np.dot(body.moments ** 2, w * w)
+            m_sq = np.dot(body.moments**2, w * w)
             assert abs(m_sq - two_e * i2) <= 8 * EPS * m_sq
-            assert tc == pytest.approx(math.atan(1 / math.sqrt(beta_corrected(i1, i2, i3))), rel=4 * EPS)
+            assert tc == pytest.approx(
+                math.atan(1 / math.sqrt(beta_corrected(i1, i2, i3))), rel=4 * EPS
+            )
 
     def test_printed_beta_contradicts_fig6(self):
         i1, i2, i3 = FIG6.moments
@@ -175,6 +180,7 @@ def _beyond_flat_edge(frame):
     def beyond(row):
         a, b, c = sorted(Fraction(v) for v in (row.m1, row.m2, row.m3))
         return c > a + b
+
     return frame.apply(beyond, axis=1).to_numpy(dtype=bool)
 
 
@@ -188,6 +194,7 @@ def reference():
     the unmoved doubles, are not references for it.
     """
     from orbits.atomic import csv_float_options
+
     table = pd.read_csv(REFERENCE, comment="#", **csv_float_options())
     beyond = _beyond_flat_edge(table)
     assert beyond.sum() == 217 and set(table.loc[beyond, "kind"]) == {"exactly_flat"}
@@ -197,8 +204,7 @@ def reference():
 def test_reference_covers_the_body_space(reference):
     assert len(reference) >= 10_000
     kinds = reference["kind"].value_counts()
-    for kind in ("interior", "prolate", "oblate", "flat", "exactly_flat",
-                 "sphere", "rod"):
+    for kind in ("interior", "prolate", "oblate", "flat", "exactly_flat", "sphere", "rod"):
         assert kinds.get(kind, 0) >= 500
     offsets = reference.loc[reference["mode"] == "dtheta", "dtheta"].abs()
     assert offsets.min() < 1e-299
@@ -208,11 +214,12 @@ def test_reference_covers_the_body_space(reference):
 
 def test_dtheta_path_relative_error_1e13_down_to_1e300(reference):
     rows = reference[reference["mode"] == "dtheta"]
-    got = orbits.phases(rows[["m1", "m2", "m3"]].to_numpy(),
-                        dtheta=rows["dtheta"].to_numpy(),
-                        phi=rows["phi"].to_numpy())
-    for column in ("total_phase", "period", "dynamic_phase", "energy",
-                   "momentum", "m"):
+    got = orbits.phases(
+        rows[["m1", "m2", "m3"]].to_numpy(),
+        dtheta=rows["dtheta"].to_numpy(),
+        phi=rows["phi"].to_numpy(),
+    )
+    for column in ("total_phase", "period", "dynamic_phase", "energy", "momentum", "m"):
         error = relative_error(got[column], rows[column])
         assert error.max() <= 1e-13, (column, error.max())
     assert (got["branch"].astype(str).to_numpy() == rows["branch"].to_numpy()).all()
@@ -228,8 +235,7 @@ def test_theta_path_within_its_conditioning(reference):
     """
     rows = reference[reference["mode"] == "theta"]
     moments = rows[["m1", "m2", "m3"]].to_numpy()
-    got = orbits.phases(moments, rows["theta"].to_numpy(),
-                        phi=rows["phi"].to_numpy())
+    got = orbits.phases(moments, rows["theta"].to_numpy(), phi=rows["phi"].to_numpy())
     expected = rows["total_phase"].to_numpy()
     error = np.abs(got["total_phase"].to_numpy() / expected - 1)
     theta_c = orbits.critical_angle(moments, rows["phi"].to_numpy())
@@ -305,8 +311,9 @@ def spins(draw, body, margin=0.02):
     return theta
 
 
-SETTINGS = settings(max_examples=150, deadline=None,
-                    suppress_health_check=[HealthCheck.filter_too_much])
+SETTINGS = settings(
+    max_examples=150, deadline=None, suppress_health_check=[HealthCheck.filter_too_much]
+)
 
 
 @SETTINGS
@@ -339,8 +346,7 @@ def point_on_same_polhode(moments, theta, fraction):
     w = np.array([math.sin(theta), 0.0, math.cos(theta)])
     two_e, m_sq = moments @ (w * w), (moments**2) @ (w * w)
     # largest |w2| on the polhode: where w1 = 0 (SAM) or w3 = 0 (LAM)
-    w2_max_sq = min((two_e * i3 - m_sq) / (i2 * (i3 - i2)),
-                    (m_sq - two_e * i1) / (i2 * (i2 - i1)))
+    w2_max_sq = min((two_e * i3 - m_sq) / (i2 * (i3 - i2)), (m_sq - two_e * i1) / (i2 * (i2 - i1)))
     w2_sq = fraction * w2_max_sq
     # i1 x + i3 z = 2E - i2 w2^2 ; i1^2 x + i3^2 z = M^2 - i2^2 w2^2
     rhs_e, rhs_m = two_e - i2 * w2_sq, m_sq - i2 * i2 * w2_sq
@@ -375,8 +381,10 @@ def test_limits_match_formula_near_the_ends(data):
     # the approach is quadratic in the distance from the axis
     near0 = [abs(orbits.total_phase(body, f * theta_c) / lim.theta_zero - 1) for f in (1e-3, 1e-4)]
     top = math.pi / 2 - theta_c
-    near1 = [abs(orbits.total_phase(body, math.pi / 2 - f * top) / lim.theta_half_pi - 1)
-             for f in (1e-3, 1e-4)]
+    near1 = [
+        abs(orbits.total_phase(body, math.pi / 2 - f * top) / lim.theta_half_pi - 1)
+        for f in (1e-3, 1e-4)
+    ]
     for coarse, fine in (near0, near1):
         assert coarse < 1e-4
         assert fine <= coarse / 50 + 1e-14
@@ -409,21 +417,24 @@ def test_critical_angle_with_phi():
     phi = 0.7
     tc = orbits.critical_angle(FIG6, phi)
     w = np.array([math.sin(tc) * math.cos(phi), math.sin(tc) * math.sin(phi), math.cos(tc)])
-    two_e, m_sq = FIG6.moments @ (w * w), (FIG6.moments ** 2) @ (w * w)
+    two_e, m_sq = FIG6.moments @ (w * w), (FIG6.moments**2) @ (w * w)
     assert abs(m_sq - two_e * i2) <= 8 * EPS * m_sq
     assert orbits.critical_angle(FIG6, math.pi / 2) == pytest.approx(math.pi / 2)
 
 
-@pytest.mark.parametrize("kwargs, error, message", [
-    (dict(theta=math.nan), AngleError, "finite"),
-    (dict(theta=math.inf), AngleError, "finite"),
-    (dict(dtheta=1.0), AngleError, r"outside \[0, pi/2\].*not folded"),
-    (dict(dtheta=-1.5), AngleError, r"outside \[0, pi/2\].*not folded"),
-    (dict(theta=0.3, dtheta=0.1), AngleError, "exactly one"),
-    (dict(), AngleError, "exactly one"),
-    (dict(dtheta=0.0), SeparatrixError, "separatrix"),
-    (dict(theta=0.5, phi=math.nan), AngleError, "phi must be finite"),
-])
+@pytest.mark.parametrize(
+    "kwargs, error, message",
+    [
+        (dict(theta=math.nan), AngleError, "finite"),
+        (dict(theta=math.inf), AngleError, "finite"),
+        (dict(dtheta=1.0), AngleError, r"outside \[0, pi/2\].*not folded"),
+        (dict(dtheta=-1.5), AngleError, r"outside \[0, pi/2\].*not folded"),
+        (dict(theta=0.3, dtheta=0.1), AngleError, "exactly one"),
+        (dict(), AngleError, "exactly one"),
+        (dict(dtheta=0.0), SeparatrixError, "separatrix"),
+        (dict(theta=0.5, phi=math.nan), AngleError, "phi must be finite"),
+    ],
+)
 def test_bad_angles(kwargs, error, message):
     with pytest.raises(error, match=message):
         orbits.total_phase(FIG6, **kwargs)
@@ -449,7 +460,7 @@ def test_bad_spin_vectors():
     with pytest.raises(AngleError, match="nonzero"):
         orbits.spin_phases(FIG6, [0.0, 0.0, 0.0])
     with pytest.raises(SeparatrixError):
-        orbits.spin_phases(FIG6, [0.0, 1.0, 0.0])   # steady spin about I2
+        orbits.spin_phases(FIG6, [0.0, 1.0, 0.0])  # steady spin about I2
     with pytest.raises(AngleError, match="finite"):
         orbits.spin_phases(FIG6, [math.nan, 0.0, 1.0])
 
@@ -471,6 +482,7 @@ FOLDS = [
 
 def test_fold_angle_keeps_the_domain_bit_for_bit():
     from orbits.phases import fold_angle
+
     inside = np.array([0.0, 1e-300, 0.3, 1.0, math.pi / 4, math.pi / 2])
     assert np.array_equal(fold_angle(inside), inside)
     assert np.array_equal(fold_angle(-inside), inside)
@@ -482,17 +494,29 @@ def test_fold_angle_keeps_the_domain_bit_for_bit():
         with pytest.raises(orbits.AngleError, match="too large to fold"):
             fold_angle(huge)
     assert fold_angle(1e6 + 0.25) == pytest.approx(
-        float(abs(mp.mpf(1e6 + 0.25) - mp.pi * mp.nint((1e6 + 0.25) / mp.pi))), abs=1e-9)
+        float(abs(mp.mpf(1e6 + 0.25) - mp.pi * mp.nint((1e6 + 0.25) / mp.pi))), abs=1e-9
+    )
 
 
 def test_fold_angle_is_correctly_rounded():
     """Against mpmath (60 digits): |x - k pi| with the nearest k, relative 2.3e-16
     (the result's rounding; a fold by the double pi would err by k ulp(pi))."""
     from orbits.phases import fold_angle
+
     rng = np.random.default_rng(5)
-    given = np.concatenate([rng.uniform(-20, 20, 400), rng.uniform(-2**21, 2**21, 400),
-                            [math.pi, -2 * math.pi, 3 * math.pi / 2, 6 * math.pi - 1e-4,
-                             np.nextafter(math.pi / 2, 4.0)]])
+    given = np.concatenate(
+        [
+            rng.uniform(-20, 20, 400),
+            rng.uniform(-(2**21), 2**21, 400),
+            [
+                math.pi,
+                -2 * math.pi,
+                3 * math.pi / 2,
+                6 * math.pi - 1e-4,
+                np.nextafter(math.pi / 2, 4.0),
+            ],
+        ]
+    )
     got = fold_angle(given)
     with mp.workdps(60):
         for x, y in zip(given, got):
@@ -504,6 +528,7 @@ def test_fold_angle_is_correctly_rounded():
 @pytest.mark.parametrize("given, folded", FOLDS)
 def test_any_theta_and_phi_fold_to_the_same_phase(given, folded):
     from orbits.phases import fold_angle
+
     assert fold_angle(given[0]) == pytest.approx(folded[0], abs=4 * EPS * 20)
     assert fold_angle(given[1]) == pytest.approx(folded[1], abs=4 * EPS * 20)
     row = orbits.phases(FIG6, given[0], given[1]).iloc[0]
@@ -516,9 +541,16 @@ def test_any_theta_and_phi_fold_to_the_same_phase(given, folded):
     # total phase from the Euler angle phi (Carlson's Pi, not cel)
     motion = orbits.Motion.from_spin(FIG6, given[0], phi=given[1])
     w = motion.omega0
-    assert np.allclose(w, [math.sin(given[0]) * math.cos(given[1]),
-                           math.sin(given[0]) * math.sin(given[1]), math.cos(given[0])],
-                       rtol=0, atol=1e-15)
+    assert np.allclose(
+        w,
+        [
+            math.sin(given[0]) * math.cos(given[1]),
+            math.sin(given[0]) * math.sin(given[1]),
+            math.cos(given[0]),
+        ],
+        rtol=0,
+        atol=1e-15,
+    )
     assert motion.total_phase() == pytest.approx(want.total_phase, rel=1e-12)
     assert motion.period == pytest.approx(want.period, rel=1e-12)
 
@@ -527,6 +559,7 @@ def test_folding_against_integration():
     """The spin at theta = pi - 0.9, phi = pi + 0.4 (all components flipped in
     sign or not) integrated with DOP853 turns the body by the folded phase."""
     from orbits.checks import rotation_by_integration
+
     check = rotation_by_integration(FIG6, math.pi - 0.9, phi=math.pi + 0.4)
     want = orbits.total_phase(FIG6, 0.9, phi=0.4)
     assert abs(check.angle - math.fmod(want, 2 * math.pi)) < 1e-9
@@ -544,7 +577,7 @@ def test_d_label_against_mpmath():
     i1, _, i3 = (mp.mpf(v) / norm for v in FIG6.moments)
     for t, row in zip(theta, table.itertuples()):
         s2, c2 = mp.sin(mp.mpf(t)) ** 2, mp.cos(mp.mpf(t)) ** 2
-        want = (i1 ** 2 * s2 + i3 ** 2 * c2) / (i1 * s2 + i3 * c2)
+        want = (i1**2 * s2 + i3**2 * c2) / (i1 * s2 + i3 * c2)
         assert abs(row.D / float(want) - 1) < 4 * EPS
         assert row.I1 <= row.D <= row.I3
         assert (row.D > row.I2) == (row.branch == "SAM")
@@ -569,19 +602,19 @@ def test_phone_energy_is_one_convention():
     motion = orbits.Motion.from_omega(phone, omega)
     i = phone.moments
     # the definitions, eqn:E and eqn:J, in plain NumPy
-    energy = 0.5 * np.sum(i * omega ** 2)
+    energy = 0.5 * np.sum(i * omega**2)
     momentum = math.sqrt(np.sum((i * omega) ** 2))
     for got in (row.energy, motion.energy):
         assert got == pytest.approx(energy, rel=1e-14)
     for got in (row.momentum, motion.momentum):
         assert got == pytest.approx(momentum, rel=1e-14)
     for got in (row.D, motion.D):
-        assert got == pytest.approx(momentum ** 2 / (2 * energy), rel=1e-14)
+        assert got == pytest.approx(momentum**2 / (2 * energy), rel=1e-14)
     assert row.period == pytest.approx(motion.period, rel=1e-13)
     norm, speed = float(np.linalg.norm(i)), float(np.linalg.norm(omega))
     theta = math.atan2(math.hypot(omega[0], omega[1]), omega[2])
     unit = orbits.phases(phone, theta, math.atan2(omega[1], omega[0])).iloc[0]
-    assert unit.energy * norm * speed ** 2 == pytest.approx(energy, rel=1e-13)
+    assert unit.energy * norm * speed**2 == pytest.approx(energy, rel=1e-13)
     assert unit.momentum * norm * speed == pytest.approx(momentum, rel=1e-13)
     assert unit.D * norm == pytest.approx(motion.D, rel=1e-13)
     assert unit.period / speed == pytest.approx(motion.period, rel=1e-13)

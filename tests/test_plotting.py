@@ -27,8 +27,7 @@ def test_closed_herpolhode_closes_and_is_labelled():
         assert ax.get_aspect() == 1.0
         assert "omega_x" in ax.get_xlabel() and "omega_y" in ax.get_ylabel()
         # the drawn points are the herpolhode
-        t, omega = orbits.herpolhode(FIG6, dtheta=row.dtheta, periods=row.q,
-                                     points=len(xy))
+        t, omega = orbits.herpolhode(FIG6, dtheta=row.dtheta, periods=row.q, points=len(xy))
         np.testing.assert_array_equal(xy, omega[:, :2])
 
 
@@ -89,8 +88,11 @@ def test_phase_curves_are_the_closed_form():
     theta, total = theta[keep], total[keep]
     table = orbits.phases(T_HANDLE, theta)
     np.testing.assert_array_equal(total, table["total_phase"])
-    np.testing.assert_allclose(lines["geometric"].get_ydata()[keep],
-                               lines["dynamic"].get_ydata()[keep] - total, atol=1e-12)
+    np.testing.assert_allclose(
+        lines["geometric"].get_ydata()[keep],
+        lines["dynamic"].get_ydata()[keep] - total,
+        atol=1e-12,
+    )
     np.testing.assert_array_equal(lines["period"].get_ydata()[keep], table["period"])
     assert lines["period_axes"].get_ylabel().startswith("period")
     assert orbits.critical_angle(T_HANDLE) not in theta
@@ -104,12 +106,14 @@ def test_total_phase_plot_marks_the_catalog_roots():
     np.testing.assert_array_equal(marked[:, 0], table["theta"])
     np.testing.assert_allclose(marked[:, 1], 2 * np.pi * table["n"], rtol=1e-14)
     assert [line.get_ydata()[0] for line in drawn["levels"]] == pytest.approx(
-        2 * np.pi * np.arange(1, 9))
+        2 * np.pi * np.arange(1, 9)
+    )
     # the levels are named on the right-hand axis, outside the data
     named = drawn["level_axis"]
     np.testing.assert_allclose(named.get_yticks(), 2 * np.pi * np.arange(1, 9), rtol=1e-15)
     assert [t.get_text() for t in named.get_yticklabels()] == [
-        rf"$2\pi\cdot{n}$" for n in range(1, 9)]
+        rf"$2\pi\cdot{n}$" for n in range(1, 9)
+    ]
     assert not [t for t in ax.texts if "2\\pi" in t.get_text()]
 
 
@@ -131,8 +135,9 @@ def test_binet_polhode_lies_on_both_surfaces():
     x, y, z = drawn["polhode"].get_data_3d()
     unit = T_HANDLE.normalized_moments
     np.testing.assert_allclose(np.sqrt(x**2 + y**2 + z**2), drawn["momentum"], rtol=1e-13)
-    np.testing.assert_allclose(x**2 / unit[0] + y**2 / unit[1] + z**2 / unit[2],
-                               2 * drawn["energy"], rtol=1e-13)
+    np.testing.assert_allclose(
+        x**2 / unit[0] + y**2 / unit[1] + z**2 / unit[2], 2 * drawn["energy"], rtol=1e-13
+    )
     assert drawn["energy"] == pytest.approx(0.264805, abs=5e-7)
 
 
@@ -141,7 +146,7 @@ def test_foliation_colours_are_the_phase():
     drawn = plotting.plot_polhode_foliation(ax, T_HANDLE, count=12)
     cmap = mpl.colormaps["twilight"]
     unit = T_HANDLE.normalized_moments
-    semi2 = unit                       # semi-axes^2 of the Binet ellipsoid at E = 1/2
+    semi2 = unit  # semi-axes^2 of the Binet ellipsoid at E = 1/2
     for line, phase in drawn["polhodes"]:
         assert line.get_color() == pytest.approx(cmap(phase / (2 * np.pi)))
         x, y, z = (np.asarray(v, dtype=float) for v in line.get_data_3d())
@@ -149,8 +154,7 @@ def test_foliation_colours_are_the_phase():
         assert shown.sum() >= 2
         points = np.stack([x, y, z], axis=-1)
         # all polhodes on the one Binet ellipsoid of energy 1/2
-        np.testing.assert_allclose(np.sum(points[shown] ** 2 / unit, axis=1), 1.0,
-                                   rtol=1e-12)
+        np.testing.assert_allclose(np.sum(points[shown] ** 2 / unit, axis=1), 1.0, rtol=1e-12)
         # depth cue: every point of a full-strength piece faces the viewer (outward
         # normal M / I towards it) or joins one that does; faint pieces face away
         facing = (points / semi2) @ drawn["view"]
@@ -176,21 +180,23 @@ def test_t_handle_drawing():
         a, b, c = hi - lo
         tensor += volume / 12 * np.diag([b * b + c * c, a * a + c * c, a * a + b * b])
         tensor += volume * (centre @ centre * np.eye(3) - np.outer(centre, centre))
-    np.testing.assert_allclose(np.diag(tensor) / volumes.sum(),
-                               np.sort(T_HANDLE.moments)[[0, 1, 2]], rtol=1e-13)
+    np.testing.assert_allclose(
+        np.diag(tensor) / volumes.sum(), np.sort(T_HANDLE.moments)[[0, 1, 2]], rtol=1e-13
+    )
 
 
 def test_plots_take_a_motion_in_real_units():
     """A phone (kg, m) spun at 120 rpm about its short axis with a wobble:
     the drawn curves are its own motion in s, rad/s and J s."""
     phone = Body.box(0.071, 0.147, 0.0078, mass=0.17)
-    omega = np.array([0.3, 0.2, 120 * 2 * np.pi / 60])        # rad/s, principal frame
+    omega = np.array([0.3, 0.2, 120 * 2 * np.pi / 60])  # rad/s, principal frame
     motion = orbits.Motion.from_omega(phone, omega)
     ax = new_figure().add_subplot()
     line = plotting.plot_herpolhode(ax, motion, points=801)
     xy = line.get_xydata()
     np.testing.assert_array_equal(
-        xy, motion.omega_space(np.linspace(0.0, motion.period, 801))[:, :2])
+        xy, motion.omega_space(np.linspace(0.0, motion.period, 801))[:, :2]
+    )
     assert "rad/s" in ax.get_xlabel()
     ax = new_figure().add_subplot()
     drawn = plotting.plot_omega_components(ax, motion)
@@ -219,8 +225,13 @@ def test_herpolhode_radii_bound_the_curve_and_are_reached():
     at a smooth extremum, so 1e-11 leaves 100x margin.
     """
     from scipy.optimize import minimize_scalar
-    for body, kwargs in ((FIG6, dict(theta=0.6)), (FIG6, dict(theta=1.3)),
-                         (T_HANDLE, SPIN), (FIG6, dict(dtheta=-3e-4))):
+
+    for body, kwargs in (
+        (FIG6, dict(theta=0.6)),
+        (FIG6, dict(theta=1.3)),
+        (T_HANDLE, SPIN),
+        (FIG6, dict(dtheta=-3e-4)),
+    ):
         r_min, r_max = plotting.herpolhode_radii(body, **kwargs)
         motion = orbits.Motion.from_spin(body, **kwargs)
         t = np.linspace(0.0, motion.period, 20001)
@@ -233,15 +244,17 @@ def test_herpolhode_radii_bound_the_curve_and_are_reached():
             def f(s, sign=sign):
                 return sign * np.hypot(*motion.omega_space(np.array([s]))[0, :2])
 
-            found = minimize_scalar(f, bounds=(t[k] - step, t[k] + step), method="bounded",
-                                    options={"xatol": 1e-13})
+            found = minimize_scalar(
+                f, bounds=(t[k] - step, t[k] + step), method="bounded", options={"xatol": 1e-13}
+            )
             assert sign * found.fun == pytest.approx(target, abs=1e-11)
 
 
 def test_theta_text_switches_to_dtheta_near_the_separatrix():
     theta_c = orbits.critical_angle(FIG6)
     assert plotting.theta_text(theta_c - 8.371e-7, -8.371e-7) == (
-        r"$\theta-\theta_c$ = -8.371e-07")
+        r"$\theta-\theta_c$ = -8.371e-07"
+    )
     assert plotting.theta_text(0.95625, 0.95625 - theta_c) == r"$\theta$ = 0.95625"
 
 
@@ -249,6 +262,7 @@ def test_closed_herpolhode_marks():
     """Start, arrow along the motion, L axis at the origin, dashed r_min/r_max circles;
     odd n drawn over T/2 (closes_after), in which the curve already closes."""
     from orbits.figures import draw_closed_herpolhode
+
     table = orbits.closed_orbits(FIG6, n_max=4)
     for row in table.itertuples():
         ax = new_figure().add_subplot()

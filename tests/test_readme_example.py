@@ -17,8 +17,9 @@ README = Path(__file__).resolve().parent.parent / "README.md"
 
 def example_blocks():
     text = README.read_text(encoding="utf-8")
-    section = re.search(r"<!-- example:phone:start -->(.*?)<!-- example:phone:end -->",
-                        text, re.DOTALL).group(1)
+    section = re.search(
+        r"<!-- example:phone:start -->(.*?)<!-- example:phone:end -->", text, re.DOTALL
+    ).group(1)
     python = re.search(r"```python\n(.*?)```", section, re.DOTALL).group(1)
     bash = re.search(r"```bash\n(.*?)```", section, re.DOTALL).group(1).strip()
     return python, bash
@@ -39,7 +40,7 @@ def test_python_example_prints_what_the_comments_say(ran):
     assert lines[0].startswith("LAM 2.337")
     assert lines[1].startswith("0.02424") and " 0.003857" in lines[1]
     motion, phone = namespace["motion"], namespace["phone"]
-    assert motion.D < phone.moments[1]                  # LAM: D < I2
+    assert motion.D < phone.moments[1]  # LAM: D < I2
     assert "precession=0.5165" in lines[3] and "ratio=4.525" in lines[3]
 
 
@@ -50,17 +51,28 @@ def test_example_period_against_integration(ran):
     i1, i2, i3 = motion.body.moments
 
     def euler(_, w):
-        return [(i2 - i3) * w[1] * w[2] / i1, (i3 - i1) * w[2] * w[0] / i2,
-                (i1 - i2) * w[0] * w[1] / i3]
+        return [
+            (i2 - i3) * w[1] * w[2] / i1,
+            (i3 - i1) * w[2] * w[0] / i2,
+            (i1 - i2) * w[0] * w[1] / i3,
+        ]
 
-    sol = solve_ivp(euler, (0.0, motion.period), motion.omega0, method="DOP853",
-                    rtol=1e-13, atol=1e-13, dense_output=True)
+    sol = solve_ivp(
+        euler,
+        (0.0, motion.period),
+        motion.omega0,
+        method="DOP853",
+        rtol=1e-13,
+        atol=1e-13,
+        dense_output=True,
+    )
     scale = np.linalg.norm(motion.omega0)
     assert np.abs(sol.y[:, -1] - motion.omega0).max() < 1e-8 * scale
     assert np.abs(sol.sol(0.5 * motion.period) - motion.omega0).max() > 1e-2 * scale
     # energy in J from its definition
     assert motion.energy == pytest.approx(
-        0.5 * np.dot(motion.body.moments, motion.omega0 ** 2), rel=1e-14)
+        0.5 * np.dot(motion.body.moments, motion.omega0**2), rel=1e-14
+    )
 
 
 def test_command_line_example(ran, capsys):

@@ -22,8 +22,13 @@ def test_box_matches_the_textbook_formula():
     # a phone: 146 x 71 x 8 mm, 170 g; I = m (b^2 + c^2)/12 and cyclically
     body = Body.box(0.146, 0.071, 0.008, 0.170)
     m = 0.170
-    expected = sorted([m * (0.071**2 + 0.008**2) / 12, m * (0.146**2 + 0.008**2) / 12,
-                       m * (0.146**2 + 0.071**2) / 12])
+    expected = sorted(
+        [
+            m * (0.071**2 + 0.008**2) / 12,
+            m * (0.146**2 + 0.008**2) / 12,
+            m * (0.146**2 + 0.071**2) / 12,
+        ]
+    )
     np.testing.assert_allclose(body.moments, expected, rtol=1e-15)
 
 
@@ -31,9 +36,17 @@ def test_box_against_numerical_volume_integral():
     a, b, c, m = 3.0, 2.0, 0.5, 7.0
     density = m / (a * b * c)
     # I_z = rho * int (x^2 + y^2) dV: an independent tplquad
-    i_z, _ = integrate.tplquad(lambda z, y, x: density * (x * x + y * y),
-                               -a / 2, a / 2, -b / 2, b / 2, -c / 2, c / 2,
-                               epsabs=1e-13, epsrel=1e-13)
+    i_z, _ = integrate.tplquad(
+        lambda z, y, x: density * (x * x + y * y),
+        -a / 2,
+        a / 2,
+        -b / 2,
+        b / 2,
+        -c / 2,
+        c / 2,
+        epsabs=1e-13,
+        epsrel=1e-13,
+    )
     assert Body.box(a, b, c, m).moments[2] == pytest.approx(i_z, rel=1e-11)
 
 
@@ -43,8 +56,9 @@ def test_box_with_a_square_section_is_a_symmetric_top(args):
         Body.box(*args)
 
 
-@pytest.mark.parametrize("args", [(0, 1, 2, 1), (1, 2, 3, -1), (1, np.nan, 2, 1),
-                                  (1, 2, math.inf, 1)])
+@pytest.mark.parametrize(
+    "args", [(0, 1, 2, 1), (1, 2, 3, -1), (1, np.nan, 2, 1), (1, 2, math.inf, 1)]
+)
 def test_box_rejects_bad_lengths_and_masses(args):
     with pytest.raises(NonPhysicalBodyError):
         Body.box(*args)
@@ -68,16 +82,28 @@ def test_elliptic_cylinder_against_numerical_integration():
         # over the elliptic section (x = a s cos t, y = b s sin t, jacobian a b s)
         # and the length
         value, _ = integrate.tplquad(
-            lambda z, s, t: density * f(a * s * math.cos(t), b * s * math.sin(t), z)
-            * a * b * s, 0.0, 2 * math.pi, 0.0, 1.0, -length / 2, length / 2,
-            epsabs=1e-13, epsrel=1e-12)
+            lambda z, s, t: density * f(a * s * math.cos(t), b * s * math.sin(t), z) * a * b * s,
+            0.0,
+            2 * math.pi,
+            0.0,
+            1.0,
+            -length / 2,
+            length / 2,
+            epsabs=1e-13,
+            epsrel=1e-12,
+        )
         return value
 
-    expected = sorted([integral(lambda x, y, z: y * y + z * z),
-                       integral(lambda x, y, z: x * x + z * z),
-                       integral(lambda x, y, z: x * x + y * y)])
-    np.testing.assert_allclose(Body.cylinder(a, length, m, radius_y=b).moments,
-                               expected, rtol=1e-10)
+    expected = sorted(
+        [
+            integral(lambda x, y, z: y * y + z * z),
+            integral(lambda x, y, z: x * x + z * z),
+            integral(lambda x, y, z: x * x + y * y),
+        ]
+    )
+    np.testing.assert_allclose(
+        Body.cylinder(a, length, m, radius_y=b).moments, expected, rtol=1e-10
+    )
 
 
 # ---------------------------------------------------------------- point masses
@@ -86,8 +112,9 @@ def test_point_masses_on_a_rectangle():
     a, b, m = 3.0, 1.0, 0.25
     corners = np.array([[sx * a / 2, sy * b / 2, 0.0] for sx in (-1, 1) for sy in (-1, 1)])
     body = Body.from_point_masses([m] * 4, corners + [10.0, -4.0, 2.0])
-    np.testing.assert_allclose(body.moments, [m * b * b, m * a * a, m * (a * a + b * b)],
-                               rtol=1e-13)
+    np.testing.assert_allclose(
+        body.moments, [m * b * b, m * a * a, m * (a * a + b * b)], rtol=1e-13
+    )
     assert body.is_flat
 
 
@@ -97,11 +124,11 @@ def test_point_masses_are_taken_about_the_centre_of_mass_in_any_frame():
     points = rng.normal(size=(7, 3))
     body = Body.from_point_masses(masses, points)
     # an independent route: parallel-axis theorem from the origin
-    tensor_origin = sum(m * (p @ p * np.eye(3) - np.outer(p, p))
-                        for m, p in zip(masses, points))
+    tensor_origin = sum(m * (p @ p * np.eye(3) - np.outer(p, p)) for m, p in zip(masses, points))
     centre = masses @ points / masses.sum()
-    tensor_cm = tensor_origin - masses.sum() * (centre @ centre * np.eye(3)
-                                                - np.outer(centre, centre))
+    tensor_cm = tensor_origin - masses.sum() * (
+        centre @ centre * np.eye(3) - np.outer(centre, centre)
+    )
     np.testing.assert_allclose(body.moments, np.linalg.eigvalsh(tensor_cm), rtol=1e-12)
     # moved and turned rigidly: same moments
     turn, _ = np.linalg.qr(rng.normal(size=(3, 3)))
@@ -112,12 +139,15 @@ def test_point_masses_are_taken_about_the_centre_of_mass_in_any_frame():
     np.testing.assert_allclose(rotated, np.diag(body.moments), atol=1e-12 * body.moments[2])
 
 
-@pytest.mark.parametrize("masses, points", [
-    ([1.0, 1.0], [[0, 0, 0], [1, 0, 0]]),                 # collinear
-    ([1.0, -1.0, 1.0], [[0, 0, 0], [1, 0, 0], [0, 1, 0]]),  # negative mass
-    ([1.0, 1.0], [[0, 0, 0]]),                            # shapes
-    ([1.0, np.nan, 1.0], [[0, 0, 0], [1, 0, 0], [0, 1, 0]]),
-])
+@pytest.mark.parametrize(
+    "masses, points",
+    [
+        ([1.0, 1.0], [[0, 0, 0], [1, 0, 0]]),  # collinear
+        ([1.0, -1.0, 1.0], [[0, 0, 0], [1, 0, 0], [0, 1, 0]]),  # negative mass
+        ([1.0, 1.0], [[0, 0, 0]]),  # shapes
+        ([1.0, np.nan, 1.0], [[0, 0, 0], [1, 0, 0], [0, 1, 0]]),
+    ],
+)
 def test_point_masses_rejected(masses, points):
     with pytest.raises(NonPhysicalBodyError):
         Body.from_point_masses(masses, points)
@@ -131,15 +161,17 @@ def test_box_mesh_matches_body_box(tmp_path):
     a, b, c, density = 0.4, 0.25, 0.1, 2700.0
     mesh = trimesh.creation.box(extents=(a, b, c))
     # turned and moved: the constructor works about the centre of mass
-    mesh.apply_transform(trimesh.transformations.random_rotation_matrix(
-        np.random.default_rng(3).uniform(size=3)))
+    mesh.apply_transform(
+        trimesh.transformations.random_rotation_matrix(np.random.default_rng(3).uniform(size=3))
+    )
     mesh.apply_translation([1.0, 2.0, 3.0])
     path = tmp_path / "box.stl"
     mesh.export(path)
     body = Body.from_mesh(path, density=density)
     # STL stores float32 vertices: the reference is good to ~1e-7
-    np.testing.assert_allclose(body.moments, Body.box(a, b, c, density * a * b * c).moments,
-                               rtol=2e-6)
+    np.testing.assert_allclose(
+        body.moments, Body.box(a, b, c, density * a * b * c).moments, rtol=2e-6
+    )
 
 
 def test_ellipsoid_mesh_converges_to_body_from_semi_axes(tmp_path):
@@ -203,9 +235,10 @@ def test_units_agree():
     cm = [v * 1e6 / (100.0 * codata.c) for v in FORMALDEHYDE_MHZ]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", InertialDefectWarning)
-        bodies = [Body.from_rotational_constants(*values, unit=unit, defect="flatten")
-                  for values, unit in ((FORMALDEHYDE_MHZ, "MHz"), (ghz, "GHz"),
-                                       (cm, "cm-1"))]
+        bodies = [
+            Body.from_rotational_constants(*values, unit=unit, defect="flatten")
+            for values, unit in ((FORMALDEHYDE_MHZ, "MHz"), (ghz, "GHz"), (cm, "cm-1"))
+        ]
     for body in bodies[1:]:
         np.testing.assert_allclose(body.moments, bodies[0].moments, rtol=1e-14)
 
@@ -215,8 +248,9 @@ def test_water_defect_is_an_error_that_names_the_option():
         Body.from_rotational_constants(*WATER_MHZ, unit="MHz")
     message = str(caught.value)
     i_a, i_b, i_c = (GORDY_COOK / v for v in WATER_MHZ)
-    defect = i_c - i_a - i_b                     # 0.0515 u A^2, 2.8 % of I_C
+    defect = i_c - i_a - i_b  # 0.0515 u A^2, 2.8 % of I_C
     import re
+
     stated = float(re.search(r"Delta = I_C - I_A - I_B = ([0-9.]+) u A\^2", message).group(1))
     assert stated == pytest.approx(defect, rel=1e-5)
     assert "defect='flatten'" in message and "2.83" in message

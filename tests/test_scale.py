@@ -43,8 +43,11 @@ def mp_total_phase(moments, theta, dps=50):
             shift = 0
         momentum = mp.sqrt(m_sq)
         period = 4 * mp.ellipk(k2) / rate
-        total = (momentum * period / i3
-                 + 4 * momentum * (i3 - i1) * mp.ellippi(n, k2) / (i1 * i3 * rate) - shift)
+        total = (
+            momentum * period / i3
+            + 4 * momentum * (i3 - i1) * mp.ellippi(n, k2) / (i1 * i3 * rate)
+            - shift
+        )
         return float(total)
 
 
@@ -62,10 +65,38 @@ def test_fig6_at_any_scale_matches_mpmath(factor):
 def test_cli_catalog_at_1e150_is_the_unscaled_catalog(tmp_path):
     """Was an empty catalog with exit code 0."""
     small, large = tmp_path / "small.csv", tmp_path / "large.csv"
-    assert main(["catalog", "--moments", "0.26", "0.55", "0.793662", "--n-max", "5",
-                 "--out", str(small)]) == 0
-    assert main(["catalog", "--moments", "0.26e150", "0.55e150", "0.793662e150",
-                 "--n-max", "5", "--out", str(large)]) == 0
+    assert (
+        main(
+            [
+                "catalog",
+                "--moments",
+                "0.26",
+                "0.55",
+                "0.793662",
+                "--n-max",
+                "5",
+                "--out",
+                str(small),
+            ]
+        )
+        == 0
+    )
+    assert (
+        main(
+            [
+                "catalog",
+                "--moments",
+                "0.26e150",
+                "0.55e150",
+                "0.793662e150",
+                "--n-max",
+                "5",
+                "--out",
+                str(large),
+            ]
+        )
+        == 0
+    )
     a, b = orbits.read_catalog(small), orbits.read_catalog(large)
     assert len(a) == 8
     columns = [c for c in orbits.CATALOG_COLUMNS if c != "body"]
@@ -76,9 +107,16 @@ def test_cli_catalog_at_1e150_is_the_unscaled_catalog(tmp_path):
 
 
 # ------------------------------------------------------- powers of two: exact
-bodies = st.sampled_from([FIG6, T_HANDLE, np.array([1.0, 1.0 + 2**-40, 1.0 + 2**-39]),
-                          np.array([0.1, 0.2, 0.3]), np.array([2.0**-50, 1.0, 1.0 + 2**-52])]
-                         + [region_sample(40)[k] for k in range(0, 40, 4)])
+bodies = st.sampled_from(
+    [
+        FIG6,
+        T_HANDLE,
+        np.array([1.0, 1.0 + 2**-40, 1.0 + 2**-39]),
+        np.array([0.1, 0.2, 0.3]),
+        np.array([2.0**-50, 1.0, 1.0 + 2**-52]),
+    ]
+    + [region_sample(40)[k] for k in range(0, 40, 4)]
+)
 exponents = st.integers(-990, 990)
 
 
@@ -88,16 +126,39 @@ def test_power_of_two_scale_is_bit_identical(body, k):
     scaled = np.ldexp(body, k)
     theta_c = orbits.critical_angle(body)
     assert orbits.critical_angle(scaled) == theta_c
-    offsets = np.array([-theta_c, -0.3 * theta_c, -1e-9, -1e-300, 1e-300, 1e-7,
-                        0.5 * (math.pi / 2 - theta_c), math.pi / 2 - theta_c])
+    offsets = np.array(
+        [
+            -theta_c,
+            -0.3 * theta_c,
+            -1e-9,
+            -1e-300,
+            1e-300,
+            1e-7,
+            0.5 * (math.pi / 2 - theta_c),
+            math.pi / 2 - theta_c,
+        ]
+    )
     a = orbits.phases(body, dtheta=offsets)
     b = orbits.phases(scaled, dtheta=offsets)
-    for column in ("theta", "theta_crit", "energy", "momentum", "m", "period",
-                   "dynamic_phase", "total_phase", "geometric_phase", "I1", "I2", "I3"):
+    for column in (
+        "theta",
+        "theta_crit",
+        "energy",
+        "momentum",
+        "m",
+        "period",
+        "dynamic_phase",
+        "total_phase",
+        "geometric_phase",
+        "I1",
+        "I2",
+        "I3",
+    ):
         assert np.array_equal(a[column].to_numpy(), b[column].to_numpy()), column
     assert np.all(np.isfinite(a[["total_phase", "period"]].to_numpy()))
-    np.testing.assert_array_equal(orbits.total_phase(scaled, [0.1, 1.2]),
-                                  orbits.total_phase(body, [0.1, 1.2]))
+    np.testing.assert_array_equal(
+        orbits.total_phase(scaled, [0.1, 1.2]), orbits.total_phase(body, [0.1, 1.2])
+    )
     # the physical motion: E and M scale with the moments, T not at all
     m0, m1 = (orbits.Motion.from_spin(b_, dtheta=-0.3 * theta_c) for b_ in (body, scaled))
     assert m1.energy == math.ldexp(m0.energy, k)
@@ -126,8 +187,9 @@ def test_survey_chunk_is_scale_free():
 
 # ----------------------------------------------------------- any other factor
 @settings(max_examples=80, deadline=None)
-@given(index=st.integers(0, 199), exponent=st.floats(-300.0, 300.0),
-       fraction=st.floats(1e-3, 0.999))
+@given(
+    index=st.integers(0, 199), exponent=st.floats(-300.0, 300.0), fraction=st.floats(1e-3, 0.999)
+)
 def test_arbitrary_factor_within_the_conditioning(index, exponent, fraction):
     """A factor f in [1e-300, 1e300] rounds each moment by <= eps/2.
 
@@ -136,7 +198,7 @@ def test_arbitrary_factor_within_the_conditioning(index, exponent, fraction):
     (measured worst: 2.1 eps I3 / min gap over 1000 bodies of the region).
     """
     body = region_sample(200)[index]
-    factor = 10.0 ** exponent
+    factor = 10.0**exponent
     theta_c = orbits.critical_angle(body)
     offsets = np.array([-fraction * theta_c, fraction * (math.pi / 2 - theta_c)])
     offsets = offsets[np.abs(offsets) >= 1e-6]
@@ -158,4 +220,4 @@ def test_spin_magnitude_is_scale_free():
         assert row["momentum"] == math.ldexp(base["momentum"], k)
         assert row["period"] == math.ldexp(base["period"], -k)
     with pytest.raises(orbits.InputError, match="energy"):
-        orbits.spin_phases(body, [1e-200] * 3)       # E ~ 1e-400: not a double
+        orbits.spin_phases(body, [1e-200] * 3)  # E ~ 1e-400: not a double

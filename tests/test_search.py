@@ -23,7 +23,7 @@ def test_fig6_roots_of_the_paper():
     paper = [0.9562, 1.004, 1.011, 1.012, 1.014, 1.021, 1.061, 1.2742]
     for got, printed in zip(table["theta"], paper):
         decimals = len(repr(printed).split(".")[1])
-        assert abs(got - printed) <= 0.5 * 10.0 ** -decimals
+        assert abs(got - printed) <= 0.5 * 10.0**-decimals
     # the critical angle sits between the two n = 5 orbits
     assert table["theta"][3] < orbits.critical_angle(FIG6) < table["theta"][4]
     # "each n is about 6x closer than the last"
@@ -40,12 +40,14 @@ def test_every_root_meets_its_level_and_n_max_300_works():
     assert np.all(np.abs(again - target) <= 1e-10 * target)
     assert np.all(np.abs(table["residual"]) <= 1e-10 * target)
     # every n from the branch minimum up to 300, once on each branch
-    for branch, limit in (("SAM", orbits.phase_limits(FIG6).theta_zero),
-                          ("LAM", orbits.phase_limits(FIG6).theta_half_pi)):
+    for branch, limit in (
+        ("SAM", orbits.phase_limits(FIG6).theta_zero),
+        ("LAM", orbits.phase_limits(FIG6).theta_half_pi),
+    ):
         found = sorted(table.loc[table.branch == branch, "n"])
         assert found == list(range(math.floor(limit / (2 * np.pi)) + 1, 301))
     assert table["dtheta"].abs().min() < 1e-200
-    assert (np.diff(table["dtheta"]) > 0).all()    # sorted by theta
+    assert (np.diff(table["dtheta"]) > 0).all()  # sorted by theta
     # full relative precision near the separatrix: the roots are distinct
     assert table["dtheta"].nunique() == len(table)
 
@@ -67,7 +69,7 @@ def test_rational_levels():
     p, q, values = phase_levels(3, 4)
     fractions = list(zip(p, q))
     assert (1, 1) in fractions and (3, 4) in fractions and (5, 2) in fractions
-    assert (2, 4) not in fractions and (2, 2) not in fractions   # lowest terms
+    assert (2, 4) not in fractions and (2, 2) not in fractions  # lowest terms
     assert np.all(np.diff(values) > 0)
     assert np.all(p <= 3 * q)
     assert all(math.gcd(int(a), int(b)) == 1 for a, b in fractions)
@@ -96,22 +98,40 @@ def test_search_is_complete_on_non_monotone_profiles(seed):
     """
     rng = np.random.default_rng(seed)
     width = rng.uniform(0.3, 1.4)
-    params = np.array([rng.uniform(0.5, 2.0), rng.uniform(3, 8), rng.uniform(0.5, 3.0),
-                       rng.uniform(2.0, 12.0), rng.uniform(0.0, 3.0),
-                       rng.uniform(0.005, 0.05), width])
+    params = np.array(
+        [
+            rng.uniform(0.5, 2.0),
+            rng.uniform(3, 8),
+            rng.uniform(0.5, 3.0),
+            rng.uniform(2.0, 12.0),
+            rng.uniform(0.0, 3.0),
+            rng.uniform(0.005, 0.05),
+            width,
+        ]
+    )
     levels = np.sort(rng.uniform(2.0, 25.0, 40))
     root_level = np.empty(4000, dtype=np.int64)
     root_offset = np.empty(4000)
     info = np.empty(kernels.BRANCH_INFO_SIZE)
-    count = kernels.search_branch(kernels.KIND_SYNTHETIC, params, width, levels,
-                                  root_level, root_offset, 0, info)
-    d = np.concatenate([np.geomspace(1e-300, 1e-3 * width, 100_000),
-                        np.linspace(1e-3 * width, width, 2_000_001)[1:-1]])
+    count = kernels.search_branch(
+        kernels.KIND_SYNTHETIC, params, width, levels, root_level, root_offset, 0, info
+    )
+    d = np.concatenate(
+        [
+            np.geomspace(1e-300, 1e-3 * width, 100_000),
+            np.linspace(1e-3 * width, width, 2_000_001)[1:-1],
+        ]
+    )
     a, b, c, k, depth, spread, w = params
-    f = (a * np.log(w / d) + b + c * np.sin(k * np.pi * d / w)
-         - depth * np.exp(-((w - d) / spread) ** 2))
-    expected = sum(int(np.count_nonzero((f[:-1] - level) * (f[1:] - level) < 0))
-                   for level in levels)
+    f = (
+        a * np.log(w / d)
+        + b
+        + c * np.sin(k * np.pi * d / w)
+        - depth * np.exp(-(((w - d) / spread) ** 2))
+    )
+    expected = sum(
+        int(np.count_nonzero((f[:-1] - level) * (f[1:] - level) < 0)) for level in levels
+    )
     assert count == expected
     for j, offset in zip(root_level[:count], root_offset[:count]):
         assert kernels.synthetic_profile(offset, params) == pytest.approx(levels[j], abs=1e-9)
@@ -121,21 +141,21 @@ def test_search_is_complete_on_non_monotone_profiles(seed):
 
 
 def test_unrepresentable_roots_are_reported():
-    body = Body((0.05, 1.0, 1.049))      # ~23x closer per n: n = 300 is past 1e-308
+    body = Body((0.05, 1.0, 1.049))  # ~23x closer per n: n = 300 is past 1e-308
     with pytest.warns(UnresolvedOrbitsWarning, match="2.2e-308"):
         table = closed_orbits(body, n_max=300)
     assert table.attrs["unresolved"] > 0
     assert table["dtheta"].abs().min() >= kernels.SMALLEST_OFFSET
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        closed_orbits(FIG6, n_max=300)     # the paper's body: all representable
+        closed_orbits(FIG6, n_max=300)  # the paper's body: all representable
 
 
 def test_minimum_phase_at_the_ends():
     value, where = minimum_phase(FIG6)
     limits = orbits.phase_limits(FIG6)
     assert value == pytest.approx(min(limits), rel=1e-12)
-    assert where == pytest.approx(-orbits.critical_angle(FIG6))    # theta = 0
+    assert where == pytest.approx(-orbits.critical_angle(FIG6))  # theta = 0
 
 
 def test_body_with_no_two_pi_orbit():
@@ -145,8 +165,9 @@ def test_body_with_no_two_pi_orbit():
     assert list(table.columns) == list(orbits.CATALOG_COLUMNS)
 
 
-@pytest.mark.parametrize("kwargs", [dict(n_max=0), dict(n_max=2.5), dict(n_max=3, q_max=0),
-                                    dict(n_max=True)])
+@pytest.mark.parametrize(
+    "kwargs", [dict(n_max=0), dict(n_max=2.5), dict(n_max=3, q_max=0), dict(n_max=True)]
+)
 def test_bad_counts(kwargs):
     with pytest.raises(InputError, match="integer >= 1"):
         closed_orbits(FIG6, **kwargs)
@@ -165,12 +186,10 @@ def test_catalog_rows_carry_d():
     orbit approaches the separatrix."""
     table = closed_orbits(FIG6, n_max=12, q_max=2)
     d = table["D"].to_numpy()
-    np.testing.assert_allclose(d, table["momentum"] ** 2 / (2 * table["energy"]),
-                               rtol=4e-16 * 8)
+    np.testing.assert_allclose(d, table["momentum"] ** 2 / (2 * table["energy"]), rtol=4e-16 * 8)
     assert np.all((table["I1"] < d) & (d < table["I3"]))
     assert np.array_equal(d > table["I2"], table["branch"] == "SAM")
     # phi = 0: D = (I1^2 sin^2 + I3^2 cos^2)/(I1 sin^2 + I3 cos^2), independently
     s2, c2 = np.sin(table["theta"]) ** 2, np.cos(table["theta"]) ** 2
     i1, i3 = table["I1"], table["I3"]
-    np.testing.assert_allclose(d, (i1**2 * s2 + i3**2 * c2) / (i1 * s2 + i3 * c2),
-                               rtol=1e-14)
+    np.testing.assert_allclose(d, (i1**2 * s2 + i3**2 * c2) / (i1 * s2 + i3 * c2), rtol=1e-14)

@@ -28,6 +28,7 @@ from mp_formulas import elliptic_parameters, period_and_total_phase
 
 import orbits
 from orbits import Body
+from orbits.atomic import csv_float_options
 from orbits.cli import main as cli_main
 
 REFERENCE = Path(__file__).parent / "reference" / "phase_reference.csv"
@@ -59,7 +60,7 @@ def _mp_montgomery(moments, w):
     """``2ET/M - Delta alpha`` from eqn:TK and eqn:GeometricPhase literally."""
     i1, i2, i3, two_e, m_sq = _mp_invariants(moments, w)
     mom = mp.sqrt(m_sq)
-    if elliptic_parameters(i1, i2, i3, two_e, m_sq)[0] == 0:   # on an axis: a point
+    if elliptic_parameters(i1, i2, i3, two_e, m_sq)[0] == 0:  # on an axis: a point
         return mp.mpf(0)
     period, total = period_and_total_phase(i1, i2, i3, two_e, m_sq)
     return two_e * period / mom - total
@@ -70,8 +71,9 @@ def _mp_spin(moments, phi, theta=None, dtheta=None):
     i1, i2, i3 = (mp.mpf(float(v)) for v in sorted(moments))
     phi = mp.mpf(phi)
     if theta is None:
-        theta = mp.atan2(mp.sqrt(i3 * (i3 - i2)),
-                         mp.sqrt(i1 * (i2 - i1)) * abs(mp.cos(phi))) + mp.mpf(dtheta)
+        theta = mp.atan2(
+            mp.sqrt(i3 * (i3 - i2)), mp.sqrt(i1 * (i2 - i1)) * abs(mp.cos(phi))
+        ) + mp.mpf(dtheta)
     else:
         theta = mp.mpf(theta)
     return (mp.sin(theta) * mp.cos(phi), mp.sin(theta) * mp.sin(phi), mp.cos(theta))
@@ -87,8 +89,11 @@ def mp_omega(moments, phi=0.0, theta=None, dtheta=None, omega=None):
     previous = None
     while dps < 5000:
         with mp.workdps(dps):
-            w = (tuple(mp.mpf(float(c)) for c in omega) if omega is not None
-                 else _mp_spin(moments, phi, theta, dtheta))
+            w = (
+                tuple(mp.mpf(float(c)) for c in omega)
+                if omega is not None
+                else _mp_spin(moments, phi, theta, dtheta)
+            )
             value = _mp_montgomery(moments, w)
             if previous is not None and abs(value - previous) <= 1e-20 * abs(value):
                 return float(value)
@@ -109,9 +114,9 @@ def mp_cap(moments, omega, dps=30):
         w = tuple(mp.mpf(float(c)) for c in omega)
         i1, i2, i3, two_e, m_sq = _mp_invariants(moments, w)
         c = [1 / i - two_e / m_sq for i in (i1, i2, i3)]
-        if m_sq > two_e * i2:        # SAM: about I3
+        if m_sq > two_e * i2:  # SAM: about I3
             c0, ca, cb, sign = -c[2], c[0], c[1], 1
-        else:                        # LAM: about I1
+        else:  # LAM: about I1
             c0, ca, cb, sign = c[0], -c[1], -c[2], -1
 
         def one_minus_cos(s):
@@ -127,14 +132,16 @@ def mp_cap(moments, omega, dps=30):
 # --------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def reference():
-    return pd.read_csv(REFERENCE, comment="#")
+    return pd.read_csv(REFERENCE, comment="#", **csv_float_options())
 
 
 def table_omega(rows, mode):
-    args = ({"dtheta": rows["dtheta"].to_numpy()} if mode == "dtheta"
-            else {"theta": rows["theta"].to_numpy()})
-    got = orbits.phases(rows[["m1", "m2", "m3"]].to_numpy(),
-                        phi=rows["phi"].to_numpy(), **args)
+    args = (
+        {"dtheta": rows["dtheta"].to_numpy()}
+        if mode == "dtheta"
+        else {"theta": rows["theta"].to_numpy()}
+    )
+    got = orbits.phases(rows[["m1", "m2", "m3"]].to_numpy(), phi=rows["phi"].to_numpy(), **args)
     return got["geometric_phase"].to_numpy()
 
 
@@ -159,8 +166,11 @@ def test_reference_table_covers_the_hard_cases(reference):
     assert (np.pi / 2 - thetas[thetas < np.pi / 2] < 1e-10).sum() >= 20
     # the old route, 2ET/M - Delta alpha in doubles, fails on these rows
     rows = sphere[sphere["mode"] == "dtheta"]
-    got = orbits.phases(rows[["m1", "m2", "m3"]].to_numpy(), phi=rows["phi"].to_numpy(),
-                        dtheta=rows["dtheta"].to_numpy())
+    got = orbits.phases(
+        rows[["m1", "m2", "m3"]].to_numpy(),
+        phi=rows["phi"].to_numpy(),
+        dtheta=rows["dtheta"].to_numpy(),
+    )
     old = got["dynamic_phase"] - got["total_phase"]
     assert relative_error(old, rows["geometric_phase"]).max() > 1e-3
 
@@ -168,8 +178,11 @@ def test_reference_table_covers_the_hard_cases(reference):
 def test_montgomery_identity_holds_to_rounding(reference):
     """Delta alpha = 2ET/M - Omega, to the rounding of 2ET/M."""
     rows = reference[reference["mode"] == "dtheta"]
-    got = orbits.phases(rows[["m1", "m2", "m3"]].to_numpy(), phi=rows["phi"].to_numpy(),
-                        dtheta=rows["dtheta"].to_numpy())
+    got = orbits.phases(
+        rows[["m1", "m2", "m3"]].to_numpy(),
+        phi=rows["phi"].to_numpy(),
+        dtheta=rows["dtheta"].to_numpy(),
+    )
     gap = got["dynamic_phase"] - got["total_phase"] - got["geometric_phase"]
     assert (gap.abs() <= 1e-13 * got["dynamic_phase"].abs()).all()
 
@@ -189,9 +202,17 @@ def test_issue_value():
     assert got == pytest.approx(-3.1418147031, abs=1e-10)
 
 
-@pytest.mark.parametrize("moments", [NEAR_SPHERE, FIG6, T_HANDLE.moments,
-                                     (1e-3, 1.0, 1.0005), (0.3, 0.5, 0.8 - 1e-9),
-                                     (0.5, 0.5 + 1e-9, 0.9)])
+@pytest.mark.parametrize(
+    "moments",
+    [
+        NEAR_SPHERE,
+        FIG6,
+        T_HANDLE.moments,
+        (1e-3, 1.0, 1.0005),
+        (0.3, 0.5, 0.8 - 1e-9),
+        (0.5, 0.5 + 1e-9, 0.9),
+    ],
+)
 def test_separatrix_limit_is_a_lune(moments):
     """At |dtheta| = 1e-300 the polhode is the separatrix to 1e-300."""
     i1, i2, i3 = sorted(moments)
@@ -213,8 +234,7 @@ def test_zero_on_the_axes():
 
 
 @pytest.mark.parametrize("moments", [FIG6, NEAR_SPHERE, (1e-3, 1.0, 1.0005)])
-@pytest.mark.parametrize("theta", [1e-150, 1e-40, 1e-8, math.pi / 2 - 1e-8,
-                                   math.pi / 2 - 1e-15])
+@pytest.mark.parametrize("theta", [1e-150, 1e-40, 1e-8, math.pi / 2 - 1e-8, math.pi / 2 - 1e-15])
 def test_near_the_axes(moments, theta):
     """Omega ~ theta^2 (or (pi/2 - theta)^2) keeps its relative precision."""
     got = orbits.phases(moments, theta)["geometric_phase"].iloc[0]
@@ -225,13 +245,23 @@ def test_near_the_axes(moments, theta):
 # Direct quadrature of the solid angle (the geometric definition)
 # --------------------------------------------------------------------------
 QUADRATURE_CASES = [
-    (T_HANDLE.moments, (math.cos(math.pi / 2 - 0.2) * math.sin(math.pi / 2 - 0.15),
-                        math.sin(math.pi / 2 - 0.2) * math.sin(math.pi / 2 - 0.15),
-                        math.cos(math.pi / 2 - 0.15))),
-    (FIG6, (0.3, 0.0, 1.0)), (FIG6, (1.0, 0.2, 0.4)), (FIG6, (0.2, 0.9, 1.0)),
-    (NEAR_SPHERE, (0.4, 0.1, 1.0)), (NEAR_SPHERE, (1.0, 0.5, 0.2)),
-    ((1e-3, 1.0, 1.0005), (0.1, 0.3, 1.0)), ((1e-3, 1.0, 1.0005), (1.0, 1e-3, 1e-2)),
-    (FIG6, (1e-6, 2e-7, 1.0)), (FIG6, (1.0, 3e-7, -1e-6)),
+    (
+        T_HANDLE.moments,
+        (
+            math.cos(math.pi / 2 - 0.2) * math.sin(math.pi / 2 - 0.15),
+            math.sin(math.pi / 2 - 0.2) * math.sin(math.pi / 2 - 0.15),
+            math.cos(math.pi / 2 - 0.15),
+        ),
+    ),
+    (FIG6, (0.3, 0.0, 1.0)),
+    (FIG6, (1.0, 0.2, 0.4)),
+    (FIG6, (0.2, 0.9, 1.0)),
+    (NEAR_SPHERE, (0.4, 0.1, 1.0)),
+    (NEAR_SPHERE, (1.0, 0.5, 0.2)),
+    ((1e-3, 1.0, 1.0005), (0.1, 0.3, 1.0)),
+    ((1e-3, 1.0, 1.0005), (1.0, 1e-3, 1e-2)),
+    (FIG6, (1e-6, 2e-7, 1.0)),
+    (FIG6, (1.0, 3e-7, -1e-6)),
 ]
 
 
@@ -255,10 +285,22 @@ def test_t_handle_paper_value():
 def test_cli_omega_nearly_spherical():
     out = io.StringIO()
     with redirect_stdout(out):
-        code = cli_main(["phase", "--moments", "1", "1.000000000001", "1.000000000002",
-                         "--omega", "1", "0.2", "0.3", "--csv"])
+        code = cli_main(
+            [
+                "phase",
+                "--moments",
+                "1",
+                "1.000000000001",
+                "1.000000000002",
+                "--omega",
+                "1",
+                "0.2",
+                "0.3",
+                "--csv",
+            ]
+        )
     assert code == 0
-    row = pd.read_csv(io.StringIO(out.getvalue())).iloc[0]
+    row = pd.read_csv(io.StringIO(out.getvalue()), **csv_float_options()).iloc[0]
     want = mp_omega(NEAR_SPHERE, omega=(1.0, 0.2, 0.3))
     assert row["geometric_phase"] == pytest.approx(want, rel=BOUND)
     assert row["geometric_phase"] < 0 and row["branch"] == "LAM"
@@ -279,43 +321,59 @@ def near_bodies(draw):
     a = draw(st.floats(1e-3, 1e3))
     x = draw(st.floats(-12.0, 1.0))
     y = draw(st.floats(-12.0, 0.0))
-    i2 = a + a * 10.0 ** x
-    i3 = i2 + a * 10.0 ** y
+    i2 = a + a * 10.0**x
+    i3 = i2 + a * 10.0**y
     if not (a < i2 < i3 <= a + i2):
         i3 = np.nextafter(a + i2, 0.0)
     return (a, i2, i3)
 
 
 @settings(max_examples=60, deadline=None, suppress_health_check=list(HealthCheck))
-@given(body=near_bodies(), side=st.sampled_from([-1.0, 1.0]),
-       exponent=st.floats(-300.0, 0.0), phi=st.sampled_from([0.0, 0.7, 2.0]))
+@given(
+    body=near_bodies(),
+    side=st.sampled_from([-1.0, 1.0]),
+    exponent=st.floats(-300.0, 0.0),
+    phi=st.sampled_from([0.0, 0.7, 2.0]),
+)
 def test_hypothesis_dtheta(body, side, exponent, phi):
     theta_c = orbits.critical_angle(body, phi)
     room = theta_c if side < 0 else math.pi / 2 - theta_c
     # within 1% of an axis theta = theta_c + dtheta is rounded to ulp(theta_c),
     # i.e. ulp(theta_c)/theta relatively (Omega ~ theta^2): pass theta there
-    dtheta = side * min(10.0 ** exponent, 0.99 * room)
+    dtheta = side * min(10.0**exponent, 0.99 * room)
     got = orbits.phases(body, dtheta=[dtheta], phi=phi)["geometric_phase"].iloc[0]
     assert got == pytest.approx(mp_omega(_as_computed(body), phi, dtheta=dtheta), rel=BOUND)
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=list(HealthCheck))
-@given(body=near_bodies(), theta=st.one_of(
-    st.floats(0.0, math.pi / 2),
-    st.floats(-150.0, -1.0).map(lambda e: 10.0 ** e),
-    st.floats(-15.0, -1.0).map(lambda e: math.pi / 2 - 10.0 ** e)))
+@given(
+    body=near_bodies(),
+    theta=st.one_of(
+        st.floats(0.0, math.pi / 2),
+        st.floats(-150.0, -1.0).map(lambda e: 10.0**e),
+        st.floats(-15.0, -1.0).map(lambda e: math.pi / 2 - 10.0**e),
+    ),
+)
 def test_hypothesis_theta(body, theta):
     theta_c = orbits.critical_angle(body)
     if abs(theta - theta_c) <= 8 * np.spacing(theta_c):
-        return    # theta_c is known to a few ulps: the branch itself is uncertain
+        return  # theta_c is known to a few ulps: the branch itself is uncertain
     got = orbits.phases(body, [theta])["geometric_phase"].iloc[0]
     assert got == pytest.approx(mp_omega(_as_computed(body), theta=theta), rel=BOUND)
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=list(HealthCheck))
-@given(body=near_bodies(),
-       omega=st.tuples(*[st.tuples(st.sampled_from([-1.0, 1.0]), st.floats(-40.0, 2.0))
-                         .map(lambda t: t[0] * 10.0 ** t[1])] * 3))
+@given(
+    body=near_bodies(),
+    omega=st.tuples(
+        *[
+            st.tuples(st.sampled_from([-1.0, 1.0]), st.floats(-40.0, 2.0)).map(
+                lambda t: t[0] * 10.0 ** t[1]
+            )
+        ]
+        * 3
+    ),
+)
 def test_hypothesis_spin_vectors(body, omega):
     """Any spin vector (the spin_phases path, taken as exact doubles)."""
     try:

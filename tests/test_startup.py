@@ -16,10 +16,13 @@ HEAVY = ("numba", "scipy", "pandas", "matplotlib", "tqdm", "llvmlite")
 
 
 def loaded_after(code):
-    script = (code + "\nimport sys, json\n"
-              "print(json.dumps(sorted({m.split('.')[0] for m in sys.modules})))")
-    result = subprocess.run([sys.executable, "-c", script], capture_output=True,
-                            text=True, timeout=120)
+    script = (
+        code + "\nimport sys, json\n"
+        "print(json.dumps(sorted({m.split('.')[0] for m in sys.modules})))"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=120
+    )
     assert result.returncode == 0, result.stderr
     return set(json.loads(result.stdout.strip().splitlines()[-1]))
 
@@ -29,32 +32,40 @@ def test_import_orbits_loads_nothing_heavy():
 
 
 def test_help_loads_nothing_heavy():
-    code = ("from orbits.cli import build_parser\n"
-            "try:\n    build_parser().parse_args(['--help'])\n"
-            "except SystemExit:\n    pass\n"
-            "for sub in ('phase', 'catalog', 'verify', 'bench'):\n"
-            "    try:\n        build_parser().parse_args([sub, '--help'])\n"
-            "    except SystemExit:\n        pass")
+    code = (
+        "from orbits.cli import build_parser\n"
+        "try:\n    build_parser().parse_args(['--help'])\n"
+        "except SystemExit:\n    pass\n"
+        "for sub in ('phase', 'catalog', 'verify', 'bench'):\n"
+        "    try:\n        build_parser().parse_args([sub, '--help'])\n"
+        "    except SystemExit:\n        pass"
+    )
     assert not loaded_after(code) & set(HEAVY)
 
 
-@pytest.mark.parametrize("name", ["Body", "phases", "catalog", "Motion", "verify",
-                                  "spins_with_total_phase", "set_num_threads"])
+@pytest.mark.parametrize(
+    "name",
+    ["Body", "phases", "catalog", "Motion", "verify", "spins_with_total_phase", "set_num_threads"],
+)
 def test_public_names_load_on_first_use(name):
     import orbits
+
     assert name in orbits.__all__
     assert callable(getattr(orbits, name))
 
 
 def test_a_submodule_import_keeps_the_function_of_the_same_name():
-    code = ("import orbits.phases, orbits.catalog, orbits\n"
-            "assert callable(orbits.phases) and callable(orbits.catalog)\n"
-            "assert not isinstance(orbits.phases, type(orbits))")
+    code = (
+        "import orbits.phases, orbits.catalog, orbits\n"
+        "assert callable(orbits.phases) and callable(orbits.catalog)\n"
+        "assert not isinstance(orbits.phases, type(orbits))"
+    )
     loaded_after(code)
 
 
 def test_every_public_name_resolves():
     import orbits
+
     for name in orbits.__all__:
         getattr(orbits, name)
     with pytest.raises(AttributeError):

@@ -14,13 +14,23 @@ import orbits
 from orbits import InputError
 from orbits.atomic import csv_float_options
 from orbits.cli import main
-from orbits.survey import (BODY_COLUMNS, load_manifest, Survey, _sha256, _write_table, compute_chunk,
-                           read_survey, survey_grid)
+from orbits.survey import (
+    BODY_COLUMNS,
+    Survey,
+    _sha256,
+    _write_table,
+    compute_chunk,
+    load_manifest,
+    read_survey,
+    survey_grid,
+)
 
 
 def read_bytes(directory):
-    return {p.relative_to(directory).as_posix(): p.read_bytes()
-            for p in sorted(directory.rglob("part-*"))}
+    return {
+        p.relative_to(directory).as_posix(): p.read_bytes()
+        for p in sorted(directory.rglob("part-*"))
+    }
 
 
 def test_chunk_matches_closed_orbits():
@@ -41,8 +51,9 @@ def test_chunk_matches_closed_orbits():
     lim = orbits.phase_limits(moments)
     np.testing.assert_array_equal(bodies["limit_theta_zero"], lim.theta_zero)
     # the conjecture on these bodies: the minimum is the smaller end value
-    np.testing.assert_allclose(bodies["min_total_phase"],
-                               np.minimum(lim.theta_zero, lim.theta_half_pi), rtol=1e-13)
+    np.testing.assert_allclose(
+        bodies["min_total_phase"], np.minimum(lim.theta_zero, lim.theta_half_pi), rtol=1e-13
+    )
     assert bodies["min_at_end"].all()
 
 
@@ -64,16 +75,18 @@ def test_report_lists_counterexamples(tmp_path):
     survey.run()
     part = tmp_path / "s" / "bodies" / "part-00000.csv"
     frame = pd.read_csv(part, **csv_float_options())
-    frame.loc[3, "min_at_end"] = False         # pretend one body's minimum is inside
+    frame.loc[3, "min_at_end"] = False  # pretend one body's minimum is inside
     _write_table(frame, part, "csv")
     with pytest.raises(InputError, match="damaged.*part-00000.csv does not match"):
-        survey.report()                         # the ledger notices the change
+        survey.report()  # the ledger notices the change
     # record the change in the ledger, as a run would have
     survey._ledger["0"]["bodies"]["sha256"] = _sha256(part)
     survey._write_manifest()
     report = survey.report()
     assert not report["conjecture_minimum_at_the_ends"]["held_on_every_body"]
-    assert [row["body"] for row in report["conjecture_minimum_at_the_ends"]["counterexamples"]] == [3]
+    assert [
+        row["body"] for row in report["conjecture_minimum_at_the_ends"]["counterexamples"]
+    ] == [3]
 
 
 def test_parquet_and_csv_engines_agree(tmp_path):
@@ -83,8 +96,7 @@ def test_parquet_and_csv_engines_agree(tmp_path):
         again = pd.read_csv(tmp_path / f"{engine}.csv", **csv_float_options())
         pd.testing.assert_frame_equal(again, table, check_exact=True, check_dtype=False)
     _write_table(table, tmp_path / "t.parquet", "parquet")
-    pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "t.parquet"), table,
-                                  check_exact=True)
+    pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "t.parquet"), table, check_exact=True)
 
 
 def test_other_parameters_are_refused(tmp_path):
@@ -113,8 +125,20 @@ def test_resume_after_a_kill(tmp_path):
     reference = tmp_path / "reference"
     Survey.grid(reference, 300, 6, chunk=400).run()
     target = tmp_path / "killed"
-    argv = [sys.executable, "-m", "orbits.cli", "survey", "--resolution", "300",
-            "--n-max", "6", "--chunk", "400", "--out", str(target)]
+    argv = [
+        sys.executable,
+        "-m",
+        "orbits.cli",
+        "survey",
+        "--resolution",
+        "300",
+        "--n-max",
+        "6",
+        "--chunk",
+        "400",
+        "--out",
+        str(target),
+    ]
     proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.time() + 120
     while time.time() < deadline and _ledger_size(target) < 3 and proc.poll() is None:
@@ -127,6 +151,7 @@ def test_resume_after_a_kill(tmp_path):
     # a second run computes only the chunks missing from the ledger
     calls = []
     import orbits.survey as module
+
     original = module.compute_chunk
 
     def counting(moments, *args, **kwargs):
@@ -139,7 +164,7 @@ def test_resume_after_a_kill(tmp_path):
     finally:
         module.compute_chunk = original
     assert len(calls) == total - finished
-    assert read_bytes(target) == read_bytes(reference)      # nothing lost or doubled
+    assert read_bytes(target) == read_bytes(reference)  # nothing lost or doubled
     assert not list(target.rglob("*.part"))
 
 
@@ -147,14 +172,27 @@ def test_distributed_equals_local(tmp_path):
     distributed = pytest.importorskip("distributed")
     local = tmp_path / "local"
     Survey.grid(local, 60, 8, chunk=500).run()
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster:
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:
         with distributed.Client(cluster) as client:
             Survey.grid(tmp_path / "client", 60, 8, chunk=500).run(scheduler=client)
         # and by address, as --scheduler tcp://host:port does
-        code = main(["survey", "--resolution", "60", "--n-max", "8", "--chunk", "500",
-                     "--scheduler", cluster.scheduler_address, "--out",
-                     str(tmp_path / "address")])
+        code = main(
+            [
+                "survey",
+                "--resolution",
+                "60",
+                "--n-max",
+                "8",
+                "--chunk",
+                "500",
+                "--scheduler",
+                cluster.scheduler_address,
+                "--out",
+                str(tmp_path / "address"),
+            ]
+        )
         assert code == 0
     assert read_bytes(tmp_path / "client") == read_bytes(local)
     assert read_bytes(tmp_path / "address") == read_bytes(local)
@@ -167,32 +205,77 @@ def test_fig2_from_a_survey(tmp_path, capsys):
     inside = np.isfinite(minimum)
     assert inside.sum() == len(orbits.region_grid(50))
     from orbits.plotting import limits_field
+
     np.testing.assert_allclose(minimum[inside], limits_field(i1, i2)[inside], rtol=1e-12)
-    assert main(["figures", "--survey", str(survey_dir), "--formats", "png", "--out",
-                 str(tmp_path / "fig")]) == 0
+    assert (
+        main(
+            [
+                "figures",
+                "--survey",
+                str(survey_dir),
+                "--formats",
+                "png",
+                "--out",
+                str(tmp_path / "fig"),
+            ]
+        )
+        == 0
+    )
     assert (tmp_path / "fig" / "fig2.png").exists()
 
 
 def test_cli_survey_and_errors(tmp_path, capsys, monkeypatch):
     import orbits.survey as module
+
     monkeypatch.setattr(module, "CONNECT_TIMEOUT", 2)
     bodies = tmp_path / "bodies.csv"
     bodies.write_text("name,I1,I2,I3\na,0.26,0.55,0.793662\nb,1,1.7,2.2\n")
-    assert main(["survey", "--bodies", str(bodies), "--n-max", "6", "--json",
-                 "--out", str(tmp_path / "s")]) == 0
+    assert (
+        main(
+            [
+                "survey",
+                "--bodies",
+                str(bodies),
+                "--n-max",
+                "6",
+                "--json",
+                "--out",
+                str(tmp_path / "s"),
+            ]
+        )
+        == 0
+    )
     report = json.loads(capsys.readouterr().out)
     assert report["bodies"] == 2
     for argv, fragment in [
         (["survey", "--n-max", "3", "--out", "x"], "exactly one"),
         (["survey", "--resolution", "10", "--n-max", "0", "--out", "x"], "must be >= 1"),
-        (["survey", "--resolution", "10", "--n-max", "3", "--format", "xml", "--out", "x"],
-         "invalid choice"),
-        (["survey", "--resolution", "10", "--n-max", "3", "--out", "/proc/orbits-survey"],
-         "cannot create"),
-        (["survey", "--resolution", "10", "--n-max", "3", "--scheduler",
-          "tcp://127.0.0.1:9", "--out", str(tmp_path / "dask")], "scheduler"),
-        (["figures", "--survey", str(tmp_path / "s"), "--out", str(tmp_path / "f")],
-         "grid survey"),
+        (
+            ["survey", "--resolution", "10", "--n-max", "3", "--format", "xml", "--out", "x"],
+            "invalid choice",
+        ),
+        (
+            ["survey", "--resolution", "10", "--n-max", "3", "--out", "/proc/orbits-survey"],
+            "cannot create",
+        ),
+        (
+            [
+                "survey",
+                "--resolution",
+                "10",
+                "--n-max",
+                "3",
+                "--scheduler",
+                "tcp://127.0.0.1:9",
+                "--out",
+                str(tmp_path / "dask"),
+            ],
+            "scheduler",
+        ),
+        (
+            ["figures", "--survey", str(tmp_path / "s"), "--out", str(tmp_path / "f")],
+            "grid survey",
+        ),
     ]:
         code = main(argv)
         err = capsys.readouterr().err.strip().splitlines()

@@ -14,9 +14,21 @@ from hypothesis import strategies as st
 from orbits.survey import _read_part, _write_table
 
 finite_doubles = st.floats(allow_nan=False, allow_infinity=False, width=64)
-special = st.sampled_from([0.0, -0.0, 5e-324, -5e-324, 2.2250738585072014e-308,
-                           2.225073858507201e-308, 1.7976931348623157e308,
-                           -1.7976931348623157e308, 0.1, 1.0 / 3.0, 9007199254740993.0])
+special = st.sampled_from(
+    [
+        0.0,
+        -0.0,
+        5e-324,
+        -5e-324,
+        2.2250738585072014e-308,
+        2.225073858507201e-308,
+        1.7976931348623157e308,
+        -1.7976931348623157e308,
+        0.1,
+        1.0 / 3.0,
+        9007199254740993.0,
+    ]
+)
 
 
 def _bits(values):
@@ -28,12 +40,15 @@ def _bits(values):
 def test_csv_round_trip_is_bit_exact(tmp_path_factory, values):
     path = tmp_path_factory.mktemp("csv") / "part.csv"
     # a real float column of the survey schema, read back by the survey's reader
-    frame = pd.DataFrame({"min_total_phase": np.array(values, dtype=np.float64),
-                          "orbits": np.arange(len(values), dtype=np.int64)})
+    frame = pd.DataFrame(
+        {
+            "min_total_phase": np.array(values, dtype=np.float64),
+            "orbits": np.arange(len(values), dtype=np.int64),
+        }
+    )
     _write_table(frame, path, "csv")
     again = _read_part(path)
-    np.testing.assert_array_equal(_bits(again["min_total_phase"]),
-                                  _bits(frame["min_total_phase"]))
+    np.testing.assert_array_equal(_bits(again["min_total_phase"]), _bits(frame["min_total_phase"]))
     np.testing.assert_array_equal(again["orbits"], frame["orbits"])
 
 
@@ -59,11 +74,12 @@ def test_csv_writer_bits_on_random_bit_patterns(tmp_path):
     # every finite double is equally likely here (uniform over bit patterns)
     rng = np.random.default_rng(13)
     bits = rng.integers(0, 2**63, size=200_000, dtype=np.int64)
-    bits[rng.random(bits.size) < 0.5] |= np.int64(-2**63)
+    bits[rng.random(bits.size) < 0.5] |= np.int64(-(2**63))
     values = bits.view(np.float64)
     values = values[np.isfinite(values)]
     frame = pd.DataFrame({"x": values})
     _write_table(frame, tmp_path / "b.csv", "csv")
     from orbits.atomic import csv_float_options
+
     again = pd.read_csv(tmp_path / "b.csv", dtype={"x": np.float64}, **csv_float_options())
     np.testing.assert_array_equal(_bits(again["x"]), _bits(values))

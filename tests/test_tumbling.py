@@ -32,8 +32,10 @@ def _azimuth_gain_by_quadrature(motion, axis):
 
     # split at quarter periods, where the integrand's shape changes
     edges = np.linspace(0.0, motion.period, 9)
-    return sum(integrate.quad(rate, a, b, epsabs=0.0, epsrel=1e-13, limit=200)[0]
-               for a, b in zip(edges[:-1], edges[1:]))
+    return sum(
+        integrate.quad(rate, a, b, epsabs=0.0, epsrel=1e-13, limit=200)[0]
+        for a, b in zip(edges[:-1], edges[1:])
+    )
 
 
 @pytest.mark.parametrize("theta", [0.2, 0.6, 1.0, 1.3, 1.5])
@@ -44,8 +46,7 @@ def test_precession_period_is_the_azimuth_gain_of_the_literature_axis(theta):
     assert periods.axis == ("short" if axis == 2 else "long")
     gain = _azimuth_gain_by_quadrature(motion, axis)
     assert periods.rotation == motion.period
-    assert periods.precession == pytest.approx(2 * math.pi * motion.period / gain,
-                                               rel=1e-11)
+    assert periods.precession == pytest.approx(2 * math.pi * motion.period / gain, rel=1e-11)
     assert periods.ratio == pytest.approx(gain / (2 * math.pi), rel=1e-11)
 
 
@@ -54,7 +55,8 @@ def test_rotation_about_momentum_from_the_two_periods():
         p = Motion.from_spin(FIG6, theta).tumbling_periods()
         sign = 1.0 if p.axis == "short" else -1.0
         assert 1.0 / p.about_momentum == pytest.approx(
-            1.0 / p.precession - sign / p.rotation, rel=1e-13)
+            1.0 / p.precession - sign / p.rotation, rel=1e-13
+        )
 
 
 def test_a_closed_orbit_has_an_exactly_rational_period_ratio():
@@ -92,7 +94,7 @@ def test_apophis_spin_state_from_its_periods():
     assert set(spins["branch"].astype(str)) == {"SAM", "LAM"}
     sam = spins[spins["branch"] == "SAM"].iloc[0]
     motion = Motion.from_spin(APOPHIS, dtheta=sam["dtheta"])
-    unit = motion.period / P_PSI                # model time units per hour
+    unit = motion.period / P_PSI  # model time units per hour
     periods = motion.tumbling_periods()
     assert periods.rotation / unit == pytest.approx(P_PSI, abs=6.0)
     assert periods.precession / unit == pytest.approx(P_PHI, abs=0.07)
@@ -140,15 +142,16 @@ def test_rotation_object_is_the_rotation_with_scalar_last_quaternions():
     t = np.linspace(0.0, 3.0, 7)
     rotation = motion.rotation_object(t)
     np.testing.assert_allclose(rotation.as_matrix(), motion.rotation(t), atol=1e-14)
-    ours = motion.quaternion(t)                       # (w, x, y, z)
-    theirs = rotation.as_quat()                        # (x, y, z, w)
+    ours = motion.quaternion(t)  # (w, x, y, z)
+    theirs = rotation.as_quat()  # (x, y, z, w)
     # same rotation up to the sign of the quaternion
     dots = np.abs(np.sum(ours[:, [1, 2, 3, 0]] * theirs, axis=1))
     np.testing.assert_allclose(dots, 1.0, atol=1e-14)
     single = motion.as_scipy(0.5)
     assert single.single
-    np.testing.assert_allclose(single.apply([0.0, 0.0, 1.0]),
-                               motion.rotation(0.5) @ [0.0, 0.0, 1.0], atol=1e-15)
+    np.testing.assert_allclose(
+        single.apply([0.0, 0.0, 1.0]), motion.rotation(0.5) @ [0.0, 0.0, 1.0], atol=1e-15
+    )
 
 
 def test_scalar_time_shapes():

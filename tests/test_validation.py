@@ -27,18 +27,54 @@ BODY = orbits.Body(FIG6)
 MOTION = orbits.Motion.from_spin(BODY, 0.4)
 
 junk = st.one_of(
-    st.none(), st.booleans(), st.text(max_size=6), st.binary(max_size=4),
-    st.complex_numbers(max_magnitude=10), st.floats(allow_nan=True, allow_infinity=True),
-    st.integers(-4, 40), st.sampled_from([10**30, -(10**30), 2**64, 2**63 - 1]),
+    st.none(),
+    st.booleans(),
+    st.text(max_size=6),
+    st.binary(max_size=4),
+    st.complex_numbers(max_magnitude=10),
+    st.floats(allow_nan=True, allow_infinity=True),
+    st.integers(-4, 40),
+    st.sampled_from([10**30, -(10**30), 2**64, 2**63 - 1]),
     st.lists(st.floats(allow_nan=True, allow_infinity=True), max_size=5),
     st.lists(st.integers(-2, 6), max_size=4),
     st.lists(st.floats(0.05, 2.0), min_size=3, max_size=3),
-    st.sampled_from([[[1, 2], [1, 2, 3]], {"a": 1}, object(), np.array(["x"]),
-                     np.float32(0.5), np.int8(3), Fraction(1, 3), Decimal("0.5"),
-                     np.zeros((2, 2)), np.ones((2, 3)), np.array([]), [], (), FIG6,
-                     [FIG6, FIG6], [0.3, 0.6, 0.9], [1e300, 1e300, 1e300], np.bool_(True),
-                     np.datetime64("2020-01-01"), slice(1), "3", "0.5", b"3", 3 + 0j,
-                     [1e-200] * 3, math.nan, math.inf, -0.0, 0, 1, 2, 0.5, 1.2]),
+    st.sampled_from(
+        [
+            [[1, 2], [1, 2, 3]],
+            {"a": 1},
+            object(),
+            np.array(["x"]),
+            np.float32(0.5),
+            np.int8(3),
+            Fraction(1, 3),
+            Decimal("0.5"),
+            np.zeros((2, 2)),
+            np.ones((2, 3)),
+            np.array([]),
+            [],
+            (),
+            FIG6,
+            [FIG6, FIG6],
+            [0.3, 0.6, 0.9],
+            [1e300, 1e300, 1e300],
+            np.bool_(True),
+            np.datetime64("2020-01-01"),
+            slice(1),
+            "3",
+            "0.5",
+            b"3",
+            3 + 0j,
+            [1e-200] * 3,
+            math.nan,
+            math.inf,
+            -0.0,
+            0,
+            1,
+            2,
+            0.5,
+            1.2,
+        ]
+    ),
 )
 
 
@@ -117,8 +153,9 @@ CALLS = {
     # survey API
     "compute_chunk.moments": lambda x: compute_chunk(x, 3),
     "compute_chunk.n_max": lambda x: compute_chunk([FIG6], x),
-    "Survey.from_bodies": lambda x: Survey.from_bodies("unused-survey-dir", x, 3,
-                                                      fmt="csv").parameters,
+    "Survey.from_bodies": lambda x: (
+        Survey.from_bodies("unused-survey-dir", x, 3, fmt="csv").parameters
+    ),
     "Survey.n_max": lambda x: Survey("unused-survey-dir", [FIG6], {}, x, fmt="csv").chunks,
     "Survey.out_dir": lambda x: Survey(x, [FIG6], {}, 3, fmt="csv").chunks,
     "read_survey": lambda x: read_survey(x),
@@ -126,22 +163,29 @@ CALLS = {
 }
 
 # calls whose result for a float array of the same value must be identical
-COMPARABLE = {"total_phase.moments", "total_phase.theta", "total_phase.dtheta",
-              "total_phase.phi", "critical_angle.moments", "critical_angle.phi"}
+COMPARABLE = {
+    "total_phase.moments",
+    "total_phase.theta",
+    "total_phase.dtheta",
+    "total_phase.phi",
+    "critical_angle.moments",
+    "critical_angle.phi",
+}
 
 
 @pytest.mark.parametrize("name", sorted(CALLS))
-@settings(max_examples=40, deadline=None,
-          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
 @pytest.mark.filterwarnings("ignore::orbits.UnresolvedOrbitsWarning")
 @given(value=junk)
 def test_garbage_gives_a_result_or_an_orbits_error(name, value, monkeypatch, tmp_path):
-    monkeypatch.chdir(tmp_path)        # any relative path junk stays in here
+    monkeypatch.chdir(tmp_path)  # any relative path junk stays in here
     call = CALLS[name]
     try:
         result = call(value)
     except OrbitsError as error:
-        assert str(error).strip()        # a message (the CLI prints it on one line)
+        assert str(error).strip()  # a message (the CLI prints it on one line)
         return
     check_finite(result)
     if name in COMPARABLE:
@@ -201,8 +245,7 @@ def test_survey_with_an_unusable_body_is_refused_up_front(tmp_path):
     with pytest.raises(orbits.NonPhysicalBodyError, match="body #1"):
         Survey.from_bodies(tmp_path / "s", [FIG6, [1.0, 4.0, 8.0]], 3, fmt="csv")
     # a body at 1e150 is usable now, and its row is that of the unscaled body
-    survey = Survey.from_bodies(tmp_path / "s", [FIG6, [v * 2.0**500 for v in FIG6]], 3,
-                                fmt="csv")
+    survey = Survey.from_bodies(tmp_path / "s", [FIG6, [v * 2.0**500 for v in FIG6]], 3, fmt="csv")
     survey.prepare()
     survey.run()
     report = survey.report()
@@ -215,9 +258,12 @@ def test_survey_with_an_unusable_body_is_refused_up_front(tmp_path):
 
 def test_bodies_file_flags_exactly_the_unusable_rows(tmp_path):
     from orbits.catalog import read_bodies_csv
+
     path = tmp_path / "bodies.csv"
-    path.write_text("I1,I2,I3\n0.26,0.55,0.793662\n0.26e150,0.55e150,0.793662e150\n"
-                    "1,4,8\n0.3,0.6,0.9\n1e-300,0.9999999999999999,1\n")
+    path.write_text(
+        "I1,I2,I3\n0.26,0.55,0.793662\n0.26e150,0.55e150,0.793662e150\n"
+        "1,4,8\n0.3,0.6,0.9\n1e-300,0.9999999999999999,1\n"
+    )
     with pytest.raises(InputError, match="row 3"):
         read_bodies_csv(path)
     table = read_bodies_csv(path, skip_invalid=True)

@@ -79,9 +79,19 @@ def _integrate_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol, max_steps, y
     if direction == 0.0:
         return np.nan
     y0 = np.array([w1, w2, w3, 1.0, 0.0, 0.0, 0.0])
-    t_end, _ = integrate_to_event(np.array([i1, i2, i3]), y0, component, y0[component],
-                                  direction, periods, rtol, atol, 1e15, y_end,
-                                  max_steps)
+    t_end, _ = integrate_to_event(
+        np.array([i1, i2, i3]),
+        y0,
+        component,
+        y0[component],
+        direction,
+        periods,
+        rtol,
+        atol,
+        1e15,
+        y_end,
+        max_steps,
+    )
     return t_end
 
 
@@ -94,8 +104,7 @@ def rotation_after_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol, max_step
     :func:`rotation_about_momentum`.  All NaN if no return was found.
     """
     y_end = np.empty(STATE_SIZE)
-    t_end = _integrate_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol,
-                               max_steps, y_end)
+    t_end = _integrate_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol, max_steps, y_end)
     if not t_end >= 0.0:
         return np.nan, np.nan, np.nan
     angle, off_axis = rotation_about_momentum(y_end[3:], i1, i2, i3, w1, w2, w3)
@@ -147,11 +156,9 @@ def phase_by_quarter(i1, i2, i3, gap_m1, gap_3m, scale, offset, closing, rtol):
     if sam:
         w1 = 0.0
         w2 = math.sqrt(gap_3m / (i2 * d32))
-        w3 = (math.sqrt(scale / (i3 * d32)) * math.sqrt(magnitude)
-              * math.sqrt(closing))
+        w3 = math.sqrt(scale / (i3 * d32)) * math.sqrt(magnitude) * math.sqrt(closing)
     else:
-        w1 = (math.sqrt(scale / (i1 * d21)) * math.sqrt(magnitude)
-              * math.sqrt(closing))
+        w1 = math.sqrt(scale / (i1 * d21)) * math.sqrt(magnitude) * math.sqrt(closing)
         w2 = math.sqrt(gap_m1 / (i2 * d21))
         w3 = 0.0
     m1 = i1 * w1
@@ -161,11 +168,17 @@ def phase_by_quarter(i1, i2, i3, gap_m1, gap_3m, scale, offset, closing, rtol):
     # orientation with space z along M and phi = 0: R = Rx(theta) Rz(psi)
     half_theta = 0.5 * math.atan2(math.sqrt(m1 * m1 + m2 * m2), m3)
     half_psi = 0.5 * math.atan2(m1, m2)
-    y0 = np.array([w1, w2, w3,
-                   math.cos(half_theta) * math.cos(half_psi),
-                   math.sin(half_theta) * math.cos(half_psi),
-                   -math.sin(half_theta) * math.sin(half_psi),
-                   math.cos(half_theta) * math.sin(half_psi)])
+    y0 = np.array(
+        [
+            w1,
+            w2,
+            w3,
+            math.cos(half_theta) * math.cos(half_psi),
+            math.sin(half_theta) * math.cos(half_psi),
+            -math.sin(half_theta) * math.sin(half_psi),
+            math.cos(half_theta) * math.sin(half_psi),
+        ]
+    )
     inertia = np.array([i1, i2, i3])
     y_end = np.empty(STATE_SIZE)
     # error control relative in every component: the absolute floor sits
@@ -175,8 +188,8 @@ def phase_by_quarter(i1, i2, i3, gap_m1, gap_3m, scale, offset, closing, rtol):
     # phi turns at most at M/I1; a quarter turn per step at most
     max_step = 0.25 * math.pi * i1 / momentum
     t_quarter, phi_quarter = integrate_to_event(
-        inertia, y0, 1, 0.0, -1.0, 1, rtol, atol, 1e15, y_end, 100_000_000,
-        max_step, True)
+        inertia, y0, 1, 0.0, -1.0, 1, rtol, atol, 1e15, y_end, 100_000_000, max_step, True
+    )
     if t_quarter < 0.0:
         return np.nan, np.nan
     total = 4.0 * phi_quarter
@@ -186,21 +199,28 @@ def phase_by_quarter(i1, i2, i3, gap_m1, gap_3m, scale, offset, closing, rtol):
 
 
 @njit(cache=True, nogil=True)
-def rotation_angle_after_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol,
-                                 max_steps):
+def rotation_angle_after_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol, max_steps):
     """Angle of the rotation ``R(q T) R(0)^-1`` (full integration), in [0, pi]."""
     y_end = np.empty(STATE_SIZE)
-    t_end = _integrate_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol,
-                               max_steps, y_end)
+    t_end = _integrate_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol, max_steps, y_end)
     if not t_end >= 0.0:
         return np.nan
     vector = math.sqrt(y_end[4] ** 2 + y_end[5] ** 2 + y_end[6] ** 2)
     return 2.0 * math.atan2(vector, abs(y_end[3]))
 
 
-CHECK_COLUMNS = ("closed_form", "motion", "montgomery", "solid_angle",
-                 "montgomery_period", "ode_period", "ode_angle", "ode_off_axis",
-                 "period", "branch")
+CHECK_COLUMNS = (
+    "closed_form",
+    "motion",
+    "montgomery",
+    "solid_angle",
+    "montgomery_period",
+    "ode_period",
+    "ode_angle",
+    "ode_off_axis",
+    "period",
+    "branch",
+)
 
 
 @njit(cache=True, nogil=True, parallel=True)
@@ -225,7 +245,8 @@ def check_batch(moments, theta, phi, ode_rtol, ode_atol, quad_rtol, out):
         i2 = moments[k, 1]
         i3 = moments[k, 2]
         code, _, _, _, w1, w2, w3, _, _, _ = _phase.spin_from_angle(
-            _phase.body_constants(i1, i2, i3, phi[k]), theta[k], False)
+            _phase.body_constants(i1, i2, i3, phi[k]), theta[k], False
+        )
         if code != _phase.STATUS_OK:
             for j in range(out.shape[1]):
                 out[k, j] = np.nan
@@ -238,12 +259,14 @@ def check_batch(moments, theta, phi, ode_rtol, ode_atol, quad_rtol, out):
         branch = _motion.orbit_setup(i1, i2, i3, w1, w2, w3, 1.0, -gap, 1.0, orbit)
         out[k, 1] = _motion.phase_after_period(orbit)
         total, dynamic, solid, period, quad_branch = montgomery_phase(
-            i1, i2, i3, w1, w2, w3, gap, quad_rtol)
+            i1, i2, i3, w1, w2, w3, gap, quad_rtol
+        )
         out[k, 2] = total
         out[k, 3] = solid
         out[k, 4] = period
         ode_period, angle, off_axis = rotation_after_periods(
-            i1, i2, i3, w1, w2, w3, 1, ode_rtol, ode_atol, 10_000_000)
+            i1, i2, i3, w1, w2, w3, 1, ode_rtol, ode_atol, 10_000_000
+        )
         out[k, 5] = ode_period
         out[k, 6] = angle
         out[k, 7] = off_axis
@@ -272,19 +295,20 @@ def closure_batch(moments, dtheta, periods, rtol, out):
         i2 = moments[k, 1]
         i3 = moments[k, 2]
         code, _, _, _, w1, w2, w3, scale, offset, closing = _phase.spin_from_angle(
-            _phase.body_constants(i1, i2, i3, 0.0), dtheta[k], True)
+            _phase.body_constants(i1, i2, i3, 0.0), dtheta[k], True
+        )
         if code != _phase.STATUS_OK:
             out[k] = np.nan
             continue
         if abs(dtheta[k]) >= FULL_INTEGRATION_FROM:
-            out[k] = rotation_angle_after_periods(i1, i2, i3, w1, w2, w3,
-                                                  periods[k], rtol, 1e-14,
-                                                  100_000_000)
+            out[k] = rotation_angle_after_periods(
+                i1, i2, i3, w1, w2, w3, periods[k], rtol, 1e-14, 100_000_000
+            )
         else:
-            gap_m1, gap_3m = _phase.orbit_constants(i1, i2, i3, w1, w2, w3, scale,
-                                                    offset, closing)[3:5]
-            total, _ = phase_by_quarter(i1, i2, i3, gap_m1, gap_3m, scale,
-                                        offset, closing, rtol)
+            gap_m1, gap_3m = _phase.orbit_constants(
+                i1, i2, i3, w1, w2, w3, scale, offset, closing
+            )[3:5]
+            total, _ = phase_by_quarter(i1, i2, i3, gap_m1, gap_3m, scale, offset, closing, rtol)
             turned = periods[k] * total
             turned -= TWO_PI * math.floor(turned / TWO_PI + 0.5)
             out[k] = abs(turned)

@@ -73,8 +73,8 @@ def cel(kc, p, a, b):
     if kc == 0.0 or not (p > 0.0):
         return np.nan
     kc = abs(kc)
-    gm = 1.0          # running arithmetic mean of the AGM pair (1, kc)
-    e = kc            # product of the pair, kc * gm
+    gm = 1.0  # running arithmetic mean of the AGM pair (1, kc)
+    e = kc  # product of the pair, kc * gm
     root_p = math.sqrt(p)
     b = b / root_p
     for _ in range(_MAX_AGM):
@@ -181,8 +181,10 @@ def _rc_unit(e):
     would throw away its digits.  Series ``sum (-e)^k / (2k + 1)`` near 0.
     """
     if abs(e) < 1.0e-3:
-        return 1.0 + e * (-1.0 / 3.0 + e * (1.0 / 5.0 + e * (-1.0 / 7.0 + e * (
-            1.0 / 9.0 + e * (-1.0 / 11.0 + e / 13.0)))))
+        return 1.0 + e * (
+            -1.0 / 3.0
+            + e * (1.0 / 5.0 + e * (-1.0 / 7.0 + e * (1.0 / 9.0 + e * (-1.0 / 11.0 + e / 13.0))))
+        )
     if e > 0.0:
         t = math.sqrt(e)
         return math.atan(t) / t
@@ -221,8 +223,7 @@ def carlson_rf(x, y, z):
     big_z = -(big_x + big_y)
     e2 = big_x * big_y - big_z * big_z
     e3 = big_x * big_y * big_z
-    series = (1.0 - e2 / 10.0 + e3 / 14.0 + e2 * e2 / 24.0
-              - 3.0 * e2 * e3 / 44.0)
+    series = 1.0 - e2 / 10.0 + e3 / 14.0 + e2 * e2 / 24.0 - 3.0 * e2 * e3 / 44.0
     return series / math.sqrt(a)
 
 
@@ -239,10 +240,9 @@ def carlson_rj(x, y, z, p):
     z0 = z
     a0 = (x + y + z + p + p) / 5.0
     delta = (p - x) * (p - y) * (p - z)
-    q = max(abs(a0 - x), abs(a0 - y), abs(a0 - z), abs(a0 - p)) \
-        / _CARLSON_R ** (1.0 / 6.0)
+    q = max(abs(a0 - x), abs(a0 - y), abs(a0 - z), abs(a0 - p)) / _CARLSON_R ** (1.0 / 6.0)
     a = a0
-    scale = 1.0          # 4**-m
+    scale = 1.0  # 4**-m
     total = 0.0
     for _ in range(60):
         if scale * q < abs(a):
@@ -266,11 +266,18 @@ def carlson_rj(x, y, z, p):
     big_z = (a0 - z0) / a * scale
     big_p = -(big_x + big_y + big_z) / 2.0
     e2 = big_x * big_y + big_x * big_z + big_y * big_z - 3.0 * big_p * big_p
-    e3 = big_x * big_y * big_z + 2.0 * e2 * big_p + 4.0 * big_p ** 3
-    e4 = (2.0 * big_x * big_y * big_z + e2 * big_p + 3.0 * big_p ** 3) * big_p
+    e3 = big_x * big_y * big_z + 2.0 * e2 * big_p + 4.0 * big_p**3
+    e4 = (2.0 * big_x * big_y * big_z + e2 * big_p + 3.0 * big_p**3) * big_p
     e5 = big_x * big_y * big_z * big_p * big_p
-    series = (1.0 - 3.0 * e2 / 14.0 + e3 / 6.0 + 9.0 * e2 * e2 / 88.0
-              - 3.0 * e4 / 22.0 - 9.0 * e2 * e3 / 52.0 + 3.0 * e5 / 26.0)
+    series = (
+        1.0
+        - 3.0 * e2 / 14.0
+        + e3 / 6.0
+        + 9.0 * e2 * e2 / 88.0
+        - 3.0 * e4 / 22.0
+        - 9.0 * e2 * e3 / 52.0
+        + 3.0 * e5 / 26.0
+    )
     return scale * series / (a * math.sqrt(a)) + 6.0 * total
 
 
@@ -353,7 +360,7 @@ def jacobi_from_table(u, levels, means, geometric):
     per level ``t <- t c, c <- c dn, dn <- (b_l + t) / (a_l + t), t <- c / a_l``.
     """
     a_last = means[levels]
-    quarter = HALF_PI / a_last                     # K(m)
+    quarter = HALF_PI / a_last  # K(m)
     j = math.floor(u / (2.0 * quarter) + 0.5)
     r = u - 2.0 * j * quarter
     v = a_last * r

@@ -10,7 +10,7 @@ is evaluated with Dekker's error-free products and Knuth's two-sum
 
 from numba import njit
 
-_SPLITTER = 134217729.0          # 2**27 + 1
+_SPLITTER = 134217729.0  # 2**27 + 1
 
 
 @njit(cache=True, nogil=True)

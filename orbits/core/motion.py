@@ -34,18 +34,44 @@ import math
 
 from numba import njit, prange
 
-from .elliptic import (AGM_LEVELS, agm_table, carlson_rj, ellipf_kc,
-                       ellippi_complete_carlson, jacobi_from_table)
-from .phase import (BRANCH_SAM, BRANCH_SEPARATRIX, elliptic_parameter,
-                    orbit_constants)
+from .elliptic import (
+    AGM_LEVELS,
+    agm_table,
+    carlson_rj,
+    ellipf_kc,
+    ellippi_complete_carlson,
+    jacobi_from_table,
+)
+from .phase import BRANCH_SAM, BRANCH_SEPARATRIX, elliptic_parameter, orbit_constants
 
 HALF_PI = 0.5 * math.pi
 TWO_PI = 2.0 * math.pi
 
-(SLOT_BRANCH, SLOT_I1, SLOT_I2, SLOT_I3, SLOT_A1, SLOT_A2, SLOT_A3, SLOT_KC,
- SLOT_RATE, SLOT_TAU0, SLOT_QUARTER, SLOT_N, SLOT_PI_COMPLETE, SLOT_PI_START,
- SLOT_COEF, SLOT_MOMENTUM, SLOT_PRECESSION, SLOT_TWO_E, SLOT_PERIOD,
- SLOT_M, SLOT_STILL, SLOT_LEVELS, SLOT_GAP_3M) = range(23)
+(
+    SLOT_BRANCH,
+    SLOT_I1,
+    SLOT_I2,
+    SLOT_I3,
+    SLOT_A1,
+    SLOT_A2,
+    SLOT_A3,
+    SLOT_KC,
+    SLOT_RATE,
+    SLOT_TAU0,
+    SLOT_QUARTER,
+    SLOT_N,
+    SLOT_PI_COMPLETE,
+    SLOT_PI_START,
+    SLOT_COEF,
+    SLOT_MOMENTUM,
+    SLOT_PRECESSION,
+    SLOT_TWO_E,
+    SLOT_PERIOD,
+    SLOT_M,
+    SLOT_STILL,
+    SLOT_LEVELS,
+    SLOT_GAP_3M,
+) = range(23)
 SLOT_MEANS = 23
 SLOT_GEOMETRIC = SLOT_MEANS + AGM_LEVELS
 ORBIT_SIZE = SLOT_GEOMETRIC + AGM_LEVELS
@@ -59,16 +85,19 @@ def _pi_of_u(orbit, u):
     ``sin, cos`` of ``am(r)`` (``|am(r)| <= pi/2``).
     """
     levels = int(orbit[SLOT_LEVELS])
-    means = orbit[SLOT_MEANS:SLOT_MEANS + AGM_LEVELS]
-    geometric = orbit[SLOT_GEOMETRIC:SLOT_GEOMETRIC + AGM_LEVELS]
+    means = orbit[SLOT_MEANS : SLOT_MEANS + AGM_LEVELS]
+    geometric = orbit[SLOT_GEOMETRIC : SLOT_GEOMETRIC + AGM_LEVELS]
     sn, cn, dn, j, r = jacobi_from_table(u, levels, means, geometric)
     parity = 1.0 - 2.0 * (j % 2.0 != 0.0)
-    s = parity * sn            # sin and cos of am(r), |am(r)| <= pi/2
+    s = parity * sn  # sin and cos of am(r), |am(r)| <= pi/2
     c = parity * cn
     n = orbit[SLOT_N]
     # DLMF 19.25.14 with F(am(r)) = r
-    value = (2.0 * j * orbit[SLOT_PI_COMPLETE] + r
-             + n / 3.0 * s * s * s * carlson_rj(c * c, dn * dn, 1.0, 1.0 - n * s * s))
+    value = (
+        2.0 * j * orbit[SLOT_PI_COMPLETE]
+        + r
+        + n / 3.0 * s * s * s * carlson_rj(c * c, dn * dn, 1.0, 1.0 - n * s * s)
+    )
     return value, sn, cn, dn, j, s, c
 
 
@@ -93,7 +122,8 @@ def orbit_setup(i1, i2, i3, w1, w2, w3, scale, offset, closing, orbit):
         The branch code (0 on the separatrix, where nothing is filled).
     """
     branch, two_e, m_sq, gap_m1, gap_3m, kc, q, p, b = orbit_constants(
-        i1, i2, i3, w1, w2, w3, scale, offset, closing)
+        i1, i2, i3, w1, w2, w3, scale, offset, closing
+    )
     orbit[SLOT_BRANCH] = branch
     if branch == BRANCH_SEPARATRIX:
         return branch
@@ -104,20 +134,23 @@ def orbit_setup(i1, i2, i3, w1, w2, w3, scale, offset, closing, orbit):
     a3 = math.sqrt(gap_m1 / (i3 * d31))
     if branch == BRANCH_SAM:
         a2 = math.sqrt(gap_3m / (i2 * d32))
-        sign = 1.0 if w3 >= 0.0 else -1.0       # w3 ~ dn never vanishes
+        sign = 1.0 if w3 >= 0.0 else -1.0  # w3 ~ dn never vanishes
         amp1, amp2, amp3 = a1, sign * a2, sign * a3
         cos0 = w1 / amp1 if amp1 > 0.0 else 1.0
         sin0 = w2 / amp2 if a2 > 0.0 else 0.0
         n = -i3 * d21 / (i1 * d32)
     else:
         a2 = math.sqrt(gap_m1 / (i2 * d21))
-        sign = 1.0 if w1 >= 0.0 else -1.0       # w1 ~ dn never vanishes
+        sign = 1.0 if w1 >= 0.0 else -1.0  # w1 ~ dn never vanishes
         amp1, amp2, amp3 = sign * a1, sign * a2, a3
         cos0 = w3 / amp3 if amp3 > 0.0 else 1.0
         sin0 = w2 / amp2 if a2 > 0.0 else 0.0
         n = -i3 * gap_m1 / (i1 * gap_3m)
-    levels = agm_table(kc, orbit[SLOT_MEANS:SLOT_MEANS + AGM_LEVELS],
-                       orbit[SLOT_GEOMETRIC:SLOT_GEOMETRIC + AGM_LEVELS])
+    levels = agm_table(
+        kc,
+        orbit[SLOT_MEANS : SLOT_MEANS + AGM_LEVELS],
+        orbit[SLOT_GEOMETRIC : SLOT_GEOMETRIC + AGM_LEVELS],
+    )
     quarter = HALF_PI / orbit[SLOT_MEANS + levels]
     rate = math.sqrt(q / (i1 * i2 * i3))
     momentum = math.sqrt(m_sq)
@@ -169,7 +202,7 @@ def state_at(orbit, t):
         w1 = orbit[SLOT_A1] * cn
         w3 = orbit[SLOT_A3] * dn
         if orbit[SLOT_STILL] != 0.0:
-            psi = -elapsed            # phi + psi = M t / I3, a plain spin
+            psi = -elapsed  # phi + psi = M t / I3, a plain spin
         else:
             # chi = atan2(I2 w2, I1 w1) follows +-am; unwrap it against am
             winding = 1.0 if amp2 >= 0.0 else -1.0
@@ -238,8 +271,7 @@ def omega_space_at(orbit, t):
     i3 = orbit[SLOT_I3]
     u = orbit[SLOT_TAU0] + orbit[SLOT_RATE] * t
     pi_u, sn, cn, dn, j, s_red, c_red = _pi_of_u(orbit, u)
-    phi = (orbit[SLOT_PRECESSION] * t
-           + orbit[SLOT_COEF] * (pi_u - orbit[SLOT_PI_START]))
+    phi = orbit[SLOT_PRECESSION] * t + orbit[SLOT_COEF] * (pi_u - orbit[SLOT_PI_START])
     w2 = orbit[SLOT_A2] * sn
     if orbit[SLOT_BRANCH] == BRANCH_SAM:
         w1 = orbit[SLOT_A1] * cn

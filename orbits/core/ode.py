@@ -25,11 +25,11 @@ import numpy as np
 from numba import njit
 from scipy.integrate._ivp import dop853_coefficients as _tableau
 
-N_STAGES = _tableau.N_STAGES                          # 12
+N_STAGES = _tableau.N_STAGES  # 12
 TABLEAU_A = np.ascontiguousarray(_tableau.A[:N_STAGES, :N_STAGES])
 TABLEAU_B = np.ascontiguousarray(_tableau.B)
 TABLEAU_C = np.ascontiguousarray(_tableau.C[:N_STAGES])
-TABLEAU_E3 = np.ascontiguousarray(_tableau.E3)        # 13 entries
+TABLEAU_E3 = np.ascontiguousarray(_tableau.E3)  # 13 entries
 TABLEAU_E5 = np.ascontiguousarray(_tableau.E5)
 
 SAFETY = 0.9
@@ -155,9 +155,21 @@ def euler_phi(y):
 
 
 @njit(cache=True, nogil=True)
-def integrate_to_event(inertia, y0, component, target, direction, count,
-                       rtol, atol, t_max, y_out, max_steps, max_step=np.inf,
-                       track_phi=False):
+def integrate_to_event(
+    inertia,
+    y0,
+    component,
+    target,
+    direction,
+    count,
+    rtol,
+    atol,
+    t_max,
+    y_out,
+    max_steps,
+    max_step=np.inf,
+    track_phi=False,
+):
     """Integrate until ``y[component] - target`` crosses zero ``count`` times
     in ``direction`` (+1 or -1); the start itself does not count.
 
@@ -212,16 +224,30 @@ def integrate_to_event(inertia, y0, component, target, direction, count,
             dop853_step(inertia, y, f, h, stages, y_new, f_new, work)
             err = error_norm(stages, h, y, y_new, rtol, atol)
             if err < 1.0:
-                factor = MAX_FACTOR if err == 0.0 else min(
-                    MAX_FACTOR, SAFETY * err ** ERROR_EXPONENT)
+                factor = (
+                    MAX_FACTOR if err == 0.0 else min(MAX_FACTOR, SAFETY * err**ERROR_EXPONENT)
+                )
                 break
-            h *= max(MIN_FACTOR, SAFETY * err ** ERROR_EXPONENT)
+            h *= max(MIN_FACTOR, SAFETY * err**ERROR_EXPONENT)
         g_new = y_new[component] - target
         if direction * g_old < 0.0 and direction * g_new >= 0.0:
             seen += 1
             if seen == count:
-                h_event = _locate(inertia, y, f, h, g_old, g_new, component,
-                                  target, stages, y_try, f_try, work, y_out)
+                h_event = _locate(
+                    inertia,
+                    y,
+                    f,
+                    h,
+                    g_old,
+                    g_new,
+                    component,
+                    target,
+                    stages,
+                    y_try,
+                    f_try,
+                    work,
+                    y_out,
+                )
                 if track_phi:
                     phi_total += _wrapped(euler_phi(y_out) - phi_last)
                 return t + h_event, phi_total
@@ -245,8 +271,7 @@ def _wrapped(angle):
 
 
 @njit(cache=True, nogil=True)
-def _locate(inertia, y, f, h, g_lo, g_hi, component, target, stages, y_try,
-            f_try, work, y_out):
+def _locate(inertia, y, f, h, g_lo, g_hi, component, target, stages, y_try, f_try, work, y_out):
     """Step length in (0, h] at which the event function vanishes.
 
     Illinois regula falsi on the step length: every trial is a full DOP853

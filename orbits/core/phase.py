@@ -57,8 +57,8 @@ _END_SLACK = 4.0 * 2.220446049250313e-16
 # below this |sin(dtheta)| the gap is assembled factor by factor (underflow)
 _TINY_OFFSET = 1.0e-200
 
-BRANCH_SAM = 1     # short-axis mode, M^2 > 2 E I2: M circles the I3 axis
-BRANCH_LAM = -1    # long-axis mode,  M^2 < 2 E I2: M circles the I1 axis
+BRANCH_SAM = 1  # short-axis mode, M^2 > 2 E I2: M circles the I3 axis
+BRANCH_LAM = -1  # long-axis mode,  M^2 < 2 E I2: M circles the I1 axis
 BRANCH_SEPARATRIX = 0
 
 STATUS_OK = 0
@@ -95,8 +95,15 @@ def body_constants(i1, i2, i3, phi):
     b = i1 * (i2 - i1) * cphi * cphi
     root_a = math.sqrt(a)
     root_b = math.sqrt(b)
-    return (cphi, sphi, math.atan2(root_a, root_b), math.atan2(root_b, root_a),
-            root_a, root_b, math.sqrt(a + b))
+    return (
+        cphi,
+        sphi,
+        math.atan2(root_a, root_b),
+        math.atan2(root_b, root_a),
+        root_a,
+        root_b,
+        math.sqrt(a + b),
+    )
 
 
 @njit(cache=True, nogil=True)
@@ -174,12 +181,12 @@ def spin_from_angle(constants, angle, from_offset):
     :func:`spin_gap`); when ``code`` is not ``STATUS_OK`` the spin is zero.
     """
     cphi, sphi, theta_c, co_theta_c, root_a, root_b, root_ab = constants
-    theta, dtheta, co_theta, code = angle_triplet(angle, from_offset, theta_c,
-                                                  co_theta_c)
+    theta, dtheta, co_theta, code = angle_triplet(angle, from_offset, theta_c, co_theta_c)
     if code != STATUS_OK:
         return code, theta, dtheta, theta_c, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     w1, w2, w3, scale, offset, closing = spin_gap(
-        cphi, sphi, root_a, root_b, root_ab, theta, dtheta, co_theta)
+        cphi, sphi, root_a, root_b, root_ab, theta, dtheta, co_theta
+    )
     return code, theta, dtheta, theta_c, w1, w2, w3, scale, offset, closing
 
 
@@ -236,11 +243,11 @@ def orbit_constants(i1, i2, i3, w1, w2, w3, scale, offset, closing):
     s3 = w3 * w3
     two_e = i1 * s1 + i2 * s2 + i3 * s3
     m_sq = i1 * i1 * s1 + i2 * i2 * s2 + i3 * i3 * s3
-    gap_m1 = i2 * d21 * s2 + i3 * d31 * s3          # M^2 - 2 E I1
-    gap_3m = i1 * d31 * s1 + i2 * d32 * s2          # 2 E I3 - M^2
+    gap_m1 = i2 * d21 * s2 + i3 * d31 * s3  # M^2 - 2 E I1
+    gap_3m = i1 * d31 * s1 + i2 * d32 * s2  # 2 E I3 - M^2
     if offset == 0.0 or closing == 0.0:
         return 0, two_e, m_sq, gap_m1, gap_3m, 0.0, 0.0, 0.0, 0.0
-    if offset < 0.0:                                 # M^2 > 2 E I2
+    if offset < 0.0:  # M^2 > 2 E I2
         branch = BRANCH_SAM
         q = d32 * gap_m1
         p = i2 * d31 / (i1 * d32)
@@ -254,8 +261,7 @@ def orbit_constants(i1, i2, i3, w1, w2, w3, scale, offset, closing):
     if magnitude > _TINY_OFFSET:
         kc = math.sqrt(d31 * scale * magnitude * closing / q)
     else:
-        kc = (math.sqrt(d31 / q) * math.sqrt(scale) * math.sqrt(magnitude)
-              * math.sqrt(closing))
+        kc = math.sqrt(d31 / q) * math.sqrt(scale) * math.sqrt(magnitude) * math.sqrt(closing)
     return branch, two_e, m_sq, gap_m1, gap_3m, kc, q, p, b
 
 
@@ -276,7 +282,8 @@ def total_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing):
     ``4 M / (I1 D) = 4 sqrt(M^2 I2 I3 / (I1 q))``.  Inf on the separatrix.
     """
     branch, two_e, m_sq, _, _, kc, q, p, b = orbit_constants(
-        i1, i2, i3, w1, w2, w3, scale, offset, closing)
+        i1, i2, i3, w1, w2, w3, scale, offset, closing
+    )
     if branch == BRANCH_SEPARATRIX:
         return np.inf
     total = 4.0 * math.sqrt(m_sq * i2 * i3 / (i1 * q)) * cel(kc, p, 1.0, b)
@@ -292,7 +299,8 @@ def parts_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing):
     ``Delta alpha`` are inf and ``m = 1``.
     """
     branch, two_e, m_sq, gap_m1, gap_3m, kc, q, p, b = orbit_constants(
-        i1, i2, i3, w1, w2, w3, scale, offset, closing)
+        i1, i2, i3, w1, w2, w3, scale, offset, closing
+    )
     if branch == BRANCH_SEPARATRIX:
         return two_e, m_sq, 1.0, 0, np.inf, np.inf, np.inf
     m_param = elliptic_parameter(i1, i2, i3, branch, gap_m1, gap_3m)
@@ -323,11 +331,13 @@ def _lane_setup(work, j, i1, i2, i3, constants, angle, from_offset):
     values and an infinite factor.
     """
     code, _, _, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
-        constants, angle, from_offset)
+        constants, angle, from_offset
+    )
     branch = BRANCH_SEPARATRIX
     if code == STATUS_OK:
         branch, _, m_sq, _, _, k_c, q, p, b = orbit_constants(
-            i1, i2, i3, w1, w2, w3, scale, offset, closing)
+            i1, i2, i3, w1, w2, w3, scale, offset, closing
+        )
     work[2, j] = 1.0
     if branch == BRANCH_SEPARATRIX:
         work[0, j] = 1.0
@@ -350,38 +360,73 @@ def _lane_finish(work, count, out, lo):
     smallest = 1.0
     for j in range(count):
         smallest = min(smallest, work[0, j])
-    cel_lanes(work[0], work[1], work[2], work[3], work[6], count,
-              cel_passes(smallest), work[7], work[8], work[9])
+    cel_lanes(
+        work[0],
+        work[1],
+        work[2],
+        work[3],
+        work[6],
+        count,
+        cel_passes(smallest),
+        work[7],
+        work[8],
+        work[9],
+    )
     for j in range(count):
         out[lo + j] = work[4, j] * work[6, j] - work[5, j]
 
 
 # Taylor coefficients (-1)^k / (2k+1)! and (-1)^k / (2k)!: on |x| <= pi/4 the
 # first omitted terms are below 1e-19, so the polynomials are good to ~1 ulp
-_S3, _S5, _S7, _S9 = (-0.16666666666666666, 0.008333333333333333,
-                      -0.0001984126984126984, 2.7557319223985893e-06)
-_S11, _S13, _S15, _S17 = (-2.505210838544172e-08, 1.6059043836821613e-10,
-                          -7.647163731819816e-13, 2.8114572543455206e-15)
-_C4, _C6, _C8, _C10 = (0.041666666666666664, -0.001388888888888889,
-                       2.48015873015873e-05, -2.755731922398589e-07)
-_C12, _C14, _C16, _C18 = (2.08767569878681e-09, -1.1470745597729725e-11,
-                          4.779477332387385e-14, -1.5619206968586225e-16)
+_S3, _S5, _S7, _S9 = (
+    -0.16666666666666666,
+    0.008333333333333333,
+    -0.0001984126984126984,
+    2.7557319223985893e-06,
+)
+_S11, _S13, _S15, _S17 = (
+    -2.505210838544172e-08,
+    1.6059043836821613e-10,
+    -7.647163731819816e-13,
+    2.8114572543455206e-15,
+)
+_C4, _C6, _C8, _C10 = (
+    0.041666666666666664,
+    -0.001388888888888889,
+    2.48015873015873e-05,
+    -2.755731922398589e-07,
+)
+_C12, _C14, _C16, _C18 = (
+    2.08767569878681e-09,
+    -1.1470745597729725e-11,
+    4.779477332387385e-14,
+    -1.5619206968586225e-16,
+)
 
 
 @njit(cache=True, nogil=True, inline="always")
 def _sin_small(x):
     """``sin x`` for ``|x| <= pi/4`` (Taylor, Horner in ``x^2``): SIMD-friendly."""
     z = x * x
-    return x + x * z * (_S3 + z * (_S5 + z * (_S7 + z * (_S9 + z * (
-        _S11 + z * (_S13 + z * (_S15 + z * _S17)))))))
+    return x + x * z * (
+        _S3 + z * (_S5 + z * (_S7 + z * (_S9 + z * (_S11 + z * (_S13 + z * (_S15 + z * _S17))))))
+    )
 
 
 @njit(cache=True, nogil=True, inline="always")
 def _cos_small(x):
     """``cos x`` for ``|x| <= pi/4`` (Taylor, Horner in ``x^2``)."""
     z = x * x
-    return 1.0 - 0.5 * z + z * z * (_C4 + z * (_C6 + z * (_C8 + z * (_C10 + z * (
-        _C12 + z * (_C14 + z * (_C16 + z * _C18)))))))
+    return (
+        1.0
+        - 0.5 * z
+        + z
+        * z
+        * (
+            _C4
+            + z * (_C6 + z * (_C8 + z * (_C10 + z * (_C12 + z * (_C14 + z * (_C16 + z * _C18))))))
+        )
+    )
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -416,7 +461,7 @@ def _one_body_setup(i1, i2, i3, constants, theta, dtheta, co_theta, work, count)
         mag = abs(dt)
         near = mag <= QUARTER_PI
         y = mag if near else (HALF_PI - mag) + HALF_PI_LOW
-        offset = _sin_small(y) if near else _cos_small(y)     # |sin dtheta|
+        offset = _sin_small(y) if near else _cos_small(y)  # |sin dtheta|
         closing = st * root_b + w3 * root_a
         w1 = st * cphi
         w2 = st * sphi
@@ -467,23 +512,21 @@ def total_phase_one_body(i1, i2, i3, phi, angles, from_offset, out, status):
             bad = 0
             for j in range(count):
                 theta, dtheta, co_theta, code = angle_triplet(
-                    angles[lo + j], from_offset, theta_c, co_theta_c)
+                    angles[lo + j], from_offset, theta_c, co_theta_c
+                )
                 status[lo + j] = code
                 if code != STATUS_OK:
                     bad += 1
-                    theta, dtheta, co_theta, _ = angle_triplet(safe, False, theta_c,
-                                                               co_theta_c)
+                    theta, dtheta, co_theta, _ = angle_triplet(safe, False, theta_c, co_theta_c)
                 lane[0, j] = theta
                 lane[1, j] = dtheta
                 lane[2, j] = co_theta
             # full batches pass the constant LANES: with the trip count known
             # at compile time LLVM's vector code is ~1.7x faster (measured)
             if count == LANES:
-                _one_body_setup(i1, i2, i3, constants, lane[0], lane[1], lane[2], work,
-                                LANES)
+                _one_body_setup(i1, i2, i3, constants, lane[0], lane[1], lane[2], work, LANES)
             else:
-                _one_body_setup(i1, i2, i3, constants, lane[0], lane[1], lane[2], work,
-                                count)
+                _one_body_setup(i1, i2, i3, constants, lane[0], lane[1], lane[2], work, count)
             if bad:
                 for j in range(count):
                     if status[lo + j] != STATUS_OK:
@@ -507,9 +550,15 @@ def total_phase_many(i1, i2, i3, phi, angles, from_offset, out, status):
             for j in range(count):
                 k = lo + j
                 status[k] = _lane_setup(
-                    work, j, i1[k], i2[k], i3[k],
-                    body_constants(i1[k], i2[k], i3[k], phi[k]), angles[k],
-                    from_offset)
+                    work,
+                    j,
+                    i1[k],
+                    i2[k],
+                    i3[k],
+                    body_constants(i1[k], i2[k], i3[k], phi[k]),
+                    angles[k],
+                    from_offset,
+                )
             if count == LANES:
                 _lane_finish(work, LANES, out, lo)
             else:
@@ -524,10 +573,14 @@ def total_phase_one_body_scalar(i1, i2, i3, phi, angles, from_offset, out, statu
     constants = body_constants(i1, i2, i3, phi)
     for k in prange(angles.shape[0]):
         code, _, _, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
-            constants, angles[k], from_offset)
+            constants, angles[k], from_offset
+        )
         status[k] = code
-        out[k] = (total_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing)
-                  if code == STATUS_OK else np.inf)
+        out[k] = (
+            total_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing)
+            if code == STATUS_OK
+            else np.inf
+        )
 
 
 @njit(cache=True, nogil=True, parallel=True)
@@ -538,14 +591,28 @@ def total_phase_many_scalar(i1, i2, i3, phi, angles, from_offset, out, status):
     """
     for k in prange(angles.shape[0]):
         code, _, _, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
-            body_constants(i1[k], i2[k], i3[k], phi[k]), angles[k], from_offset)
+            body_constants(i1[k], i2[k], i3[k], phi[k]), angles[k], from_offset
+        )
         status[k] = code
-        out[k] = (total_from_spin(i1[k], i2[k], i3[k], w1, w2, w3, scale, offset,
-                                  closing) if code == STATUS_OK else np.inf)
+        out[k] = (
+            total_from_spin(i1[k], i2[k], i3[k], w1, w2, w3, scale, offset, closing)
+            if code == STATUS_OK
+            else np.inf
+        )
 
 
-PARTS_COLUMNS = ("theta", "dtheta", "theta_crit", "two_e", "m_sq", "m",
-                 "branch", "period", "dynamic_phase", "total_phase")
+PARTS_COLUMNS = (
+    "theta",
+    "dtheta",
+    "theta_crit",
+    "two_e",
+    "m_sq",
+    "m",
+    "branch",
+    "period",
+    "dynamic_phase",
+    "total_phase",
+)
 
 
 @njit(cache=True, nogil=True)
@@ -565,9 +632,9 @@ def _store_parts(out, k, first, parts):
 def phase_parts_many(i1, i2, i3, phi, angles, from_offset, out, status):
     """All closed-form quantities; ``out[k]`` follows :data:`PARTS_COLUMNS`."""
     for k in prange(angles.shape[0]):
-        code, theta, dtheta, theta_c, w1, w2, w3, scale, offset, closing = \
-            spin_from_angle(body_constants(i1[k], i2[k], i3[k], phi[k]), angles[k],
-                            from_offset)
+        code, theta, dtheta, theta_c, w1, w2, w3, scale, offset, closing = spin_from_angle(
+            body_constants(i1[k], i2[k], i3[k], phi[k]), angles[k], from_offset
+        )
         status[k] = code
         out[k, 0] = theta
         out[k, 1] = dtheta
@@ -576,8 +643,9 @@ def phase_parts_many(i1, i2, i3, phi, angles, from_offset, out, status):
             for j in range(3, 10):
                 out[k, j] = np.nan
             continue
-        _store_parts(out, k, 3, parts_from_spin(i1[k], i2[k], i3[k], w1, w2, w3,
-                                                scale, offset, closing))
+        _store_parts(
+            out, k, 3, parts_from_spin(i1[k], i2[k], i3[k], w1, w2, w3, scale, offset, closing)
+        )
 
 
 @njit(cache=True, nogil=True, parallel=True)
@@ -592,5 +660,9 @@ def parts_from_vector_array(i1, i2, i3, w1, w2, w3, out):
     """:func:`parts_from_spin` for arbitrary spin vectors; ``out`` (n, 7)."""
     for k in prange(out.shape[0]):
         scale, offset, closing = vector_gap(i1[k], i2[k], i3[k], w1[k], w2[k], w3[k])
-        _store_parts(out, k, 0, parts_from_spin(i1[k], i2[k], i3[k], w1[k], w2[k],
-                                                w3[k], scale, offset, closing))
+        _store_parts(
+            out,
+            k,
+            0,
+            parts_from_spin(i1[k], i2[k], i3[k], w1[k], w2[k], w3[k], scale, offset, closing),
+        )

@@ -70,8 +70,9 @@ def _panel(a, b, sam, inv, gap_m1, gap_3m, gap, m_sq, momentum):
     time = 0.0
     area = 0.0
     for k in range(GAUSS_NODES.shape[0]):
-        dt, dcap = _integrands(mid + half * GAUSS_NODES[k], sam, inv, gap_m1,
-                               gap_3m, gap, m_sq, momentum)
+        dt, dcap = _integrands(
+            mid + half * GAUSS_NODES[k], sam, inv, gap_m1, gap_3m, gap, m_sq, momentum
+        )
         time += GAUSS_WEIGHTS[k] * dt
         area += GAUSS_WEIGHTS[k] * dcap
     return half * time, half * area
@@ -107,8 +108,7 @@ def period_and_cap(i1, i2, i3, w1, w2, w3, gap, rtol):
         lo_stack[depth] = HALF_PI * k / edges
         hi_stack[depth] = HALF_PI * (k + 1) / edges
         depth += 1
-    whole_t, whole_c = _panel(0.0, HALF_PI, sam, inv, gap_m1, gap_3m, gap, m_sq,
-                              momentum)
+    whole_t, whole_c = _panel(0.0, HALF_PI, sam, inv, gap_m1, gap_3m, gap, m_sq, momentum)
     total_t = 0.0
     total_c = 0.0
     scale_t = abs(whole_t)
@@ -123,8 +123,9 @@ def period_and_cap(i1, i2, i3, w1, w2, w3, gap, rtol):
         t_r, c_r = _panel(mid, b, sam, inv, gap_m1, gap_3m, gap, m_sq, momentum)
         scale_t = max(scale_t, total_t + t_l + t_r)
         scale_c = max(scale_c, total_c + c_l + c_r)
-        converged = (abs(t_l + t_r - t_ab) <= rtol * scale_t
-                     and abs(c_l + c_r - c_ab) <= rtol * max(scale_c, 1e-300))
+        converged = abs(t_l + t_r - t_ab) <= rtol * scale_t and abs(
+            c_l + c_r - c_ab
+        ) <= rtol * max(scale_c, 1e-300)
         if converged or depth + 2 > _STACK or b - a < 1e-15:
             total_t += t_l + t_r
             total_c += c_l + c_r
@@ -147,6 +148,6 @@ def montgomery_phase(i1, i2, i3, w1, w2, w3, gap, rtol):
     two_e = i1 * w1 * w1 + i2 * w2 * w2 + i3 * w3 * w3
     momentum = math.sqrt(i1 * i1 * w1 * w1 + i2 * i2 * w2 * w2 + i3 * i3 * w3 * w3)
     period, cap, branch = period_and_cap(i1, i2, i3, w1, w2, w3, gap, rtol)
-    signed = branch * cap          # right-hand rule: + on SAM, - on LAM
+    signed = branch * cap  # right-hand rule: + on SAM, - on LAM
     dynamic = two_e * period / momentum
     return dynamic - signed, dynamic, signed, period, branch

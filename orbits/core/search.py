@@ -61,11 +61,22 @@ _GOLDEN = 0.3819660112501051
 _NOISE = 16.0 * 2.220446049250313e-16
 
 INFO_SIZE = 12
-(INFO_MIN_SAM, INFO_MIN_AT_SAM, INFO_MIN_LAM, INFO_MIN_AT_LAM,
- INFO_TOP_SAM, INFO_TOP_LAM, INFO_UNREACHED_SAM, INFO_UNREACHED_LAM,
- INFO_WIDTH_SAM, INFO_WIDTH_LAM, INFO_EVALUATIONS, INFO_FALLBACKS) = range(INFO_SIZE)
+(
+    INFO_MIN_SAM,
+    INFO_MIN_AT_SAM,
+    INFO_MIN_LAM,
+    INFO_MIN_AT_LAM,
+    INFO_TOP_SAM,
+    INFO_TOP_LAM,
+    INFO_UNREACHED_SAM,
+    INFO_UNREACHED_LAM,
+    INFO_WIDTH_SAM,
+    INFO_WIDTH_LAM,
+    INFO_EVALUATIONS,
+    INFO_FALLBACKS,
+) = range(INFO_SIZE)
 
-BRANCH_INFO_SIZE = 4     # minimum, where, value at the smallest offset, unreached
+BRANCH_INFO_SIZE = 4  # minimum, where, value at the smallest offset, unreached
 
 
 # params: I1, I2, I3, sign, the 7 body constants, the evaluation counter
@@ -82,14 +93,13 @@ def phase_of_offset(d, params):
     """
     if params.shape[0] > _COUNTER:
         params[_COUNTER] += 1.0
-    constants = (params[4], params[5], params[6], params[7], params[8], params[9],
-                 params[10])
+    constants = (params[4], params[5], params[6], params[7], params[8], params[9], params[10])
     code, _, _, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
-        constants, params[3] * d, True)
+        constants, params[3] * d, True
+    )
     if code != STATUS_OK:
         return np.nan
-    return total_from_spin(params[0], params[1], params[2], w1, w2, w3, scale,
-                           offset, closing)
+    return total_from_spin(params[0], params[1], params[2], w1, w2, w3, scale, offset, closing)
 
 
 KIND_PHASE = 0
@@ -104,11 +114,21 @@ def synthetic_profile(d, params):
     ``params = (A, B, C, k, D, s, w)``: it diverges at the separatrix like
     the phase, oscillates across the branch and dips next to the far end.
     """
-    a, b, c, k, depth, spread, width = (params[0], params[1], params[2],
-                                        params[3], params[4], params[5],
-                                        params[6])
-    return (a * math.log(width / d) + b + c * math.sin(k * math.pi * d / width)
-            - depth * math.exp(-((width - d) / spread) ** 2))
+    a, b, c, k, depth, spread, width = (
+        params[0],
+        params[1],
+        params[2],
+        params[3],
+        params[4],
+        params[5],
+        params[6],
+    )
+    return (
+        a * math.log(width / d)
+        + b
+        + c * math.sin(k * math.pi * d / width)
+        - depth * math.exp(-(((width - d) / spread) ** 2))
+    )
 
 
 @njit(cache=True, nogil=True)
@@ -276,8 +296,7 @@ def _bracket(values, start, stop, level):
 
 
 @njit(cache=True, nogil=True)
-def search_branch(kind, params, width, levels, root_level, root_offset, found,
-                  branch_info):
+def search_branch(kind, params, width, levels, root_level, root_offset, found, branch_info):
     """Every ``d`` in (0, width) with ``f(d)`` equal to a level.
 
     ``f`` is :func:`phase_of_offset` (``kind = KIND_PHASE``), the phase at
@@ -317,13 +336,12 @@ def search_branch(kind, params, width, levels, root_level, root_offset, found,
         if abs(left) <= noise or abs(right) <= noise:
             continue
         if left * right < 0.0:
-            d_ext, f_ext = _extremum(kind, params, grid[k - 1], grid[k + 1],
-                                     right > 0.0)
+            d_ext, f_ext = _extremum(kind, params, grid[k - 1], grid[k + 1], right > 0.0)
             # the refined extremum replaces the scan point, keeping the
             # scan ordered and each piece monotone
             if grid[k - 1] < d_ext < grid[k + 1] and (
-                    (right > 0.0 and f_ext <= values[k])
-                    or (right < 0.0 and f_ext >= values[k])):
+                (right > 0.0 and f_ext <= values[k]) or (right < 0.0 and f_ext >= values[k])
+            ):
                 grid[k] = d_ext
                 values[k] = f_ext
             piece_lo[pieces] = k
@@ -348,8 +366,9 @@ def search_branch(kind, params, width, levels, root_level, root_offset, found,
                 return -1
             k = _bracket(values, start, stop, levels[j])
             root_level[found] = j
-            root_offset[found] = solve_level(kind, params, levels[j], grid[k],
-                                             grid[k + 1], values[k], values[k + 1])
+            root_offset[found] = solve_level(
+                kind, params, levels[j], grid[k], grid[k + 1], values[k], values[k + 1]
+            )
             found += 1
             j += 1
     return found
@@ -375,11 +394,13 @@ def phase_slope_of_offset(d, params):
     root_b = params[9]
     constants = (cphi, sphi, params[6], params[7], root_a, root_b, params[10])
     code, theta, dtheta, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
-        constants, params[3] * d, True)
+        constants, params[3] * d, True
+    )
     if code != STATUS_OK:
         return np.nan, np.nan
     branch, two_e, m_sq, gap_m1, gap_3m, kc, q, p, b = orbit_constants(
-        i1, i2, i3, w1, w2, w3, scale, offset, closing)
+        i1, i2, i3, w1, w2, w3, scale, offset, closing
+    )
     if branch == BRANCH_SEPARATRIX:
         return np.inf, np.nan
     d21 = i2 - i1
@@ -407,13 +428,11 @@ def phase_slope_of_offset(d, params):
         b_dot = b * (two_e_dot / two_e - q_rate)
         shift = 0.0
     # kc^2 = d31 scale sin(dtheta) closing / q (orbit_constants), in logs
-    kc_dot = 0.5 * kc * (math.cos(dtheta) * dtheta / offset + closing_dot / closing
-                         - q_rate)
+    kc_dot = 0.5 * kc * (math.cos(dtheta) * dtheta / offset + closing_dot / closing - q_rate)
     integral, integral_dot = cel_dual(kc, kc_dot, p, p_dot, 1.0, 0.0, b, b_dot)
     factor = 4.0 * math.sqrt(m_sq * i2 * i3 / (i1 * q))
     factor_dot = 0.5 * factor * (m_sq_dot / m_sq - q_rate)
-    return (factor * integral - shift,
-            factor_dot * integral + factor * integral_dot)
+    return (factor * integral - shift, factor_dot * integral + factor * integral_dot)
 
 
 @njit(cache=True, nogil=True)
@@ -453,7 +472,7 @@ def separatrix_expansion(params):
     s3 = w3 * w3
     two_e = i1 * s1 + i2 * s2 + i3 * s3
     m_sq = i1 * i1 * s1 + i2 * i2 * s2 + i3 * i3 * s3
-    if params[3] < 0.0:                          # SAM
+    if params[3] < 0.0:  # SAM
         q = d32 * (i2 * d21 * s2 + i3 * d31 * s3)
         p = i2 * d31 / (i1 * d32)
         b = d31 / d32
@@ -476,8 +495,9 @@ def separatrix_expansion(params):
     factor = 4.0 * math.sqrt(m_sq * i2 * i3 / (i1 * q))
     ratio = b / p
     slope = 0.5 * factor * ratio
-    return slope, factor * (ratio * (math.log(4.0) - 0.5 * math.log(kappa))
-                            + (1.0 - ratio) * j) - shift
+    return slope, factor * (
+        ratio * (math.log(4.0) - 0.5 * math.log(kappa)) + (1.0 - ratio) * j
+    ) - shift
 
 
 # Newton in ln d: stop once a step is below this (the next would be ~its
@@ -536,8 +556,8 @@ def newton_branch(params, width, levels, root_level, root_offset, found, branch_
         x_guess = (intercept - level) / slope
         lo = SMALLEST_OFFSET
         hi = width
-        r_lo = top - level         # > 0
-        r_hi = f_end - level       # < 0
+        r_lo = top - level  # > 0
+        r_hi = f_end - level  # < 0
         x_lo = math.log(lo)
         x_hi = log_width
         if not (x_lo < x_guess < x_hi):
@@ -645,12 +665,12 @@ def search_body(i1, i2, i3, levels, root_branch, root_level, root_offset, info):
         params[3] = sign
         width = constants[2] if branch_index == 0 else constants[3]
         start = found
-        found = newton_branch(params, width, levels, root_level, root_offset, found,
-                              branch_info)
+        found = newton_branch(params, width, levels, root_level, root_offset, found, branch_info)
         if found == -2:
             fallbacks += 1
-            found = search_branch(KIND_PHASE, params, width, levels, root_level,
-                                  root_offset, start, branch_info)
+            found = search_branch(
+                KIND_PHASE, params, width, levels, root_level, root_offset, start, branch_info
+            )
         if found < 0:
             return -1
         for k in range(start, found):
@@ -667,8 +687,7 @@ def search_body(i1, i2, i3, levels, root_branch, root_level, root_offset, info):
 
 
 @njit(cache=True, nogil=True)
-def search_body_bracketing(i1, i2, i3, levels, root_branch, root_level, root_offset,
-                           info):
+def search_body_bracketing(i1, i2, i3, levels, root_branch, root_level, root_offset, info):
     """The scan-and-bracket search of both branches (the reference).
 
     Every branch is scanned and split into monotone pieces
@@ -710,8 +729,9 @@ def search_body_bracketing(i1, i2, i3, levels, root_branch, root_level, root_off
         params[3] = sign
         width = constants[2] if branch_index == 0 else constants[3]
         start = found
-        found = search_branch(KIND_PHASE, params, width, levels, root_level,
-                              root_offset, found, branch_info)
+        found = search_branch(
+            KIND_PHASE, params, width, levels, root_level, root_offset, found, branch_info
+        )
         if found < 0:
             return -1
         for k in range(start, found):
@@ -735,8 +755,16 @@ def search_many(moments, levels, root_branch, root_level, root_offset, counts, i
     when its row of the output arrays was too short.
     """
     for b in prange(moments.shape[0]):
-        counts[b] = search_body(moments[b, 0], moments[b, 1], moments[b, 2], levels,
-                                root_branch[b], root_level[b], root_offset[b], info[b])
+        counts[b] = search_body(
+            moments[b, 0],
+            moments[b, 1],
+            moments[b, 2],
+            levels,
+            root_branch[b],
+            root_level[b],
+            root_offset[b],
+            info[b],
+        )
 
 
 @njit(cache=True, nogil=True)

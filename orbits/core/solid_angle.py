@@ -99,12 +99,22 @@ def solid_angle_from_invariants(i1, i2, i3, branch, m_sq, gap_m1, gap_3m, kc):
         # 4 v / (M D I3) with D = sqrt((I3-I2) u / (I1 I2 I3)), factor by factor
         # so that no product of four moments is formed (range of doubles)
         p = d31 * (m_sq / (i3 * gap_m1))
-        front = (4.0 * (gap_3m / momentum) * math.sqrt(i1 / i3)
-                 * math.sqrt(i2 / (i3 - i2)) / math.sqrt(gap_m1))
+        front = (
+            4.0
+            * (gap_3m / momentum)
+            * math.sqrt(i1 / i3)
+            * math.sqrt(i2 / (i3 - i2))
+            / math.sqrt(gap_m1)
+        )
         return front * cel(kc, p, 1.0, 0.0)
     p = d31 * (m_sq / (i1 * gap_3m))
-    front = (4.0 * (gap_m1 / momentum) * math.sqrt(i3 / i1)
-             * math.sqrt(i2 / (i2 - i1)) / math.sqrt(gap_3m))
+    front = (
+        4.0
+        * (gap_m1 / momentum)
+        * math.sqrt(i3 / i1)
+        * math.sqrt(i2 / (i2 - i1))
+        / math.sqrt(gap_3m)
+    )
     return -front * cel(kc, p, 1.0, 0.0)
 
 
@@ -113,9 +123,9 @@ def solid_angle_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing):
     """``Omega`` for the spin ``(w1, w2, w3)`` with the factored separatrix gap
     ``M^2 - 2 E I2 = -scale * offset * closing`` (see ``phase.spin_gap``)."""
     branch, _, m_sq, gap_m1, gap_3m, kc, _, _, _ = orbit_constants(
-        i1, i2, i3, w1, w2, w3, scale, offset, closing)
-    return solid_angle_from_invariants(i1, i2, i3, branch, m_sq, gap_m1,
-                                       gap_3m, kc)
+        i1, i2, i3, w1, w2, w3, scale, offset, closing
+    )
+    return solid_angle_from_invariants(i1, i2, i3, branch, m_sq, gap_m1, gap_3m, kc)
 
 
 @njit(cache=True, nogil=True, parallel=True)
@@ -129,12 +139,12 @@ def solid_angle_many(i1, i2, i3, phi, angles, from_offset, out):
     """
     for k in prange(angles.shape[0]):
         code, _, _, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
-            body_constants(i1[k], i2[k], i3[k], phi[k]), angles[k], from_offset)
+            body_constants(i1[k], i2[k], i3[k], phi[k]), angles[k], from_offset
+        )
         if code != STATUS_OK:
             out[k] = math.nan
             continue
-        out[k] = solid_angle_from_spin(i1[k], i2[k], i3[k], w1, w2, w3, scale,
-                                       offset, closing)
+        out[k] = solid_angle_from_spin(i1[k], i2[k], i3[k], w1, w2, w3, scale, offset, closing)
 
 
 @njit(cache=True, nogil=True, parallel=True)
@@ -143,5 +153,6 @@ def solid_angle_from_vector_array(i1, i2, i3, w1, w2, w3, out):
     separatrix.  The gap is the exact one of ``phase.vector_gap``."""
     for k in prange(out.shape[0]):
         scale, offset, closing = vector_gap(i1[k], i2[k], i3[k], w1[k], w2[k], w3[k])
-        out[k] = solid_angle_from_spin(i1[k], i2[k], i3[k], w1[k], w2[k], w3[k],
-                                       scale, offset, closing)
+        out[k] = solid_angle_from_spin(
+            i1[k], i2[k], i3[k], w1[k], w2[k], w3[k], scale, offset, closing
+        )

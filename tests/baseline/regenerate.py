@@ -16,8 +16,9 @@ HERE = Path(__file__).resolve().parent
 
 
 def _cases_module():
-    spec = importlib.util.spec_from_file_location("test_figure_images",
-                                                  HERE.parent / "test_figure_images.py")
+    spec = importlib.util.spec_from_file_location(
+        "test_figure_images", HERE.parent / "test_figure_images.py"
+    )
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -30,6 +31,7 @@ def cases():
 
 def main():
     from orbits.atomic import atomic_path
+
     module = _cases_module()
     for name in module.CASES:
         with atomic_path(HERE / f"{name}.png") as temporary:

@@ -57,8 +57,9 @@ BASE_DPS = 40
 def random_body(rng, kind=None):
     """Moments (unsorted, random scale) from the region or one of its edges."""
     if kind is None:
-        kind = rng.choice(["interior"] * 6 + ["prolate", "oblate", "flat",
-                                              "exactly_flat", "sphere", "rod"])
+        kind = rng.choice(
+            ["interior"] * 6 + ["prolate", "oblate", "flat", "exactly_flat", "sphere", "rod"]
+        )
     while True:
         if kind == "near_sphere":
             eps = 10.0 ** rng.uniform(-12, -2)
@@ -84,8 +85,11 @@ def random_body(rng, kind=None):
             moments = [i1, i2, i2 * (1.0 + 10.0 ** rng.uniform(-12, -2))]
         elif kind == "oblate":
             i1 = rng.uniform(0.41, 0.57)
-            moments = [i1, i1 * (1.0 + 10.0 ** rng.uniform(-12, -2)),
-                       rng.uniform(i1 * 1.01, 2 * i1)]
+            moments = [
+                i1,
+                i1 * (1.0 + 10.0 ** rng.uniform(-12, -2)),
+                rng.uniform(i1 * 1.01, 2 * i1),
+            ]
         elif kind == "sphere":
             eps = 10.0 ** rng.uniform(-6, -2)
             u, v = sorted(rng.uniform(0, 1, 2))
@@ -110,30 +114,39 @@ def exact_parts(moments, theta, phi):
     energy = (i1 * w1**2 + i2 * w2**2 + i3 * w3**2) / 2
     m_sq = i1**2 * w1**2 + i2**2 * w2**2 + i3**2 * w3**2
     momentum = mp.sqrt(m_sq)
-    if m_sq > 2 * energy * i2:           # SAM, eqn:GeometricPhase case 1
+    if m_sq > 2 * energy * i2:  # SAM, eqn:GeometricPhase case 1
         k2 = (i2 - i1) * (2 * energy * i3 - m_sq) / ((i3 - i2) * (m_sq - 2 * energy * i1))
         rate = mp.sqrt((i3 - i2) * (m_sq - 2 * energy * i1) / (i1 * i2 * i3))
         n = -i3 * (i2 - i1) / (i1 * (i3 - i2))
         shift = 2 * mp.pi
         branch = "SAM"
-    else:                                # LAM, eqn:GeometricPhase case 2
+    else:  # LAM, eqn:GeometricPhase case 2
         k2 = (i3 - i2) * (m_sq - 2 * energy * i1) / ((i2 - i1) * (2 * energy * i3 - m_sq))
         rate = mp.sqrt((i2 - i1) * (2 * energy * i3 - m_sq) / (i1 * i2 * i3))
         n = -i3 * (m_sq - 2 * energy * i1) / (i1 * (2 * energy * i3 - m_sq))
         shift = 0
         branch = "LAM"
     period = 4 * mp.ellipk(k2) / rate
-    total = (momentum * period / i3
-             + 4 * momentum * (i3 - i1) * mp.ellippi(n, k2) / (i1 * i3 * rate)
-             - shift)
+    total = (
+        momentum * period / i3
+        + 4 * momentum * (i3 - i1) * mp.ellippi(n, k2) / (i1 * i3 * rate)
+        - shift
+    )
     norm = mp.sqrt(i1**2 + i2**2 + i3**2)
     dynamic = 2 * energy * period / momentum
     # On an axis (k^2 = 0 exactly: theta = 0) the polhode is a point and
     # Omega = 0; the difference would be rounding noise at any precision.
     geometric = 0 if k2 == 0 else dynamic - total
-    return dict(energy=energy / norm, momentum=momentum / norm, m=k2,
-                branch=branch, period=period, dynamic_phase=dynamic,
-                total_phase=total, geometric_phase=geometric)
+    return dict(
+        energy=energy / norm,
+        momentum=momentum / norm,
+        m=k2,
+        branch=branch,
+        period=period,
+        dynamic_phase=dynamic,
+        total_phase=total,
+        geometric_phase=geometric,
+    )
 
 
 def converged_parts(moments, theta_at, phi, start_dps):
@@ -152,17 +165,18 @@ def converged_parts(moments, theta_at, phi, start_dps):
             raise RuntimeError(f"no convergence for {moments!r}, {phi!r}")
         mp.mp.dps = dps
         current = exact_parts(moments, theta_at(), phi)
-        if all(key == "branch" or abs(current[key] - previous[key])
-               <= mp.mpf(10) ** -25 * abs(current[key])
-               for key in current):
+        if all(
+            key == "branch"
+            or abs(current[key] - previous[key]) <= mp.mpf(10) ** -25 * abs(current[key])
+            for key in current
+        ):
             return current, theta_at()
         previous = current
 
 
 def theta_crit(moments, phi):
     i1, i2, i3 = sorted(mp.mpf(float(v)) for v in moments)
-    return mp.atan2(mp.sqrt(i3 * (i3 - i2)),
-                    mp.sqrt(i1 * (i2 - i1)) * abs(mp.cos(phi)))
+    return mp.atan2(mp.sqrt(i3 * (i3 - i2)), mp.sqrt(i1 * (i2 - i1)) * abs(mp.cos(phi)))
 
 
 def make_row(rng, mode, kind=None):
@@ -197,19 +211,26 @@ def make_row(rng, mode, kind=None):
         exponent = rng.uniform(-300, -1)
         side = rng.choice([-1.0, 1.0])
         room = tc if side < 0 else mp.pi / 2 - tc
-        offset = side * min(10.0 ** exponent, float(room) * 0.999)
+        offset = side * min(10.0**exponent, float(room) * 0.999)
         if offset == 0.0:
             return None
         start = BASE_DPS + int(-math.log10(abs(offset))) + 5
-        theta_at = (lambda mom, ph, off: lambda: theta_crit(mom, ph)
-                    + mp.mpf(off))(moments, phi, offset)
+        theta_at = (lambda mom, ph, off: lambda: theta_crit(mom, ph) + mp.mpf(off))(
+            moments, phi, offset
+        )
     parts, t_exact = converged_parts(moments, theta_at, mp.mpf(phi), start)
     if mode == "dtheta":
         theta = float(t_exact)
-    row = dict(kind=kind, m1=float(moments[0]), m2=float(moments[1]),
-               m3=float(moments[2]),
-               mode=mode, theta=float(theta), dtheta=float(offset),
-               phi=float(phi))
+    row = dict(
+        kind=kind,
+        m1=float(moments[0]),
+        m2=float(moments[1]),
+        m3=float(moments[2]),
+        mode=mode,
+        theta=float(theta),
+        dtheta=float(offset),
+        phi=float(phi),
+    )
     for key, value in parts.items():
         row[key] = value if key == "branch" else float(value)
     if mode == "theta":
@@ -236,18 +257,18 @@ def main():
             print(index, file=sys.stderr)
     sphere = np.random.default_rng(SPHERE_SEED)
     for index in range(N_SPHERE_ROWS):
-        row = make_row(sphere, "theta" if index % 2 == 0 else "dtheta",
-                       kind="near_sphere")
+        row = make_row(sphere, "theta" if index % 2 == 0 else "dtheta", kind="near_sphere")
         if row is not None:
             rows.append(row)
     with OUT.open("w", newline="") as handle:
-        handle.write(f"# generated by {Path(__file__).name} with mpmath "
-                     f"{mp.__version__}, seeds {SEED} and {SPHERE_SEED}\n")
+        handle.write(
+            f"# generated by {Path(__file__).name} with mpmath "
+            f"{mp.__version__}, seeds {SEED} and {SPHERE_SEED}\n"
+        )
         writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
         writer.writeheader()
         for row in rows:
-            writer.writerow({k: (repr(v) if isinstance(v, float) else v)
-                             for k, v in row.items()})
+            writer.writerow({k: (repr(v) if isinstance(v, float) else v) for k, v in row.items()})
     print(f"wrote {len(rows)} rows to {OUT}", file=sys.stderr)
 
 
