@@ -123,9 +123,13 @@ def find_roots(moments, levels):
         branch = np.empty(capacity, dtype=np.int8)
         level = np.empty(capacity, dtype=np.int64)
         offset = np.empty(capacity)
-        count = _kernels.search_body(
+        count = _kernels.search_body_newton(
             moments[0], moments[1], moments[2], levels, branch, level, offset, info
         )
+        if count == _kernels.NEEDS_BRACKETING:  # rare: compiled only when needed
+            count = _kernels.search_body(
+                moments[0], moments[1], moments[2], levels, branch, level, offset, info
+            )
         if count >= 0:
             return branch[:count], level[:count], offset[:count], info
         capacity *= 4

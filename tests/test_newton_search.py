@@ -201,3 +201,36 @@ def test_flatten_roots_matches_a_stable_lexsort():
     assert np.array_equal(body, want_body[order])
     assert np.array_equal(rows_level, want_level[order])
     assert np.array_equal(rows_offset, want_offset[order])
+
+
+def test_newton_only_kernel_equals_the_full_one():
+    """search_body_newton (what a catalog compiles first) gives search_body's
+    roots and info bit for bit wherever it needs no bracketing fallback."""
+    from orbits.search import searched
+
+    p, q, values = phase_levels(10, 2)
+    levels = np.ascontiguousarray(values[searched(p, q)])
+    for moments in region_grid(25):
+        out = []
+        for kernel in (kernels.search_body_newton, kernels.search_body):
+            arrays = (np.empty(400, np.int8), np.empty(400, np.int64), np.empty(400))
+            info = np.empty(kernels.INFO_SIZE)
+            count = kernel(*moments, levels, *arrays, info)
+            out.append((count, [a[: max(count, 0)] for a in arrays], info))
+        (count, arrays, info), (want_count, want_arrays, want_info) = out
+        if count == kernels.NEEDS_BRACKETING:
+            continue
+        assert count == want_count
+        for got, want in zip(arrays, want_arrays):
+            np.testing.assert_array_equal(got, want)
+        np.testing.assert_array_equal(info, want_info)
+
+
+def test_catalog_falls_back_to_the_full_search(monkeypatch):
+    """A body whose Newton search gives up is searched by search_body."""
+    import orbits
+
+    body = orbits.Body.preset("fig6")
+    want = orbits.closed_orbits(body, n_max=8, q_max=2)
+    monkeypatch.setattr(kernels, "search_body_newton", lambda *args: kernels.NEEDS_BRACKETING)
+    pd.testing.assert_frame_equal(orbits.closed_orbits(body, n_max=8, q_max=2), want)

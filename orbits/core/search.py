@@ -60,6 +60,8 @@ _GOLDEN = 0.3819660112501051
 # relative size of rounding noise in the scanned phase
 _NOISE = 16.0 * 2.220446049250313e-16
 
+# search_body_newton: a branch needs the bracketing search (call search_body)
+NEEDS_BRACKETING = -2
 INFO_SIZE = 12
 (
     INFO_MIN_SAM,
@@ -139,6 +141,29 @@ def _evaluate(kind, d, params):
 
 
 @njit(cache=True, nogil=True)
+def _merge_two(a, b, out):
+    i = 0
+    j = 0
+    for k in range(a.size + b.size):
+        if j >= b.size or (i < a.size and a[i] <= b[j]):
+            out[k] = a[i]
+            i += 1
+        else:
+            out[k] = b[j]
+            j += 1
+
+
+@njit(cache=True, nogil=True)
+def _merge_runs(values, first_end, second_end):
+    """``values`` sorted, given it is three ascending runs split at the two ends."""
+    head = np.empty(second_end)
+    _merge_two(values[:first_end], values[first_end:second_end], head)
+    merged = np.empty(values.size)
+    _merge_two(head, values[second_end:], merged)
+    return merged
+
+
+@njit(cache=True, nogil=True)
 def branch_grid(width, out):
     """Scan points ``d`` in (0, width], ascending; returns how many."""
     count = 0
@@ -152,7 +177,9 @@ def branch_grid(width, out):
     for k in range(1, END_POINTS + 1):
         out[count] = width * (1.0 - 10.0 ** (-0.5 - 0.75 * k))
         count += 1
-    grid = np.sort(out[:count])
+    # three ascending runs: merge them (the same order as np.sort, whose
+    # generic quicksort cost more compile time than the whole scan)
+    grid = _merge_runs(out[:count], LOG_POINTS, LOG_POINTS + UNIFORM_POINTS)
     unique = 0
     for k in range(count):
         if k == 0 or grid[k] > grid[k - 1]:
@@ -658,7 +685,7 @@ def search_body(i1, i2, i3, levels, root_branch, root_level, root_offset, info):
     for k in range(7):
         params[4 + k] = constants[k]
     branch_info = np.empty(BRANCH_INFO_SIZE)
-    found = 0
+    found = np.int64(0)  # not a literal: one compiled signature of the callees
     fallbacks = 0
     for branch_index in range(2):
         sign = -1.0 if branch_index == 0 else 1.0
@@ -673,17 +700,60 @@ def search_body(i1, i2, i3, levels, root_branch, root_level, root_offset, info):
             )
         if found < 0:
             return -1
-        for k in range(start, found):
-            root_branch[k] = 1 if branch_index == 0 else -1
-            root_offset[k] *= sign
-        info[INFO_MIN_SAM + 2 * branch_index] = branch_info[0]
-        info[INFO_MIN_AT_SAM + 2 * branch_index] = sign * branch_info[1]
-        info[INFO_TOP_SAM + branch_index] = branch_info[2]
-        info[INFO_UNREACHED_SAM + branch_index] = branch_info[3]
-        info[INFO_WIDTH_SAM + branch_index] = width
+        _record_branch(
+            branch_index, width, start, found, branch_info, root_branch, root_offset, info
+        )
     info[INFO_EVALUATIONS] = params[_COUNTER]
     info[INFO_FALLBACKS] = fallbacks
     return found
+
+
+@njit(cache=True, nogil=True)
+def search_body_newton(i1, i2, i3, levels, root_branch, root_level, root_offset, info):
+    """:func:`search_body` without its fallback: ``NEEDS_BRACKETING`` instead.
+
+    Returns the same as :func:`search_body` whenever no branch needs the
+    bracketing search, which is then never compiled: a cold first catalog
+    compiles only this (the fallback is rare; call :func:`search_body`).
+    """
+    constants = body_constants(i1, i2, i3, 0.0)
+    params = np.zeros(PARAMS_SIZE)
+    params[0] = i1
+    params[1] = i2
+    params[2] = i3
+    for k in range(7):
+        params[4 + k] = constants[k]
+    branch_info = np.empty(BRANCH_INFO_SIZE)
+    found = np.int64(0)
+    for branch_index in range(2):
+        params[3] = -1.0 if branch_index == 0 else 1.0
+        width = constants[2] if branch_index == 0 else constants[3]
+        start = found
+        found = newton_branch(params, width, levels, root_level, root_offset, found, branch_info)
+        if found == -2:
+            return NEEDS_BRACKETING
+        if found < 0:
+            return -1
+        _record_branch(
+            branch_index, width, start, found, branch_info, root_branch, root_offset, info
+        )
+    info[INFO_EVALUATIONS] = params[_COUNTER]
+    info[INFO_FALLBACKS] = 0
+    return found
+
+
+@njit(cache=True, nogil=True)
+def _record_branch(branch_index, width, start, found, branch_info, root_branch, root_offset, info):
+    """Signs, branch labels and the branch's ``info`` slots (roots start..found)."""
+    sign = -1.0 if branch_index == 0 else 1.0
+    for k in range(start, found):
+        root_branch[k] = 1 if branch_index == 0 else -1
+        root_offset[k] *= sign
+    info[INFO_MIN_SAM + 2 * branch_index] = branch_info[0]
+    info[INFO_MIN_AT_SAM + 2 * branch_index] = sign * branch_info[1]
+    info[INFO_TOP_SAM + branch_index] = branch_info[2]
+    info[INFO_UNREACHED_SAM + branch_index] = branch_info[3]
+    info[INFO_WIDTH_SAM + branch_index] = width
 
 
 @njit(cache=True, nogil=True)
@@ -723,7 +793,7 @@ def search_body_bracketing(i1, i2, i3, levels, root_branch, root_level, root_off
     for k in range(7):
         params[4 + k] = constants[k]
     branch_info = np.empty(BRANCH_INFO_SIZE)
-    found = 0
+    found = np.int64(0)
     for branch_index in range(2):
         sign = -1.0 if branch_index == 0 else 1.0
         params[3] = sign
