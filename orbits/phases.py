@@ -73,8 +73,6 @@ def _first_bad(array):
 
 # |angle| above which fold_angle refuses (the input's ulp exceeds 4e-10 rad)
 FOLD_LIMIT = 2.0**21
-# pi - fl(pi): the low part of pi in double-double
-_PI_LOW = 1.2246467991473532e-16
 
 
 def fold_angle(angle):
@@ -99,34 +97,32 @@ def fold_angle(angle):
         ``|angle|`` bit for bit.  Others are reduced by pi in double-double
         (``fl(pi)`` exactly by ``fmod``, then pi's low part): correctly
         rounded to within about half an ulp of the result (1.1e-16 relative
-        against mpmath over ``|angle| <= FOLD_LIMIT = 2**21``).
+        against mpmath over ``|angle| <= FOLD_LIMIT = 2**21``).  When every
+        value already lies in ``[0, pi/2]`` the input array itself is returned
+        (no copy).
 
     Raises
     ------
     AngleError
         A finite ``|angle| > FOLD_LIMIT``.
     """
+    from .core import angles as _angles
+
     angle = np.asarray(angle, dtype=float)
-    large = np.isfinite(angle) & (np.abs(angle) > FOLD_LIMIT)
-    if large.any():
+    flat = np.ascontiguousarray(angle).reshape(-1)
+    if _angles.all_folded(flat):
+        return angle  # the common case: no copy (a fresh 8 MB array costs page faults)
+    folded = np.empty_like(flat)
+    first = _angles.fold_many(flat, FOLD_LIMIT, folded)
+    if first >= 0:
         # beyond the limit the double's own spacing exceeds 4e-10 rad, and far
         # beyond it the double carries no fraction of a radian at all, so a
         # fold would be a made-up number
         raise AngleError(
-            f"angle {angle[large].flat[0]:.17g} rad is too large to fold into "
+            f"angle {flat[first]:.17g} rad is too large to fold into "
             f"[0, pi/2] faithfully; give angles within +-{FOLD_LIMIT:.0f} rad"
         )
-    with np.errstate(invalid="ignore"):
-        # t -> -t first (exact).  fmod by the double pi is exact: r = a - k fl(pi);
-        # the true a - k pi follows with pi's low part, and pi - r likewise, so
-        # the fold errs by rounding of the result only, not by k ulp(pi)
-        size = np.abs(angle)
-        high = np.fmod(size, np.pi)
-        low = -np.rint((size - high) / np.pi) * _PI_LOW  # size - k pi = high + low
-        below = high + low
-        folded = np.where(high <= 0.5 * np.pi, below, (np.pi - high) + (_PI_LOW - low))
-        folded = np.where(below < 0.0, -below, folded)  # just below a multiple of pi
-    return np.where(np.isfinite(angle), folded, angle)
+    return folded.reshape(angle.shape)
 
 
 def _spin_inputs(moments, theta, dtheta, phi):
@@ -150,9 +146,9 @@ def _flat(array, shape):
 
 def _check_status(status, moments, angle, phi, shape, from_offset):
     """Raise the error that the kernel's first non-OK status code stands for."""
-    bad = np.flatnonzero(status.ravel())
-    if bad.size == 0:
+    if not status.any():  # the common case, without an index array
         return
+    bad = np.flatnonzero(status.ravel())
     k = int(bad[0])
     code = int(status.ravel()[k])
     value = float(_flat(angle, shape)[k])

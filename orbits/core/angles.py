@@ -1,0 +1,56 @@
+"""Folding of spin angles into [0, pi/2], compiled (see :func:`orbits.phases.fold_angle`).
+
+The spin ``(sin t cos p, sin t sin p, cos t)`` has the same period, E, M and
+total phase when any component changes sign, so each angle folds as
+``|x - k pi|`` reduced to ``[0, pi/2]``.  The reduction is by pi in
+double-double: ``fmod`` by ``fl(pi)`` is exact, then pi's low part corrects
+it, so the result is correctly rounded (not off by ``k ulp(pi)``).
+"""
+
+import math
+
+import numpy as np
+from numba import njit
+
+HALF_PI = 0.5 * math.pi
+# pi - fl(pi): the low part of pi in double-double
+PI_LOW = 1.2246467991473532e-16
+
+
+@njit(cache=True, nogil=True)
+def fold_one(x):
+    """One angle folded into ``[0, pi/2]``; NaN and inf pass through."""
+    if not math.isfinite(x):
+        return x
+    size = abs(x)
+    if size <= HALF_PI:
+        return size  # bit for bit
+    high = np.fmod(size, math.pi)  # exact: size - k fl(pi)
+    low = -np.rint((size - high) / math.pi) * PI_LOW  # size - k pi = high + low
+    below = high + low
+    if below < 0.0:  # just below a multiple of pi
+        return -below
+    if high <= HALF_PI:
+        return below
+    return (math.pi - high) + (PI_LOW - low)
+
+
+@njit(cache=True, nogil=True)
+def fold_many(values, limit, out):
+    """``out[i] = fold_one(values[i])``; the index of the first finite value
+    with ``|value| > limit`` (not folded), or -1."""
+    for i in range(values.size):
+        x = values[i]
+        if math.isfinite(x) and abs(x) > limit:
+            return i
+        out[i] = fold_one(x)
+    return -1
+
+
+@njit(cache=True, nogil=True)
+def all_folded(values):
+    """True when every value already lies in ``[0, pi/2]`` (nothing to fold)."""
+    for i in range(values.size):
+        if not (0.0 <= values[i] <= HALF_PI):
+            return False
+    return True
