@@ -221,21 +221,10 @@ def solid_faces(body, solid="auto"):
 
 
 def _box_faces(lo, hi):
-    (x0, y0, z0), (x1, y1, z1) = lo, hi
-    corners = np.array(
-        [
-            [x0, y0, z0],
-            [x1, y0, z0],
-            [x1, y1, z0],
-            [x0, y1, z0],
-            [x0, y0, z1],
-            [x1, y0, z1],
-            [x1, y1, z1],
-            [x0, y1, z1],
-        ]
-    )
-    faces = [[0, 1, 2, 3], [4, 5, 6, 7], [0, 1, 5, 4], [2, 3, 7, 6], [1, 2, 6, 5], [0, 3, 7, 4]]
-    return [corners[f] for f in faces]
+    """The six faces of an axis-aligned box (as :mod:`orbits.plotting` draws it)."""
+    from .plotting import _box_faces as faces
+
+    return faces(lo, hi)
 
 
 def t_handle_boxes(l1, l2, w):

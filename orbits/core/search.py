@@ -646,6 +646,19 @@ def newton_branch(params, width, levels, root_level, root_offset, found, branch_
 
 
 @njit(cache=True, nogil=True)
+def _body_params(i1, i2, i3):
+    """The body's constants (phi = 0) and the parameter vector of the phase."""
+    constants = body_constants(i1, i2, i3, 0.0)
+    params = np.zeros(PARAMS_SIZE)
+    params[0] = i1
+    params[1] = i2
+    params[2] = i3
+    for k in range(7):
+        params[4 + k] = constants[k]
+    return constants, params
+
+
+@njit(cache=True, nogil=True)
 def search_body(i1, i2, i3, levels, root_branch, root_level, root_offset, info):
     """All roots of ``Delta alpha = levels[j]`` on both branches of one body.
 
@@ -677,13 +690,7 @@ def search_body(i1, i2, i3, levels, root_branch, root_level, root_offset, info):
     monotonicity check fails, by the scan-and-bracket
     :func:`search_branch` (see :func:`search_body_bracketing`).
     """
-    constants = body_constants(i1, i2, i3, 0.0)
-    params = np.zeros(PARAMS_SIZE)
-    params[0] = i1
-    params[1] = i2
-    params[2] = i3
-    for k in range(7):
-        params[4 + k] = constants[k]
+    constants, params = _body_params(i1, i2, i3)
     branch_info = np.empty(BRANCH_INFO_SIZE)
     found = np.int64(0)  # not a literal: one compiled signature of the callees
     fallbacks = 0
@@ -716,13 +723,7 @@ def search_body_newton(i1, i2, i3, levels, root_branch, root_level, root_offset,
     bracketing search, which is then never compiled: a cold first catalog
     compiles only this (the fallback is rare; call :func:`search_body`).
     """
-    constants = body_constants(i1, i2, i3, 0.0)
-    params = np.zeros(PARAMS_SIZE)
-    params[0] = i1
-    params[1] = i2
-    params[2] = i3
-    for k in range(7):
-        params[4 + k] = constants[k]
+    constants, params = _body_params(i1, i2, i3)
     branch_info = np.empty(BRANCH_INFO_SIZE)
     found = np.int64(0)
     for branch_index in range(2):
@@ -785,13 +786,7 @@ def search_body_bracketing(i1, i2, i3, levels, root_branch, root_level, root_off
     int
         Number of roots found, or ``-1`` if the output arrays are too short.
     """
-    constants = body_constants(i1, i2, i3, 0.0)
-    params = np.zeros(PARAMS_SIZE)
-    params[0] = i1
-    params[1] = i2
-    params[2] = i3
-    for k in range(7):
-        params[4 + k] = constants[k]
+    constants, params = _body_params(i1, i2, i3)
     branch_info = np.empty(BRANCH_INFO_SIZE)
     found = np.int64(0)
     for branch_index in range(2):
