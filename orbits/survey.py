@@ -360,8 +360,12 @@ class Survey:
             raise InputError(f"{self.out_dir} exists and is not a directory")
         if not self.out_dir.is_dir() or (self.out_dir / MANIFEST).exists():
             return
-        # a survey being created (by another run, or one killed) has only these
-        ours = re.compile(rf"{re.escape(LOCK)}|bodies|orbits|\.manifest\.json\..*\.part")
+        # a survey being created (by another run, or one killed) has only these;
+        # the manifest too, since another run may write it between the check
+        # above and this listing (a report without a manifest is damage)
+        ours = re.compile(
+            rf"{re.escape(LOCK)}|bodies|orbits|manifest\.json|\.manifest\.json\..*\.part"
+        )
         if any(not ours.fullmatch(p.name) for p in self.out_dir.iterdir()):
             raise InputError(f"{self.out_dir} exists and is not a survey directory")
 
