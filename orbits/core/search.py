@@ -695,8 +695,7 @@ def search_body(i1, i2, i3, levels, root_branch, root_level, root_offset, info):
     found = np.int64(0)  # not a literal: one compiled signature of the callees
     fallbacks = 0
     for branch_index in range(2):
-        sign = -1.0 if branch_index == 0 else 1.0
-        params[3] = sign
+        params[3] = -1.0 if branch_index == 0 else 1.0
         width = constants[2] if branch_index == 0 else constants[3]
         start = found
         found = newton_branch(params, width, levels, root_level, root_offset, found, branch_info)
@@ -763,35 +762,14 @@ def search_body_bracketing(i1, i2, i3, levels, root_branch, root_level, root_off
 
     Every branch is scanned and split into monotone pieces
     (:func:`search_branch`); kept as the reference of :func:`search_body`
-    in the tests and as its fallback.  Arguments and results as for
-    :func:`search_body`.
-
-    Parameters
-    ----------
-    i1, i2, i3 : float
-        Principal moments, ascending.
-    levels : ndarray
-        Target phases, ascending (``2 pi p / q``).
-    root_branch, root_level, root_offset : ndarray
-        Receive, per root, the branch (+1 SAM, -1 LAM), the index into
-        ``levels`` and ``dtheta``.
-    info : ndarray (INFO_SIZE,)
-        Per branch: the minimum of the phase and its ``dtheta``, the phase
-        at ``|dtheta| = 2.2e-308``, the number of levels above it (roots
-        that would lie closer to the separatrix than a double can say),
-        and the branch width.
-
-    Returns
-    -------
-    int
-        Number of roots found, or ``-1`` if the output arrays are too short.
+    in the tests and as its fallback.  Arguments, ``info`` and the result
+    as for :func:`search_body` (no branch falls back: ``info`` counts 0).
     """
     constants, params = _body_params(i1, i2, i3)
     branch_info = np.empty(BRANCH_INFO_SIZE)
     found = np.int64(0)
     for branch_index in range(2):
-        sign = -1.0 if branch_index == 0 else 1.0
-        params[3] = sign
+        params[3] = -1.0 if branch_index == 0 else 1.0
         width = constants[2] if branch_index == 0 else constants[3]
         start = found
         found = search_branch(
@@ -799,14 +777,9 @@ def search_body_bracketing(i1, i2, i3, levels, root_branch, root_level, root_off
         )
         if found < 0:
             return -1
-        for k in range(start, found):
-            root_branch[k] = 1 if branch_index == 0 else -1
-            root_offset[k] *= sign
-        info[INFO_MIN_SAM + 2 * branch_index] = branch_info[0]
-        info[INFO_MIN_AT_SAM + 2 * branch_index] = sign * branch_info[1]
-        info[INFO_TOP_SAM + branch_index] = branch_info[2]
-        info[INFO_UNREACHED_SAM + branch_index] = branch_info[3]
-        info[INFO_WIDTH_SAM + branch_index] = width
+        _record_branch(
+            branch_index, width, start, found, branch_info, root_branch, root_offset, info
+        )
     info[INFO_EVALUATIONS] = params[_COUNTER]
     info[INFO_FALLBACKS] = 0
     return found
