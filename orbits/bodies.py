@@ -95,15 +95,6 @@ def canonical_moments(moments):
     bad = flat[:, 0] <= 0.0
     if bad.any():
         raise NonPhysicalBodyError(f"moments {_row(flat, bad)} must all be positive")
-    bad = flat[:, 0] < np.finfo(float).tiny
-    if bad.any():
-        # a subnormal double keeps fewer than 53 bits: the body would not be
-        # the one typed (1e-320 is stored as 9.99988671826831e-321)
-        raise NonPhysicalBodyError(
-            f"moments {_row(flat, bad)} are below the smallest normal double "
-            "(2.2e-308) and carry reduced precision; rescale them (the phases "
-            "do not depend on the scale)"
-        )
     _, exponent = np.frexp(flat[:, 2])
     exponent = exponent.astype(np.int64)
     with np.errstate(under="ignore"):

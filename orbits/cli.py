@@ -50,6 +50,22 @@ def _finite(text):
     return value
 
 
+def _moment(text):
+    """A moment typed in decimal: refused where the double would not be it.
+
+    Below the smallest normal double (2.2e-308) a decimal is stored with
+    fewer than 53 bits (``1e-320`` becomes ``9.99988671826831e-321``), so the
+    body computed would silently differ from the one typed.
+    """
+    value = _finite(text)
+    if 0.0 < abs(value) < sys.float_info.min:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is below the smallest normal double (2.2e-308) and would be "
+            "stored with reduced precision; give the moments in larger units"
+        )
+    return value
+
+
 def _positive_int(text):
     try:
         value = int(text)
@@ -71,7 +87,7 @@ def add_body_options(parser, many=False):
     exclusive.add_argument(
         "--moments",
         nargs=3,
-        type=_finite,
+        type=_moment,
         metavar=("I1", "I2", "I3"),
         help="principal moments of inertia",
     )
