@@ -146,6 +146,36 @@ def test_matches_mpmath_down_to_one_minus_m_1e12(branch_sign, one_minus_m):
     assert circular(state.euler[:, 2], euler[:, 2]).max() <= 1e-12
 
 
+@pytest.mark.parametrize(
+    "omega0",
+    [
+        (6.123233995736766e-17, 1.0, 6.123233995736766e-17),  # theta = phi = pi/2
+        (1e-12, 1.0, -3e-12),
+        (-1e-8, 1.0, 2e-8),
+        (1e-5, -1.0, 1e-5),
+        (2e-10, 1.0, -1e-10),  # LAM
+        (-3e-16, -1.0, 1e-16),  # LAM
+    ],
+)
+def test_spin_near_the_unstable_axis_matches_mpmath(omega0):
+    """A spin within 1e-5..6e-17 of the I2 axis: the Dzhanibekov flip on time.
+
+    The start argument u0 = F(am0) has am0 within ~1e-16 of pi/2, where
+    the amplitude itself rounds; it is formed from the complementary
+    amplitude.  (Before, ``(6e-17, 1, 6e-17)`` flipped at the wrong time:
+    |omega| wrong by 1.2 after two periods; 1e-8 off the axis, by 1e-9.)
+    Reference: mpmath at 60 digits from the same double omega0.
+    """
+    body = Body(FIG6.normalized_moments)
+    motion = Motion.from_omega(body, omega0)
+    times = np.linspace(0.0, 2.0 * motion.period, 41)
+    omega, euler, omega_space = exact_motion_mpmath(body.moments, motion.omega0, times, dps=60)
+    state = motion.state(times)
+    assert np.abs(state.omega - omega).max() <= 2e-13
+    assert np.abs(state.omega_space - omega_space).max() <= 2e-13
+    assert np.abs(state.euler[:, 0] - euler[:, 0]).max() <= 2e-13 * max(1.0, abs(euler[-1, 0]))
+
+
 def test_sign_convention_rotation_after_one_period():
     """R(T) = Rot(+M, Delta alpha) R(0): omega_space(T) = Rz(+Delta alpha) omega_space(0)."""
     for body, theta in ((FIG6, 0.7), (FIG6, 1.3), (T_HANDLE, 1.2)):

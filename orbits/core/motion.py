@@ -102,6 +102,27 @@ def _pi_of_u(orbit, u):
 
 
 @njit(cache=True, nogil=True)
+def start_argument(sin0, cos0, kc, quarter):
+    """``u0`` with ``(sn u0, cn u0)`` along ``(sin0, cos0)``, ``|u0| <= 2K``.
+
+    ``u0 = F(atan2(sin0, cos0) | m)`` in factored form.  Near ``am = +-pi/2``
+    (a spin near the unstable I2 axis, where ``cos0`` may be 1e-17 and the
+    amplitude itself rounds to ``pi/2``) the complementary amplitude
+    ``psi`` with ``tan(am) tan(psi) = 1/kc`` carries the small part:
+    ``F(am) = K - F(psi)`` (``cn(K - x) = kc sd(x)``, DLMF 22.4.iii),
+    so ``u0 = +-(K + F(atan2(-cos0, kc |sin0|)))``.  Near ``am = pi``,
+    ``F(pi - x) = 2K - F(x)``.  ``quarter`` is ``K``.
+    """
+    if abs(cos0) >= abs(sin0):
+        if cos0 > 0.0:
+            return ellipf_kc(math.atan2(sin0, cos0), kc)
+        sign = 1.0 if sin0 >= 0.0 else -1.0
+        return sign * 2.0 * quarter - ellipf_kc(math.atan2(sin0, -cos0), kc)
+    sign = 1.0 if sin0 > 0.0 else -1.0
+    return sign * (quarter + ellipf_kc(math.atan2(-cos0, kc * abs(sin0)), kc))
+
+
+@njit(cache=True, nogil=True)
 def orbit_setup(i1, i2, i3, w1, w2, w3, scale, offset, closing, orbit):
     """Fill ``orbit`` with the constants of the motion through omega0.
 
@@ -175,7 +196,7 @@ def orbit_setup(i1, i2, i3, w1, w2, w3, scale, offset, closing, orbit):
     # a steady spin about I3: the Euler angles phi and psi share one axis
     orbit[SLOT_STILL] = 1.0 if (branch == BRANCH_SAM and gap_3m == 0.0) else 0.0
     orbit[SLOT_LEVELS] = levels
-    tau0 = ellipf_kc(math.atan2(sin0, cos0), kc)
+    tau0 = start_argument(sin0, cos0, kc, quarter)
     orbit[SLOT_TAU0] = tau0
     orbit[SLOT_PI_START] = _pi_of_u(orbit, tau0)[0]
     return branch
