@@ -169,20 +169,6 @@ def test_llvm_emits_packed_sqrt_and_division():
     assert re.search(r"\bv?divpd\b", asm)
 
 
-def test_polynomial_sin_cos_within_two_ulps():
-    """The SIMD set-up's sin/cos on [-pi/4, pi/4] against mpmath, to 2 ulp."""
-    import mpmath as mp
-
-    x = np.concatenate(
-        [np.linspace(-math.pi / 4, math.pi / 4, 2001), np.geomspace(1e-300, math.pi / 4, 500)]
-    )
-    for value in x:
-        with mp.workdps(40):
-            s, c = mp.sin(mp.mpf(value)), mp.cos(mp.mpf(value))
-        assert abs(kernels._sin_small(value) - float(s)) <= 2 * np.spacing(abs(float(s)))
-        assert abs(kernels._cos_small(value) - float(c)) <= 2 * np.spacing(float(c))
-
-
 def test_one_body_simd_path_against_mpmath_reference():
     """Per-body calls (the one-body SIMD set-up) on the reference table.
 

@@ -47,6 +47,7 @@ from numba import njit, prange
 
 from .elliptic import cel, cel_lanes, cel_pair, cel_passes
 from .exact import separatrix_gap_exact
+from .trig import cos_small, sin_small
 
 TWO_PI = 2.0 * math.pi
 HALF_PI = 0.5 * math.pi
@@ -376,59 +377,6 @@ def _lane_finish(work, count, out, lo):
         out[lo + j] = work[4, j] * work[6, j] - work[5, j]
 
 
-# Taylor coefficients (-1)^k / (2k+1)! and (-1)^k / (2k)!: on |x| <= pi/4 the
-# first omitted terms are below 1e-19, so the polynomials are good to ~1 ulp
-_S3, _S5, _S7, _S9 = (
-    -0.16666666666666666,
-    0.008333333333333333,
-    -0.0001984126984126984,
-    2.7557319223985893e-06,
-)
-_S11, _S13, _S15, _S17 = (
-    -2.505210838544172e-08,
-    1.6059043836821613e-10,
-    -7.647163731819816e-13,
-    2.8114572543455206e-15,
-)
-_C4, _C6, _C8, _C10 = (
-    0.041666666666666664,
-    -0.001388888888888889,
-    2.48015873015873e-05,
-    -2.755731922398589e-07,
-)
-_C12, _C14, _C16, _C18 = (
-    2.08767569878681e-09,
-    -1.1470745597729725e-11,
-    4.779477332387385e-14,
-    -1.5619206968586225e-16,
-)
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _sin_small(x):
-    """``sin x`` for ``|x| <= pi/4`` (Taylor, Horner in ``x^2``): SIMD-friendly."""
-    z = x * x
-    return x + x * z * (
-        _S3 + z * (_S5 + z * (_S7 + z * (_S9 + z * (_S11 + z * (_S13 + z * (_S15 + z * _S17))))))
-    )
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _cos_small(x):
-    """``cos x`` for ``|x| <= pi/4`` (Taylor, Horner in ``x^2``)."""
-    z = x * x
-    return (
-        1.0
-        - 0.5 * z
-        + z
-        * z
-        * (
-            _C4
-            + z * (_C6 + z * (_C8 + z * (_C10 + z * (_C12 + z * (_C14 + z * (_C16 + z * _C18))))))
-        )
-    )
-
-
 @njit(cache=True, nogil=True, error_model="numpy")
 def _one_body_setup(i1, i2, i3, constants, theta, dtheta, co_theta, work, count):
     """Rows 0-5 of ``work`` (see :func:`_lane_setup`) for valid lanes, SIMD form.
@@ -453,15 +401,15 @@ def _one_body_setup(i1, i2, i3, constants, theta, dtheta, co_theta, work, count)
         c = co_theta[j]
         low = t <= QUARTER_PI
         x = t if low else c
-        sx = _sin_small(x)
-        cx = _cos_small(x)
+        sx = sin_small(x)
+        cx = cos_small(x)
         st = sx if low else cx
         w3 = cx if low else sx
         dt = dtheta[j]
         mag = abs(dt)
         near = mag <= QUARTER_PI
         y = mag if near else (HALF_PI - mag) + HALF_PI_LOW
-        offset = _sin_small(y) if near else _cos_small(y)  # |sin dtheta|
+        offset = sin_small(y) if near else cos_small(y)  # |sin dtheta|
         closing = st * root_b + w3 * root_a
         w1 = st * cphi
         w2 = st * sphi
