@@ -71,6 +71,8 @@ def real_array(name, value, error=InputError):
 
 def real_scalar(name, value, error=InputError):
     """One real number as a Python float (not checked for finiteness)."""
+    if type(value) is float:  # the common case, without NumPy's overhead
+        return value
     array = real_array(name, value, error)
     if array.shape != ():
         if array.size == 1:

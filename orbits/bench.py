@@ -138,6 +138,17 @@ def _herpolhode_by_integration(motion, times):
     return rotation.apply(states[:3].T)
 
 
+def _herpolhode_direct(motion, times):
+    """The herpolhode kernel without the even-grid block path."""
+    from .core.grid import omega_space_on_grid
+    from .threads import threads_for
+
+    out = np.empty((times.size, 3))
+    with threads_for(times.size):
+        omega_space_on_grid(motion._orbit, times, False, out)
+    return out
+
+
 def bench_motion(points=2001, repeats=5, dtheta=None):
     """The herpolhode of one orbit: exact motion against solve_ivp.
 
@@ -170,6 +181,8 @@ def bench_motion(points=2001, repeats=5, dtheta=None):
         note += "n/a (install mpmath)"
     rate = points / ours
     where = "theta 0.9" if dtheta is None else f"1 - m = {motion.one_minus_m:.0e}"
+    direct = best_time(lambda: _herpolhode_direct(motion, times), repeats)
+    note += f"; the direct path (one R_J per point) {_seconds(direct)}"
     return {
         "_ours": (lambda: herpolhode(body, theta, points=points), repeats),
         "task": f"herpolhode, {points} points, 1 period ({where})",
@@ -427,6 +440,8 @@ BENCHMARKS = {
     "phase": bench_total_phase,
     "motion": bench_motion,
     "motion_near_separatrix": lambda **kw: bench_motion(dtheta=-2e-4, **kw),
+    "motion_20001": lambda **kw: bench_motion(points=20001, **kw),
+    "motion_near_separatrix_20001": lambda **kw: bench_motion(points=20001, dtheta=-2e-4, **kw),
     "motion_rate": bench_motion_rate,
     "search": bench_search,
     "search_evaluations": bench_search_evaluations,

@@ -25,6 +25,7 @@ import numpy as np
 
 from ._args import integer, real_array, real_scalar
 from .bodies import Body
+from .core import grid as _grid_kernels
 from .core import motion as _kernels
 from .core import phase as _phase
 from .errors import AngleError, InputError, SeparatrixError
@@ -59,16 +60,33 @@ def _as_body(body_or_moments):
     return Body(moments.reshape(-1) if moments.shape == (1, 3) else moments)
 
 
+def _does_not_fit(what):
+    return InputError(
+        f"the {what} of this motion does not fit a double at this "
+        "scale of the moments and omega0; rescale them"
+    )
+
+
 def _scaled(value, power, what):
     """``value * 2**power`` (exact), refused if it over- or underflows."""
+    if np.ndim(value) == 0:
+        value = float(value)
+        try:
+            out = math.ldexp(value, power)
+        except OverflowError:
+            out = math.inf
+        if math.isfinite(out) and math.ldexp(out, -power) == value:
+            return out
+        raise _does_not_fit(what)
+    if power == 0:  # the common |omega0| ~ 1: only the check (np.ldexp is slow)
+        if np.isfinite(value).all():
+            return value
+        raise _does_not_fit(what)
     with np.errstate(over="ignore", under="ignore"):
         out = np.ldexp(value, power)
         back = np.ldexp(out, -power)
     if not np.all(np.isfinite(out)) or not np.array_equal(back, value):
-        raise InputError(
-            f"the {what} of this motion does not fit a double at this "
-            "scale of the moments and omega0; rescale them"
-        )
+        raise _does_not_fit(what)
     return out
 
 
@@ -106,15 +124,16 @@ class Motion:
     def __init__(self, body, omega0, _gap=None):
         body = _as_body(body)
         omega0 = real_array("omega0", omega0, AngleError)
-        if omega0.shape != (3,) or not np.all(np.isfinite(omega0)):
+        if omega0.shape != (3,) or not all(math.isfinite(v) for v in omega0.tolist()):
             raise AngleError("omega0 must be a finite 3-vector")
-        if not np.any(omega0):
+        largest = max(abs(v) for v in omega0.tolist())
+        if largest == 0.0:
             raise AngleError("omega0 must be nonzero")
         # Exact power-of-two scalings: the kernels see the unit moments of
         # the body and omega0 / 2**speed, with max |component| in [1/2, 1);
         # Euler's equations are homogeneous, so omega(t) = 2**speed u(2**speed t)
         # and E, M, T follow by exact rescaling (no overflow at any scale).
-        speed = int(np.frexp(np.max(np.abs(omega0)))[1])
+        speed = math.frexp(largest)[1]
         unit_omega = np.ldexp(omega0, -speed)
         i1, i2, i3 = body.unit_moments
         if _gap is None:
@@ -175,18 +194,18 @@ class Motion:
         """
         body = _as_body(body)
         speed = real_scalar("speed", speed, AngleError)
-        if not (np.isfinite(speed) and speed > 0.0):
+        if not (math.isfinite(speed) and speed > 0.0):
             raise AngleError(f"speed must be positive, got {speed}")
         if (theta is None) == (dtheta is None):
             raise AngleError("give exactly one of theta and dtheta")
         phi = real_scalar("phi", phi, AngleError)
-        if not np.isfinite(phi):
+        if not math.isfinite(phi):
             raise AngleError(f"phi must be finite, got {phi}")
         from_offset = dtheta is not None
         angle = real_scalar(
             "dtheta" if from_offset else "theta", dtheta if from_offset else theta, AngleError
         )
-        if not from_offset and np.isfinite(angle) and not 0.0 <= angle <= 0.5 * np.pi:
+        if not from_offset and math.isfinite(angle) and not 0.0 <= angle <= 0.5 * np.pi:
             # the spin as given (not folded: the motion differs by signs; its
             # T, E, M and total phase are those of the folded spin)
             return cls(
@@ -205,14 +224,13 @@ class Motion:
             raise AngleError(f"theta = {theta_!r} is outside [0, pi/2]")
         if status == _phase.STATUS_SEPARATRIX:
             raise SeparatrixError("the spin lies on the separatrix; pass a nonzero dtheta")
-        with np.errstate(over="ignore"):
-            omega = speed * np.array([w1, w2, w3])
-        if not np.all(np.isfinite(omega)):
+        omega = [speed * w1, speed * w2, speed * w3]
+        if not all(math.isfinite(v) for v in omega):
             raise AngleError(f"speed {speed!r} is too large for a double omega0")
         # the kernel sees omega / 2**k (see __init__); the gap scales like
         # omega's squares
-        unit_speed = math.ldexp(speed, -int(np.frexp(np.max(np.abs(omega)))[1]))
-        return cls(body, omega, (scale * unit_speed * unit_speed, offset, closing))
+        unit_speed = math.ldexp(speed, -math.frexp(max(abs(v) for v in omega))[1])
+        return cls(body, np.array(omega), (scale * unit_speed * unit_speed, offset, closing))
 
     # ------------------------------------------------------------------
     def _times(self, t):
@@ -220,9 +238,12 @@ class Motion:
         times = real_array("t", t)
         if not np.all(np.isfinite(times)):
             raise InputError("times must be finite")
-        with np.errstate(over="ignore", under="ignore"):
-            scaled = np.ldexp(times, self._speed)
-        if not np.all(np.isfinite(scaled)):
+        if self._speed == 0:
+            scaled = times
+        else:
+            with np.errstate(over="ignore", under="ignore"):
+                scaled = np.ldexp(times, self._speed)
+        if self._speed > 0 and not np.all(np.isfinite(scaled)):
             raise InputError("times too large for this |omega0| (t |omega0| overflows)")
         return times, np.ascontiguousarray(scaled.reshape(-1))
 
@@ -235,7 +256,7 @@ class Motion:
         euler = np.empty((n, 3))
         rotation = np.empty((n, 3, 3))
         omega_space = np.empty((n, 3))
-        _kernels.motion_on_grid(self._orbit, flat, omega, euler, rotation, omega_space)
+        _grid_kernels.motion_on_grid(self._orbit, flat, True, omega, euler, rotation, omega_space)
         shape = times.shape
         omega = _scaled(omega, self._speed, "angular velocity")
         omega_space = _scaled(omega_space, self._speed, "angular velocity")
@@ -290,7 +311,7 @@ class Motion:
         """Space-frame angular velocity (z along M): the herpolhode, shape ``t.shape + (3,)``."""
         times, flat = self._times(t)
         out = np.empty((times.size, 3))
-        _kernels.omega_space_on_grid(self._orbit, flat, out)
+        _grid_kernels.omega_space_on_grid(self._orbit, flat, True, out)
         return _scaled(out, self._speed, "angular velocity").reshape(times.shape + (3,))
 
     def total_phase(self):

@@ -32,7 +32,7 @@ Formulas (Mecholsky 2019, appendix; Landau & Lifshitz, Mechanics, Sec. 37):
 
 import math
 
-from numba import njit, prange
+from numba import njit
 
 from .elliptic import (
     AGM_LEVELS,
@@ -43,6 +43,7 @@ from .elliptic import (
     jacobi_from_table,
 )
 from .phase import BRANCH_SAM, BRANCH_SEPARATRIX, elliptic_parameter, orbit_constants
+from .trig import sincos
 
 HALF_PI = 0.5 * math.pi
 TWO_PI = 2.0 * math.pi
@@ -210,11 +211,16 @@ def state_at(orbit, t):
     continuous too: on SAM it winds by -2 pi sign(w3) per period, on LAM it
     stays in one half-plane.
     """
+    pi_u, sn, cn, dn, j, _, _ = _pi_of_u(orbit, orbit[SLOT_TAU0] + orbit[SLOT_RATE] * t)
+    return state_from_pieces(orbit, t, pi_u, sn, cn, dn, j)
+
+
+@njit(cache=True, nogil=True)
+def state_from_pieces(orbit, t, pi_u, sn, cn, dn, j):
+    """:func:`state_at` from ``P(u)``, ``sn, cn, dn`` of ``u`` and its half-period index."""
     i1 = orbit[SLOT_I1]
     i2 = orbit[SLOT_I2]
     i3 = orbit[SLOT_I3]
-    u = orbit[SLOT_TAU0] + orbit[SLOT_RATE] * t
-    pi_u, sn, cn, dn, j, s_red, c_red = _pi_of_u(orbit, u)
     elapsed = orbit[SLOT_COEF] * (pi_u - orbit[SLOT_PI_START])
     phi = orbit[SLOT_PRECESSION] * t + elapsed
     amp2 = orbit[SLOT_A2]
@@ -226,8 +232,10 @@ def state_at(orbit, t):
             psi = -elapsed  # phi + psi = M t / I3, a plain spin
         else:
             # chi = atan2(I2 w2, I1 w1) follows +-am; unwrap it against am
+            # (sin, cos of am(r), |am(r)| <= pi/2, are (-1)^j sn, (-1)^j cn)
+            parity = 1.0 - 2.0 * (j % 2.0 != 0.0)
             winding = 1.0 if amp2 >= 0.0 else -1.0
-            am = j * math.pi + math.atan2(s_red, c_red)
+            am = j * math.pi + math.atan2(parity * sn, parity * cn)
             chi = math.atan2(i2 * w2, i1 * w1)
             delta = chi - winding * am
             delta -= TWO_PI * math.floor(delta / TWO_PI + 0.5)
@@ -243,9 +251,9 @@ def state_at(orbit, t):
 @njit(cache=True, nogil=True)
 def rotation_from_euler(phi, theta, psi, out):
     """``R = Rz(phi) Rx(theta) Rz(psi)`` into ``out`` (3x3)."""
-    cf, sf = math.cos(phi), math.sin(phi)
-    ct, st = math.cos(theta), math.sin(theta)
-    cp, sp = math.cos(psi), math.sin(psi)
+    sf, cf = sincos(phi)
+    st, ct = sincos(theta)
+    sp, cp = sincos(psi)
     out[0, 0] = cf * cp - sf * ct * sp
     out[0, 1] = -cf * sp - sf * ct * cp
     out[0, 2] = sf * st
@@ -257,41 +265,24 @@ def rotation_from_euler(phi, theta, psi, out):
     out[2, 2] = ct
 
 
-@njit(cache=True, nogil=True, parallel=True)
-def motion_on_grid(orbit, times, omega, euler, rotation, omega_space):
-    """Evaluate the motion at every time, in parallel.
-
-    Fills ``omega`` (n, 3) body frame, ``euler`` (n, 3) as (phi, theta, psi),
-    ``rotation`` (n, 3, 3) body -> space, and ``omega_space`` (n, 3).
-    """
-    for k in prange(times.shape[0]):
-        w1, w2, w3, phi, theta, psi = state_at(orbit, times[k])
-        omega[k, 0] = w1
-        omega[k, 1] = w2
-        omega[k, 2] = w3
-        euler[k, 0] = phi
-        euler[k, 1] = theta
-        euler[k, 2] = psi
-        r = rotation[k]
-        rotation_from_euler(phi, theta, psi, r)
-        for row in range(3):
-            omega_space[k, row] = r[row, 0] * w1 + r[row, 1] * w2 + r[row, 2] * w3
-
-
 @njit(cache=True, nogil=True)
 def omega_space_at(orbit, t):
     """Space-frame angular velocity at ``t`` (the herpolhode point).
 
     With ``R = Rz(phi) Rx(theta) Rz(psi)`` and ``sin(psi), cos(psi)`` from the
     body-frame momentum, ``R omega`` lies in the invariable plane at height
-    ``2E/M``, at distance ``rho = sqrt(|omega|^2 - (2E/M)^2)`` from the axis
-    and azimuth ``phi + atan2(w3 (2EI3 - M^2) / M, (I2 - I1) w1 w2)``.
+    ``2E/M``; its part in that plane is ``Rz(phi)`` of
+    ``((I2 - I1) w1 w2, w3 (2EI3 - M^2) / M) / (M sin(theta))``.
     """
+    pi_u, sn, cn, dn, _, _, _ = _pi_of_u(orbit, orbit[SLOT_TAU0] + orbit[SLOT_RATE] * t)
+    return omega_space_from_pieces(orbit, t, pi_u, sn, cn, dn)
+
+
+@njit(cache=True, nogil=True)
+def omega_space_from_pieces(orbit, t, pi_u, sn, cn, dn):
+    """:func:`omega_space_at` from ``P(u)`` and ``sn, cn, dn`` of ``u``."""
     i1 = orbit[SLOT_I1]
     i2 = orbit[SLOT_I2]
-    i3 = orbit[SLOT_I3]
-    u = orbit[SLOT_TAU0] + orbit[SLOT_RATE] * t
-    pi_u, sn, cn, dn, j, s_red, c_red = _pi_of_u(orbit, u)
     phi = orbit[SLOT_PRECESSION] * t + orbit[SLOT_COEF] * (pi_u - orbit[SLOT_PI_START])
     w2 = orbit[SLOT_A2] * sn
     if orbit[SLOT_BRANCH] == BRANCH_SAM:
@@ -302,24 +293,23 @@ def omega_space_at(orbit, t):
         w3 = orbit[SLOT_A3] * cn
     momentum = orbit[SLOT_MOMENTUM]
     height = orbit[SLOT_TWO_E] / momentum
-    # |omega|^2 - (2E/M)^2 = |omega x M^|^2, as a sum of squares
-    c1 = (i3 - i2) * w2 * w3
-    c2 = (i1 - i3) * w3 * w1
-    c3 = (i2 - i1) * w1 * w2
-    rho = math.sqrt(c1 * c1 + c2 * c2 + c3 * c3) / momentum
-    # 2 E I3 - M^2 is an invariant: taken from the orbit, not from omega(t)
-    azimuth = phi + math.atan2(w3 * orbit[SLOT_GAP_3M] / momentum, c3)
-    return rho * math.cos(azimuth), rho * math.sin(azimuth), height
-
-
-@njit(cache=True, nogil=True, parallel=True)
-def omega_space_on_grid(orbit, times, omega_space):
-    """Only the space-frame angular velocity (the herpolhode), in parallel."""
-    for k in prange(times.shape[0]):
-        x, y, z = omega_space_at(orbit, times[k])
-        omega_space[k, 0] = x
-        omega_space[k, 1] = y
-        omega_space[k, 2] = z
+    # x + i y = exp(i phi) (x' + i y') with (x', y') = R_x(theta) R_z(psi) omega:
+    # x' = (I2 - I1) w1 w2 / mu and y' = w3 (2EI3 - M^2) / (M mu), where
+    # mu = M sin(theta) = |(M1, M2)| (eqn:eulerangles; 2EI3 - M^2 is an
+    # invariant taken from the orbit).  Only products: no cancellation.
+    # (the kernels see |I| ~ 1 and |omega| ~ 1: the squares cannot overflow;
+    # hypot where they could underflow, e.g. a rod spun about its axis)
+    m1 = i1 * w1
+    m2 = i2 * w2
+    mu_sq = m1 * m1 + m2 * m2
+    mu = math.sqrt(mu_sq) if mu_sq > 1e-280 else math.hypot(m1, m2)
+    if mu == 0.0:  # a steady spin about I3: omega along M
+        return 0.0, 0.0, height
+    inv_mu = 1.0 / mu
+    x_node = (i2 - i1) * w1 * w2 * inv_mu
+    y_node = w3 * (orbit[SLOT_GAP_3M] / momentum) * inv_mu
+    sf, cf = sincos(phi)
+    return cf * x_node - sf * y_node, sf * x_node + cf * y_node, height
 
 
 @njit(cache=True, nogil=True)
