@@ -189,3 +189,28 @@ def test_the_public_functions_take_the_block_path():
     fast, _ = both_paths(motion, times)
     np.testing.assert_array_equal(motion.omega_space(times), fast[5])
     np.testing.assert_array_equal(motion.state(times).omega, fast[1])
+
+
+@pytest.mark.parametrize(
+    "moments, omega0, points",
+    [
+        # 1 - m = 3e-19: both sn near 1 in the addition theorem, where
+        # 1 - m sn^2 sn^2 lost 5e-12 relative (fixed: cn^2 + sn^2 dn^2)
+        ([0.8221121612459374, 0.9277839690231837, 1.0], [5.4e-15, -0.69, 3.0e-10], 2001),
+        ([0.3380956397108331, 0.75, 1.0], [-1.7e-16, 0.69, 6.9e-15], 4001),
+        ([0.4011056866780741, 0.5988943133232275, 1.0], [3.1e-14, -0.94, 4.3e-13], 2001),
+    ],
+)
+def test_block_path_near_the_unstable_axis(moments, omega0, points):
+    body = Body(moments)
+    motion = Motion.from_omega(body, omega0)
+    times = np.linspace(0.0, 2.0 * motion.period, points)
+    fast, direct = both_paths(motion, times)
+    assert fast[0] == 0
+    tolerance = bound(direct[2][:, 0])
+    assert np.abs(fast[1] - direct[1]).max() <= tolerance
+    assert np.abs(fast[5] - direct[5]).max() <= tolerance
+    sample = np.arange(0, points, points // 16)
+    omega, _, space = exact_motion_mpmath(body.moments, motion.omega0, times[sample], dps=60)
+    assert np.abs(fast[1][sample] - omega).max() <= tolerance
+    assert np.abs(fast[5][sample] - space).max() <= tolerance
