@@ -333,7 +333,14 @@ def phases(body_or_moments, theta=None, phi=0.0, *, dtheta=None):
     ------
     As :func:`total_phase`.
     """
-    moments, _ = unit_moments(body_or_moments)
+    return phases_of_unit_moments(unit_moments(body_or_moments)[0], theta, phi, dtheta=dtheta)
+
+
+@size_aware
+def phases_of_unit_moments(moments, theta=None, phi=0.0, *, dtheta=None):
+    """:func:`phases` for moments already in the canonical form of
+    :func:`orbits.bodies.unit_moments` (no second normalisation: the
+    catalog and survey pass their roots here)."""
     from_offset, angle, phi, shape = _spin_inputs(moments, theta, dtheta, phi)
     i1, i2, i3 = (_flat(moments[..., k], shape) for k in range(3))
     phi_flat, angle_flat = _flat(phi, shape), _flat(angle, shape)
@@ -357,7 +364,8 @@ def phases(body_or_moments, theta=None, phi=0.0, *, dtheta=None):
             **_parts_columns(
                 norm, two_e, m_sq, m_param, branch, period, dynamic, total, geometric
             ),
-        }
+        },
+        copy=False,  # one block per column: no consolidating copy
     )
 
 
@@ -499,5 +507,6 @@ def spin_phases(body_or_moments, omega):
         columns[label] = value
     given = [np.ldexp(i, exponent) for i in (i1, i2, i3)]
     return pd.DataFrame(
-        {"I1": given[0], "I2": given[1], "I3": given[2], "w1": w1, "w2": w2, "w3": w3, **columns}
+        {"I1": given[0], "I2": given[1], "I3": given[2], "w1": w1, "w2": w2, "w3": w3, **columns},
+        copy=False,  # one block per column: no consolidating copy
     )

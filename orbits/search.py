@@ -18,7 +18,7 @@ from ._args import integer
 from .bodies import Body, unit_moments
 from .core import search as _kernels
 from .errors import InputError
-from .phases import phases
+from .phases import phases_of_unit_moments
 
 CATALOG_COLUMNS = (
     "body",
@@ -235,14 +235,29 @@ def closes_after(p, q):
         ``"1/2"``, ``"1"``, ``"3/2"``, ... (a :class:`fractions.Fraction`
         as text).
     """
+    names, inverse, shape = _closes_after_codes(p, q)
+    text = np.array(names, dtype=object)[inverse].reshape(shape)
+    return str(text[()]) if text.ndim == 0 else text
+
+
+def _closes_after_codes(p, q):
+    """:func:`closes_after` as distinct texts and an index into them (and the shape)."""
     p_arr = np.asarray(p, dtype=np.int64)
     q_arr = np.asarray(q, dtype=np.int64)
     both_odd = (p_arr % 2 == 1) & (q_arr % 2 == 1)
     # few distinct (q, both odd) pairs: format each once (a catalog has ~1e6 rows)
     key, inverse = np.unique(2 * q_arr.ravel() + both_odd.ravel(), return_inverse=True)
-    names = np.array([str(Fraction(int(k // 2), 2 if k % 2 else 1)) for k in key], dtype=object)
-    text = names[inverse.reshape(-1)].reshape(q_arr.shape)
-    return str(text[()]) if text.ndim == 0 else text
+    names = [str(Fraction(int(k // 2), 2 if k % 2 else 1)) for k in key]
+    return names, inverse.reshape(-1), q_arr.shape
+
+
+def _text_column(names, codes):
+    """``names[codes]`` as a text column of the type ``astype(str)`` gives.
+
+    Taking from the few distinct texts is ~20x faster than converting a
+    categorical or object column (1.6 ms against 28 ms for 346,000 rows).
+    """
+    return pd.Series(pd.Series(names, dtype=object).astype(str).array.take(codes))
 
 
 def catalog_rows(body, moments, level, offset, p, q, levels):
@@ -264,7 +279,8 @@ def catalog_rows(body, moments, level, offset, p, q, levels):
         A root misses its level by more than ``RESIDUAL_TOLERANCE`` (the
         search guarantees it does not: this would be a bug).
     """
-    table = phases(moments, dtheta=offset)
+    # moments are canonical here (unit_moments): no second normalisation
+    table = phases_of_unit_moments(moments, dtheta=offset)
     target = levels[level]
     residual = table["total_phase"].to_numpy() - target
     bad = np.abs(residual) > RESIDUAL_TOLERANCE * target
@@ -278,7 +294,9 @@ def catalog_rows(body, moments, level, offset, p, q, levels):
             "I2": table["I2"],
             "I3": table["I3"],
             "theta_crit": table["theta_crit"],
-            "branch": table["branch"].astype(str),
+            "branch": _text_column(
+                list(table["branch"].cat.categories), table["branch"].cat.codes.to_numpy()
+            ),
             "n": p[level],
             "q": q[level],
             "theta": table["theta"],
@@ -292,9 +310,10 @@ def catalog_rows(body, moments, level, offset, p, q, levels):
             "D": table["D"],
             "m": table["m"],
             "residual": residual,
-            "closes_after": closes_after(p[level], q[level]),
+            "closes_after": _text_column(*_closes_after_codes(p[level], q[level])[:2]),
         },
         columns=list(CATALOG_COLUMNS),
+        copy=False,  # one block per column: no consolidating copy
     )
 
 

@@ -169,6 +169,7 @@ def _body_rows(moments, ids, info, orbits, body_of_row):
             ).astype(np.int64),
         },
         columns=list(BODY_COLUMNS),
+        copy=False,  # one block per column: no consolidating copy
     )
 
 
@@ -185,15 +186,15 @@ _GRID_INSIDE = 0.39  # fraction of the bounding box inside the region
 def survey_estimate(bodies, n_max, q_max, chunk):
     """Rough peak memory (bytes) and total time (s) of a survey.
 
-    A chunk holds up to two orbits per level and body; the memory is one
-    chunk's rows (chunks are written and dropped one by one).
+    A chunk holds up to two orbits per level and body; the memory is two
+    chunks' rows (one being written while the next is computed).
     """
     from .catalog import search_estimate
 
     level_memory, _ = search_estimate(n_max, q_max, bodies=0)
     levels = float(n_max) * q_max * (q_max + 1) / 2.0 * 6.0 / np.pi**2 + n_max
     per_chunk = min(chunk, bodies)
-    memory = level_memory + per_chunk * (2.0 * levels * _BYTES_PER_ROW + 34.0 * levels)
+    memory = level_memory + 2 * per_chunk * (2.0 * levels * _BYTES_PER_ROW + 34.0 * levels)
     seconds = bodies * (_SECONDS_PER_BODY + levels * _SECONDS_PER_BODY_LEVEL)
     return memory, seconds
 
@@ -212,7 +213,8 @@ def check_survey_bounds(bodies, n_max, q_max, chunk):
     budget = memory_budget()
     if memory > budget:
         one, _ = survey_estimate(1, n_max, q_max, 1)
-        fits = int(budget // max(one, 1.0))
+        base, _ = survey_estimate(0, n_max, q_max, 0)
+        fits = int((budget - base) // max(one - base, 1.0))
         advice = f"use --chunk {fits} or less" if fits >= 1 else "lower --n-max or --q-max"
         raise InputError(
             f"this survey (n_max={n_max}, q_max={q_max}, chunk={chunk}) "
@@ -551,16 +553,46 @@ class Survey:
             todo = self.missing()
             self.last_todo = todo
             if client is None:
-                for index in todo:
-                    bodies, orbits = compute_chunk(
-                        self.chunk_moments(index), self.n_max, self.q_max, index * self.chunk
-                    )
-                    self.write_chunk(index, bodies, orbits)
-                    if progress is not None:
-                        progress(len(bodies))
+                self._run_local(todo, progress)
             else:
                 self._run_distributed(client, todo, progress)
             return self.report()
+
+    def _run_local(self, todo, progress):
+        """Compute the chunks in order; write each while the next is computed.
+
+        One writer thread takes the finished chunks in order (files, SHA-256,
+        fsync and the ledger release the GIL), so the ledger grows exactly
+        as in a serial run.  At most one chunk waits to be written; on an
+        error or an interrupt it is still written (it is computed) before
+        the lock is released: a chunk is in the ledger with both its parts,
+        or not at all.
+        """
+        from concurrent.futures import ThreadPoolExecutor
+
+        writer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="orbits-writer")
+        pending = []
+        try:
+            for index in todo:
+                bodies, orbits = compute_chunk(
+                    self.chunk_moments(index), self.n_max, self.q_max, index * self.chunk
+                )
+                while pending:  # the previous chunk must be on disk first
+                    written = pending.pop(0).result()
+                    if progress is not None:
+                        progress(written)
+                pending.append(writer.submit(self._write_and_count, index, bodies, orbits))
+            while pending:
+                written = pending.pop(0).result()
+                if progress is not None:
+                    progress(written)
+        finally:
+            # at most one chunk is queued: it is computed, so finish it
+            writer.shutdown(wait=True)
+
+    def _write_and_count(self, index, bodies, orbits):
+        self.write_chunk(index, bodies, orbits)
+        return len(bodies)
 
     @staticmethod
     def _connect(scheduler, status=None):

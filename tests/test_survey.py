@@ -280,3 +280,52 @@ def test_cli_survey_and_errors(tmp_path, capsys, monkeypatch):
         code = main(argv)
         err = capsys.readouterr().err.strip().splitlines()
         assert code == 2 and len(err) == 1 and fragment in err[0], (argv, err)
+
+
+@pytest.mark.parametrize("failure", ["write", "interrupt"])
+def test_a_failure_mid_run_leaves_whole_chunks(tmp_path, monkeypatch, failure):
+    """Chunks are written by one thread while the next is computed.
+
+    A failing write (the third chunk) or an interrupt while the fourth is
+    computed stops the run; every chunk in the ledger has both parts with
+    their SHA-256, no temporary is left, and a second run completes the
+    survey to the same bytes as an uninterrupted one.
+    """
+    import orbits.survey as module
+
+    reference = tmp_path / "reference"
+    Survey.grid(reference, 40, 4, chunk=60).run()
+    target = tmp_path / "target"
+    original_write = Survey.write_chunk
+    original_compute = module.compute_chunk
+    computed = []
+
+    def failing_write(self, index, bodies, orbits):
+        if index == 2:
+            raise InputError("cannot write: disk full (simulated)")
+        return original_write(self, index, bodies, orbits)
+
+    def interrupted_compute(moments, *args, **kwargs):
+        computed.append(1)
+        if len(computed) == 4:
+            raise KeyboardInterrupt
+        return original_compute(moments, *args, **kwargs)
+
+    if failure == "write":
+        monkeypatch.setattr(Survey, "write_chunk", failing_write)
+        expected = pytest.raises(InputError, match="simulated")
+    else:
+        monkeypatch.setattr(module, "compute_chunk", interrupted_compute)
+        expected = pytest.raises(KeyboardInterrupt)
+    with expected:
+        Survey.grid(target, 40, 4, chunk=60).run()
+    ledger = load_manifest(target)["parts"]
+    written = ["0", "1"] if failure == "write" else ["0", "1", "2"]
+    assert sorted(ledger, key=int) == written
+    for entry in ledger.values():
+        for table in ("orbits", "bodies"):
+            assert _sha256(target / entry[table]["file"]) == entry[table]["sha256"]
+    assert not list(target.rglob("*.part"))
+    monkeypatch.undo()
+    Survey.grid(target, 40, 4, chunk=60).run()
+    assert read_bytes(target) == read_bytes(reference)
