@@ -14,11 +14,12 @@ from contextlib import contextmanager
 
 import numpy as np
 
-# Below this many elements a call runs on one thread.  Chosen from the
-# measurement in the README ("Threads"): the herpolhode costs ~0.2 us and
-# the total phase ~0.05 us per element on one core, so 20000 elements are
-# 1-4 ms serial, the order of one time slice that a parallel call can lose
-# waiting for a busy core; above it two threads gain more than they risk.
+# Below this many elements a call runs on one thread.  Measured here
+# (orbits bench, 2026-11-23): waking the second thread costs ~150 us with
+# passive OpenMP waits, and one element costs ~0.02 us (total phase) to
+# ~0.04 us (herpolhode on an even grid) on one core, so two threads break
+# even at ~7,500-15,000 elements; on a busy machine a parallel call can
+# also wait a whole time slice (~ms) for its descheduled partner.
 SERIAL_BELOW = 20_000
 
 _requested = None
