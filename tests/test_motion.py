@@ -137,13 +137,21 @@ def test_matches_mpmath_down_to_one_minus_m_1e12(branch_sign, one_minus_m):
     motion = Motion.from_omega(FIG6, seed.omega0)
     assert 0.3 < motion.one_minus_m / one_minus_m < 3.0
     times = np.linspace(0.0, 10.0 * motion.period, 13)
-    omega, euler, omega_space = exact_motion_mpmath(FIG6.moments, motion.omega0, times, dps=40)
-    state = motion.state(times)
-    assert np.abs(state.omega - omega).max() <= 1e-12
-    assert np.abs(state.omega_space - omega_space).max() <= 1e-12
-    assert np.abs(state.euler[:, 0] - euler[:, 0]).max() <= 1e-12 * max(1.0, abs(euler[-1, 0]))
+    euler, state = assert_matches_mpmath(motion, times, 1e-12, dps=40)
     assert np.abs(state.euler[:, 1] - euler[:, 1]).max() <= 1e-12
     assert circular(state.euler[:, 2], euler[:, 2]).max() <= 1e-12
+
+
+def assert_matches_mpmath(motion, times, bound, dps):
+    """omega, omega in space and phi (relative to its size) within ``bound`` of mpmath."""
+    omega, euler, omega_space = exact_motion_mpmath(
+        motion.body.moments, motion.omega0, times, dps=dps
+    )
+    state = motion.state(times)
+    assert np.abs(state.omega - omega).max() <= bound
+    assert np.abs(state.omega_space - omega_space).max() <= bound
+    assert np.abs(state.euler[:, 0] - euler[:, 0]).max() <= bound * max(1.0, abs(euler[-1, 0]))
+    return euler, state
 
 
 @pytest.mark.parametrize(
@@ -168,12 +176,7 @@ def test_spin_near_the_unstable_axis_matches_mpmath(omega0):
     """
     body = Body(FIG6.normalized_moments)
     motion = Motion.from_omega(body, omega0)
-    times = np.linspace(0.0, 2.0 * motion.period, 41)
-    omega, euler, omega_space = exact_motion_mpmath(body.moments, motion.omega0, times, dps=60)
-    state = motion.state(times)
-    assert np.abs(state.omega - omega).max() <= 2e-13
-    assert np.abs(state.omega_space - omega_space).max() <= 2e-13
-    assert np.abs(state.euler[:, 0] - euler[:, 0]).max() <= 2e-13 * max(1.0, abs(euler[-1, 0]))
+    assert_matches_mpmath(motion, np.linspace(0.0, 2.0 * motion.period, 41), 2e-13, dps=60)
 
 
 def test_sign_convention_rotation_after_one_period():

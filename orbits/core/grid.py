@@ -273,6 +273,26 @@ def grid_plan(orbit, times):
 
 
 @njit(cache=True, nogil=True)
+def _tables(orbit, times, fast):
+    """``(delta, offsets, nodes, weights)`` of the block path; ``delta`` 0: none."""
+    delta, substeps = grid_plan(orbit, times) if fast else (0.0, 0)
+    if substeps == 0:
+        return 0.0, np.empty((3, 0)), np.empty((3, 0)), np.empty(0)
+    offsets, nodes, weights = grid_tables(orbit, delta, substeps)
+    return delta, offsets, nodes, weights
+
+
+@njit(cache=True, nogil=True)
+def _run_block(orbit, times, tables, b, pieces, redone):
+    """:func:`block_pieces` for block ``b``; marks ``redone[b]``; returns its time range."""
+    delta, offsets, nodes, weights = tables
+    if not block_pieces(orbit, times, delta, offsets, nodes, weights, b, pieces):
+        redone[b] = 1
+    lo = b * BLOCK
+    return lo, min(times.shape[0], lo + BLOCK)
+
+
+@njit(cache=True, nogil=True)
 def _fill_state(k, w1, w2, w3, phi, theta, psi, omega, euler, rotation, omega_space):
     omega[k, 0] = w1
     omega[k, 1] = w2
@@ -298,21 +318,16 @@ def motion_on_grid(orbit, times, fast, omega, euler, rotation, omega_space):
     by point, or -1 when every point was evaluated directly.
     """
     n = times.shape[0]
-    delta, substeps = grid_plan(orbit, times) if fast else (0.0, 0)
-    if substeps == 0:
+    tables = _tables(orbit, times, fast)
+    if tables[0] == 0.0:
         for k in prange(n):
             w1, w2, w3, phi, theta, psi = state_at(orbit, times[k])
             _fill_state(k, w1, w2, w3, phi, theta, psi, omega, euler, rotation, omega_space)
         return -1
-    offsets, nodes, weights = grid_tables(orbit, delta, substeps)
-    blocks = (n + BLOCK - 1) // BLOCK
-    redone = np.zeros(blocks, dtype=np.int64)
-    for b in prange(blocks):
-        lo = b * BLOCK
-        hi = min(n, lo + BLOCK)
+    redone = np.zeros((n + BLOCK - 1) // BLOCK, dtype=np.int64)
+    for b in prange(redone.shape[0]):
         pieces = np.empty((PIECES, BLOCK))
-        if not block_pieces(orbit, times, delta, offsets, nodes, weights, b, pieces):
-            redone[b] = 1
+        lo, hi = _run_block(orbit, times, tables, b, pieces, redone)
         for k in range(lo, hi):
             i = k - lo
             w1, w2, w3, phi, theta, psi = state_from_pieces(
@@ -335,23 +350,18 @@ def omega_space_on_grid(orbit, times, fast, omega_space):
     Returns as :func:`motion_on_grid`.
     """
     n = times.shape[0]
-    delta, substeps = grid_plan(orbit, times) if fast else (0.0, 0)
-    if substeps == 0:
+    tables = _tables(orbit, times, fast)
+    if tables[0] == 0.0:
         for k in prange(n):
             x, y, z = omega_space_at(orbit, times[k])
             omega_space[k, 0] = x
             omega_space[k, 1] = y
             omega_space[k, 2] = z
         return -1
-    offsets, nodes, weights = grid_tables(orbit, delta, substeps)
-    blocks = (n + BLOCK - 1) // BLOCK
-    redone = np.zeros(blocks, dtype=np.int64)
-    for b in prange(blocks):
-        lo = b * BLOCK
-        hi = min(n, lo + BLOCK)
+    redone = np.zeros((n + BLOCK - 1) // BLOCK, dtype=np.int64)
+    for b in prange(redone.shape[0]):
         pieces = np.empty((PIECES, BLOCK))
-        if not block_pieces(orbit, times, delta, offsets, nodes, weights, b, pieces):
-            redone[b] = 1
+        lo, hi = _run_block(orbit, times, tables, b, pieces, redone)
         for k in range(lo, hi):
             i = k - lo
             x, y, z = omega_space_from_pieces(
