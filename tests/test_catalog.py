@@ -4,14 +4,13 @@ import errno
 import os
 import shlex
 import signal
-import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+from long_run import interrupted_catalog
 
 import orbits
 from orbits import Body, InputError, catalog, read_catalog, write_catalog
@@ -176,35 +175,9 @@ def test_new_files_get_normal_permissions(tmp_path):
 
 
 def test_interrupt_leaves_no_partial_file(tmp_path):
-    bodies = tmp_path / "bodies.csv"
-    grid = orbits.region_grid(60)
-    pd.DataFrame(grid, columns=["I1", "I2", "I3"]).to_csv(bodies, index=False)
-    out = tmp_path / "out.csv"
-    out.write_text("previous good catalog\n")
-    proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "orbits.cli",
-            "catalog",
-            "--bodies",
-            str(bodies),
-            "--n-max",
-            "300",
-            "--q-max",
-            "5",
-            "--out",
-            str(out),
-        ],
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    time.sleep(4.0)
-    assert proc.poll() is None, "the run ended before it could be interrupted"
-    proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 130
-    assert err.strip().splitlines() == ["orbits: interrupted; no partial output was written"]
+    code, err, out = interrupted_catalog(tmp_path, signal.SIGINT, module="orbits.cli")
+    assert code == 130
+    assert err == ["orbits: interrupted; no partial output was written"]
     assert out.read_text() == "previous good catalog\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bodies.csv", "out.csv"]
 

@@ -7,10 +7,10 @@ import shutil
 import signal
 import subprocess
 import sys
-import time
 
 import pandas as pd
 import pytest
+from long_run import interrupted_catalog
 
 import orbits
 import orbits.survey
@@ -188,34 +188,9 @@ def test_concurrent_runs_never_break_each_other(tmp_path):
     ],
 )
 def test_termination_leaves_no_partial_file(tmp_path, signum, code, message):
-    bodies = tmp_path / "bodies.csv"
-    pd.DataFrame(orbits.region_grid(60), columns=["I1", "I2", "I3"]).to_csv(bodies, index=False)
-    out = tmp_path / "out.csv"
-    out.write_text("previous good catalog\n")
-    proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "orbits",
-            "catalog",
-            "--bodies",
-            str(bodies),
-            "--n-max",
-            "300",
-            "--q-max",
-            "5",
-            "--out",
-            str(out),
-        ],
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    time.sleep(4.0)
-    assert proc.poll() is None, "the run ended before it could be stopped"
-    proc.send_signal(signum)
-    _, err = proc.communicate(timeout=60)
-    assert proc.returncode == code
-    assert err.strip().splitlines() == [message]
+    returncode, err, out = interrupted_catalog(tmp_path, signum)
+    assert returncode == code
+    assert err == [message]
     assert out.read_text() == "previous good catalog\n"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bodies.csv", "out.csv"]
 
