@@ -53,7 +53,7 @@ from .motion import (
     state_from_pieces,
 )
 
-# points per block: one exact evaluation per block, a table of BLOCK entries
+# points per block: two exact evaluations per block, a table of BLOCK + 1 entries
 BLOCK = 64
 # Gauss-Legendre nodes per step (on [0, 1]) and the required ratio of the
 # integrand's pole distance to the step; a coarser grid step is split into
@@ -73,7 +73,7 @@ GAUSS_NODES = 0.5 * (_nodes + 1.0)
 GAUSS_WEIGHTS = 0.5 * _weights
 EPS = np.finfo(np.float64).eps
 
-# rows of the per-point pieces array filled by :func:`pieces_on_grid`
+# rows of the per-block pieces array filled by :func:`block_pieces`
 PIECE_PI, PIECE_SN, PIECE_CN, PIECE_DN, PIECE_J = range(5)
 PIECES = 5
 
@@ -103,10 +103,12 @@ def even_step(times):
 def pole_distance(orbit):
     """``y``: the integrand of ``P`` is analytic for ``|Im v| < y``.
 
-    ``1 - n sn^2(i y | m) = 1 + n sc^2(y | 1 - m)`` (DLMF 22.6.1) first
-    vanishes at ``am(y | 1 - m) = atan(1 / sqrt(-n))``; the complementary
-    modulus of ``1 - m`` is ``k = sqrt(m)``.  ``n = 0``: no pole, and the
-    strip is bounded by the poles of ``sn`` at ``K'``.
+    ``1 - n sn^2(i y | m) = 1 + n sc^2(y | 1 - m)`` (Jacobi's imaginary
+    transformation, DLMF 22.6(iv)) first vanishes at
+    ``am(y | 1 - m) = atan(1 / sqrt(-n))``; the complementary modulus of
+    ``1 - m`` is ``k = sqrt(m)``.  ``n = 0`` (a spin exactly along I1): the
+    integrand is 1 and ``K(1 - m)`` is returned as a finite cap.  (``n > 0``
+    cannot occur; it would give NaN and the direct path.)
     """
     n = orbit[SLOT_N]
     kc = orbit[SLOT_KC]
