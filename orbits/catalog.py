@@ -69,6 +69,14 @@ _SECONDS_PER_BODY_LEVEL = 2e-7  # root search per body and level, one core
 MAX_SECONDS = 24 * 3600
 
 
+def _as_float(number):
+    """A count as a float; inf beyond the doubles (not OverflowError)."""
+    try:
+        return float(number)
+    except OverflowError:
+        return math.inf
+
+
 def search_estimate(n_max, q_max, bodies=1):
     """Rough memory (bytes) and time (s) of a closed-orbit search.
 
@@ -77,10 +85,12 @@ def search_estimate(n_max, q_max, bodies=1):
     ``n_max q_max (q_max + 1) / 2`` candidates; each body gives at most two
     orbits per level.
     """
-    candidates = float(n_max) * q_max * (q_max + 1) / 2.0
-    levels = candidates * 6.0 / math.pi**2 + n_max
-    memory = levels * _BYTES_PER_LEVEL + 2.0 * levels * bodies * _BYTES_PER_ROW
-    seconds = candidates * _SECONDS_PER_CANDIDATE + levels * bodies * _SECONDS_PER_BODY_LEVEL
+    candidates = _as_float(n_max) * q_max * (q_max + 1) / 2.0
+    levels = candidates * 6.0 / math.pi**2 + _as_float(n_max)
+    # bodies = 0 adds nothing (not inf * 0 = NaN when n_max overflows a double)
+    rows = 2.0 * levels * bodies if bodies else 0.0
+    memory = levels * _BYTES_PER_LEVEL + rows * _BYTES_PER_ROW
+    seconds = candidates * _SECONDS_PER_CANDIDATE + 0.5 * rows * _SECONDS_PER_BODY_LEVEL
     return memory, seconds
 
 
@@ -99,19 +109,30 @@ def check_search_bounds(n_max, q_max, bodies=1, what="this search"):
     """
     memory, seconds = search_estimate(n_max, q_max, bodies)
     budget = memory_budget()
-    if memory > budget:
+    n_max, q_max = _short(n_max), _short(q_max)
+    if not memory <= budget:  # also a NaN estimate (inf * 0 for a huge n_max)
         raise InputError(
             f"{what} (n_max={n_max}, q_max={q_max}, {bodies} body(ies)) "
-            f"would need about {_bytes(memory)} of memory, more than the "
+            f"would need {_about_bytes(memory)} of memory, more than the "
             f"{_bytes(budget)} allowed (half of this machine's); "
             "lower --n-max or --q-max"
         )
-    if seconds > MAX_SECONDS:
+    if not seconds <= MAX_SECONDS:
         raise InputError(
             f"{what} (n_max={n_max}, q_max={q_max}, {bodies} body(ies)) "
-            f"would take about {_duration(seconds)}; lower --n-max or --q-max"
+            f"would take {_about_duration(seconds)}; lower --n-max or --q-max"
         )
     return memory, seconds
+
+
+def _short(number):
+    """A count for a message: digits up to 1e15, else ~1.2e+30."""
+    if abs(number) < 10**15:
+        return str(number)
+    try:
+        return f"~{float(number):.2g}"
+    except OverflowError:
+        return "beyond 1e308"
 
 
 def _bytes(count):
@@ -120,6 +141,15 @@ def _bytes(count):
             return f"{count:.3g} {unit}"
         count /= 1024
     return f"{count:.3g} EiB"
+
+
+def _about_bytes(count):
+    """``about 3.2 GiB``, or a phrase for an estimate beyond a double."""
+    return f"about {_bytes(count)}" if math.isfinite(count) else "more than a double can count"
+
+
+def _about_duration(seconds):
+    return f"about {_duration(seconds)}" if math.isfinite(seconds) else "forever"
 
 
 def _duration(seconds):

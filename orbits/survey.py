@@ -23,6 +23,7 @@ here, so both engines write identical files.
 
 import hashlib
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -189,13 +190,16 @@ def survey_estimate(bodies, n_max, q_max, chunk):
     A chunk holds up to two orbits per level and body; the memory is two
     chunks' rows (one being written while the next is computed).
     """
-    from .catalog import search_estimate
+    from .catalog import _as_float, search_estimate
 
     level_memory, _ = search_estimate(n_max, q_max, bodies=0)
-    levels = float(n_max) * q_max * (q_max + 1) / 2.0 * 6.0 / np.pi**2 + n_max
+    n_levels = _as_float(n_max)
+    levels = n_levels * q_max * (q_max + 1) / 2.0 * 6.0 / np.pi**2 + n_levels
     per_chunk = min(chunk, bodies)
-    memory = level_memory + 2 * per_chunk * (2.0 * levels * _BYTES_PER_ROW + 34.0 * levels)
-    seconds = bodies * (_SECONDS_PER_BODY + levels * _SECONDS_PER_BODY_LEVEL)
+    # zero bodies add nothing (not inf * 0 = NaN when n_max overflows a double)
+    rows = 2 * per_chunk * (2.0 * levels * _BYTES_PER_ROW + 34.0 * levels) if per_chunk else 0.0
+    memory = level_memory + rows
+    seconds = bodies * (_SECONDS_PER_BODY + levels * _SECONDS_PER_BODY_LEVEL) if bodies else 0.0
     return memory, seconds
 
 
@@ -207,25 +211,26 @@ def check_survey_bounds(bodies, n_max, q_max, chunk):
     InputError
         With the estimate and the largest ``chunk`` that would fit.
     """
-    from .catalog import MAX_SECONDS, _bytes, _duration, memory_budget
+    from .catalog import MAX_SECONDS, _about_bytes, _about_duration, _bytes, _short, memory_budget
 
     memory, seconds = survey_estimate(bodies, n_max, q_max, chunk)
     budget = memory_budget()
-    if memory > budget:
+    if not memory <= budget:  # also a NaN estimate (inf * 0 for a huge n_max)
         one, _ = survey_estimate(1, n_max, q_max, 1)
         base, _ = survey_estimate(0, n_max, q_max, 0)
-        fits = int((budget - base) // max(one - base, 1.0))
+        room = (budget - base) / max(one - base, 1.0)
+        fits = int(room) if math.isfinite(room) and room >= 1.0 else 0
         advice = f"use --chunk {fits} or less" if fits >= 1 else "lower --n-max or --q-max"
         raise InputError(
-            f"this survey (n_max={n_max}, q_max={q_max}, chunk={chunk}) "
-            f"would need about {_bytes(memory)} of memory per chunk, more "
+            f"this survey (n_max={_short(n_max)}, q_max={_short(q_max)}, chunk={chunk}) "
+            f"would need {_about_bytes(memory)} of memory per chunk, more "
             f"than the {_bytes(budget)} allowed (half of this machine's); "
             f"{advice}"
         )
-    if seconds > MAX_SECONDS:
+    if not seconds <= MAX_SECONDS:
         raise InputError(
-            f"this survey ({bodies} bodies, n_max={n_max}, q_max={q_max}) "
-            f"would take about {_duration(seconds)}; use fewer bodies or "
+            f"this survey ({bodies} bodies, n_max={_short(n_max)}, q_max={_short(q_max)}) "
+            f"would take {_about_duration(seconds)}; use fewer bodies or "
             "a lower --n-max"
         )
     return memory, seconds

@@ -269,3 +269,30 @@ def test_bodies_file_flags_exactly_the_unusable_rows(tmp_path):
     table = read_bodies_csv(path, skip_invalid=True)
     assert [row for row, _ in table.skipped] == [3]
     assert len(table.bodies()) == 4
+
+
+@pytest.mark.parametrize("n_max", [1e308, 10**400, 2**63 - 1, 10**17])
+def test_huge_level_counts_are_refused_before_any_allocation(n_max, tmp_path):
+    """A hypothesis draw (n_max = 1e308) got the CI runner OOM-killed.
+
+    The memory estimate was inf * 0 = NaN for zero bodies, and NaN > budget
+    is False: phase_levels then tried to build 1e308 fractions.  Every
+    entry point now refuses with a one-line message.
+    """
+    from orbits.catalog import check_search_bounds
+    from orbits.search import phase_levels
+    from orbits.survey import check_survey_bounds
+
+    calls = [
+        lambda: phase_levels(n_max, 2),
+        lambda: compute_chunk([FIG6], n_max),
+        lambda: orbits.closed_orbits(BODY, n_max),
+        lambda: orbits.catalog([BODY], n_max),
+        lambda: check_search_bounds(n_max, 1, 0),
+        lambda: check_survey_bounds(1000, n_max, 1, 10),
+        lambda: Survey.from_bodies(tmp_path / "s", [FIG6], n_max, fmt="csv"),
+    ]
+    for call in calls:
+        with pytest.raises(InputError, match="would need") as error:
+            call()
+        assert "\n" not in str(error.value) and len(str(error.value)) < 300
