@@ -189,7 +189,7 @@ def _step_integral(s, c, d, nodes, weights, n):
 
 @njit(cache=True, nogil=True)
 def _exact_piece(orbit, u, pieces, k):
-    value, sn, cn, dn, j, _, _ = _pi_of_u(orbit, u)
+    value, sn, cn, dn, j = _pi_of_u(orbit, u)
     pieces[PIECE_PI, k] = value
     pieces[PIECE_SN, k] = sn
     pieces[PIECE_CN, k] = cn
@@ -239,7 +239,7 @@ def block_pieces(orbit, times, delta, offsets, nodes, weights, b, pieces):
     if end == lo:
         return True
     u_end = tau0 + rate * times[end]
-    exact, s_end, c_end, d_end, _, _, _ = _pi_of_u(orbit, u_end)
+    exact, s_end, c_end, d_end, _ = _pi_of_u(orbit, u_end)
     # the two u_end differ by rounding: a few ulps of u times |d/du| <= 1
     slack = BLOCK_TOLERANCE * EPS * (1.0 + abs(u_end))
     if (

@@ -82,8 +82,7 @@ ORBIT_SIZE = SLOT_GEOMETRIC + AGM_LEVELS
 def _pi_of_u(orbit, u):
     """``Pi(n; am(u) | m)`` continued through every half period, with sn, cn, dn.
 
-    Also returns ``am(u)``'s pieces: the half-period index ``j`` and
-    ``sin, cos`` of ``am(r)`` (``|am(r)| <= pi/2``).
+    Also returns the half-period index ``j`` of ``am(u) = j pi + am(r)``.
     """
     levels = int(orbit[SLOT_LEVELS])
     means = orbit[SLOT_MEANS : SLOT_MEANS + AGM_LEVELS]
@@ -99,7 +98,7 @@ def _pi_of_u(orbit, u):
         + r
         + n / 3.0 * s * s * s * carlson_rj(c * c, dn * dn, 1.0, 1.0 - n * s * s)
     )
-    return value, sn, cn, dn, j, s, c
+    return value, sn, cn, dn, j
 
 
 @njit(cache=True, nogil=True)
@@ -211,7 +210,7 @@ def state_at(orbit, t):
     continuous too: on SAM it winds by -2 pi sign(w3) per period, on LAM it
     stays in one half-plane.
     """
-    pi_u, sn, cn, dn, j, _, _ = _pi_of_u(orbit, orbit[SLOT_TAU0] + orbit[SLOT_RATE] * t)
+    pi_u, sn, cn, dn, j = _pi_of_u(orbit, orbit[SLOT_TAU0] + orbit[SLOT_RATE] * t)
     return state_from_pieces(orbit, t, pi_u, sn, cn, dn, j)
 
 
@@ -274,7 +273,7 @@ def omega_space_at(orbit, t):
     ``2E/M``; its part in that plane is ``Rz(phi)`` of
     ``((I2 - I1) w1 w2, w3 (2EI3 - M^2) / M) / (M sin(theta))``.
     """
-    pi_u, sn, cn, dn, _, _, _ = _pi_of_u(orbit, orbit[SLOT_TAU0] + orbit[SLOT_RATE] * t)
+    pi_u, sn, cn, dn, _ = _pi_of_u(orbit, orbit[SLOT_TAU0] + orbit[SLOT_RATE] * t)
     return omega_space_from_pieces(orbit, t, pi_u, sn, cn, dn)
 
 
