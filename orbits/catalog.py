@@ -77,16 +77,25 @@ def _as_float(number):
         return math.inf
 
 
-def search_estimate(n_max, q_max, bodies=1):
-    """Rough memory (bytes) and time (s) of a closed-orbit search.
+def level_estimate(n_max, q_max):
+    """``(candidates, levels)``: fractions tried and kept by :func:`phase_levels`.
 
     The levels are the fractions ``p/q <= n_max`` with ``q <= q_max`` in
     lowest terms: about ``(6/pi^2) n_max q_max^2 / 2`` of them, built from
-    ``n_max q_max (q_max + 1) / 2`` candidates; each body gives at most two
-    orbits per level.
+    ``n_max q_max (q_max + 1) / 2`` candidates.  Floats (inf beyond a double).
     """
-    candidates = _as_float(n_max) * q_max * (q_max + 1) / 2.0
-    levels = candidates * 6.0 / math.pi**2 + _as_float(n_max)
+    n = _as_float(n_max)
+    candidates = n * q_max * (q_max + 1) / 2.0
+    return candidates, candidates * 6.0 / math.pi**2 + n
+
+
+def search_estimate(n_max, q_max, bodies=1):
+    """Rough memory (bytes) and time (s) of a closed-orbit search.
+
+    Levels as :func:`level_estimate`; each body gives at most two orbits
+    per level.
+    """
+    candidates, levels = level_estimate(n_max, q_max)
     # bodies = 0 adds nothing (not inf * 0 = NaN when n_max overflows a double)
     rows = 2.0 * levels * bodies if bodies else 0.0
     memory = levels * _BYTES_PER_LEVEL + rows * _BYTES_PER_ROW

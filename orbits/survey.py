@@ -190,11 +190,10 @@ def survey_estimate(bodies, n_max, q_max, chunk):
     A chunk holds up to two orbits per level and body; the memory is two
     chunks' rows (one being written while the next is computed).
     """
-    from .catalog import _as_float, search_estimate
+    from .catalog import level_estimate, search_estimate
 
     level_memory, _ = search_estimate(n_max, q_max, bodies=0)
-    n_levels = _as_float(n_max)
-    levels = n_levels * q_max * (q_max + 1) / 2.0 * 6.0 / np.pi**2 + n_levels
+    _, levels = level_estimate(n_max, q_max)
     per_chunk = min(chunk, bodies)
     # zero bodies add nothing (not inf * 0 = NaN when n_max overflows a double)
     rows = 2 * per_chunk * (2.0 * levels * _BYTES_PER_ROW + 34.0 * levels) if per_chunk else 0.0
