@@ -577,21 +577,15 @@ class Survey:
         from concurrent.futures import ThreadPoolExecutor
 
         writer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="orbits-writer")
-        pending = []
+        previous = None  # the chunk being written
         try:
             for index in todo:
                 bodies, orbits = compute_chunk(
                     self.chunk_moments(index), self.n_max, self.q_max, index * self.chunk
                 )
-                while pending:  # the previous chunk must be on disk first
-                    written = pending.pop(0).result()
-                    if progress is not None:
-                        progress(written)
-                pending.append(writer.submit(self._write_and_count, index, bodies, orbits))
-            while pending:
-                written = pending.pop(0).result()
-                if progress is not None:
-                    progress(written)
+                self._wait_for(previous, progress)  # on disk before the next is queued
+                previous = writer.submit(self._write_and_count, index, bodies, orbits)
+            self._wait_for(previous, progress)
         finally:
             # at most one chunk is queued: it is computed, so finish it
             writer.shutdown(wait=True)
@@ -599,6 +593,15 @@ class Survey:
     def _write_and_count(self, index, bodies, orbits):
         self.write_chunk(index, bodies, orbits)
         return len(bodies)
+
+    @staticmethod
+    def _wait_for(future, progress):
+        """Wait for a queued write (re-raising its error); report its bodies."""
+        if future is None:
+            return
+        written = future.result()
+        if progress is not None:
+            progress(written)
 
     @staticmethod
     def _connect(scheduler, status=None):
