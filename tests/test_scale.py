@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
+from mp_formulas import period_and_total_phase
 
 import orbits
 from orbits.bodies import Body, region_sample
@@ -31,24 +32,7 @@ def mp_total_phase(moments, theta, dps=50):
         w1, w3 = mp.sin(theta), mp.cos(theta)
         two_e = i1 * w1**2 + i3 * w3**2
         m_sq = i1**2 * w1**2 + i3**2 * w3**2
-        if m_sq > two_e * i2:
-            k2 = (i2 - i1) * (two_e * i3 - m_sq) / ((i3 - i2) * (m_sq - two_e * i1))
-            rate = mp.sqrt((i3 - i2) * (m_sq - two_e * i1) / (i1 * i2 * i3))
-            n = -i3 * (i2 - i1) / (i1 * (i3 - i2))
-            shift = 2 * mp.pi
-        else:
-            k2 = (i3 - i2) * (m_sq - two_e * i1) / ((i2 - i1) * (two_e * i3 - m_sq))
-            rate = mp.sqrt((i2 - i1) * (two_e * i3 - m_sq) / (i1 * i2 * i3))
-            n = -i3 * (m_sq - two_e * i1) / (i1 * (two_e * i3 - m_sq))
-            shift = 0
-        momentum = mp.sqrt(m_sq)
-        period = 4 * mp.ellipk(k2) / rate
-        total = (
-            momentum * period / i3
-            + 4 * momentum * (i3 - i1) * mp.ellippi(n, k2) / (i1 * i3 * rate)
-            - shift
-        )
-        return float(total)
+        return float(period_and_total_phase(i1, i2, i3, two_e, m_sq)[1])
 
 
 # ---------------------------------------------------------------- the issue
