@@ -240,6 +240,24 @@ def t_handle_boxes(l1, l2, w):
     ]
 
 
+def _same_vertex_count(faces):
+    """Faces padded to one vertex count by repeating each face's last vertex.
+
+    matplotlib 3.11 stores polygons of different lengths in an ``np.empty``
+    array and projects and autoscales its unused padding too
+    (matplotlib/matplotlib#32272): a cylinder (24-gon caps, quadrilateral
+    walls) got axis limits of 1.8e308 in one CI run.  A repeated vertex adds
+    a zero-length edge: the drawing is the same.
+    """
+    count = max(len(face) for face in faces)
+    return [
+        face
+        if len(face) == count
+        else np.concatenate([face, np.repeat(face[-1:], count - len(face), axis=0)])
+        for face in faces
+    ]
+
+
 def _cylinder_faces(a, b, length, sides=24):
     """An elliptic cylinder along z (semi-axes a along x, b along y) as a prism."""
     u = np.linspace(0.0, 2.0 * np.pi, sides + 1)[:-1]
@@ -412,7 +430,7 @@ class PoinsotAnimation:
         vertices = np.concatenate(faces)
         reach = float(np.max(np.sqrt(np.sum((vertices / semi) ** 2, axis=1))))
         self.solid_scale = 0.95 / reach
-        self._faces = [face * self.solid_scale for face in faces]
+        self._faces = _same_vertex_count([face * self.solid_scale for face in faces])
         self._build_figure(title, size, pyplot)
         self._animation = None
 

@@ -332,3 +332,18 @@ class TestCli:
         err = capsys.readouterr().err.strip().splitlines()
         assert code == 2 and len(err) == 1 and fragment in err[0], err
         assert list(tmp_path.iterdir()) == []
+
+
+def test_solids_reach_matplotlib_with_one_vertex_count():
+    """A cylinder's 24-gon caps and quadrilateral walls are padded by repeating
+    each face's last vertex: matplotlib 3.11 would otherwise pad them with
+    uninitialised memory and autoscale on it (matplotlib#32272; a CI run got
+    axis limits of 1.8e308).  The padded faces are the same polygons."""
+    rod = Body.cylinder(0.3, 1.0, 2.0, radius_y=0.2)
+    anim = animate.poinsot_animation(animate.flip_motion(rod), frames=2, dpi=20)
+    _, faces = animate.solid_faces(rod)
+    assert len({len(face) for face in faces}) > 1  # the input is ragged
+    assert {len(face) for face in anim._faces} == {max(len(face) for face in faces)}
+    for original, drawn in zip(faces, anim._faces):
+        np.testing.assert_array_equal(drawn[: len(original)], original * anim.solid_scale)
+        assert (drawn[len(original) :] == drawn[len(original) - 1]).all()
