@@ -127,3 +127,17 @@ def broadcast(names_and_shapes):
     except ValueError:
         listed = ", ".join(f"{name} {shape}" for name, shape in names_and_shapes)
         raise InputError(f"shapes do not broadcast together: {listed}") from None
+
+
+def finite_array(name, value, error=InputError):
+    """A real array with every value finite, or ``error`` naming the first bad one."""
+    array = real_array(name, value, error)
+    if not np.all(np.isfinite(array)):
+        flat = np.ravel(array)
+        raise error(f"{name} must be finite, got {flat[~np.isfinite(flat)][0]}")
+    return array
+
+
+def flat_broadcast(array, shape):
+    """``array`` broadcast to ``shape`` as a fresh contiguous 1-D float array."""
+    return np.ascontiguousarray(np.broadcast_to(array, shape), dtype=float).ravel()

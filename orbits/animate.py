@@ -46,7 +46,8 @@ import numpy as np
 from .atomic import atomic_path, ensure_writable
 from .bodies import Body, cylinder_moments
 from .errors import InputError
-from .motion import Motion, _as_body
+from .motion import Motion, as_body
+from .plotting import box_faces
 
 FORMATS = ("gif", "mp4")
 # colours of the drawing (one place, so that the two panels agree)
@@ -107,7 +108,7 @@ def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
     if branch is not None and branch not in ("SAM", "LAM"):
         raise InputError(f"branch must be SAM or LAM, got {branch!r}")
     if orbits is None:
-        orbits = closed_orbits(_as_body(body), n_max=max(1, math.ceil(p / q)), q_max=q)
+        orbits = closed_orbits(as_body(body), n_max=max(1, math.ceil(p / q)), q_max=q)
     match = orbits[(orbits["n"] == p) & (orbits["q"] == q)]
     if branch is not None:
         match = match[match["branch"] == branch]
@@ -147,7 +148,7 @@ def flip_motion(body=None, *, offset=0.05, speed=1.0):
     """
     if not (np.isfinite(offset) and 0.0 < offset < 0.25 * np.pi):
         raise InputError(f"offset must be in (0, pi/4), got {offset!r}")
-    body = Body.preset("t-handle") if body is None else _as_body(body)
+    body = Body.preset("t-handle") if body is None else as_body(body)
     angle = 0.5 * np.pi - offset
     return Motion.from_spin(body, angle, phi=angle, speed=speed)
 
@@ -177,7 +178,7 @@ def solid_faces(body, solid="auto"):
     faces : list of ndarray, each (k, 3)
         Polygons in the sorted principal frame (length units of the body).
     """
-    body = _as_body(body)
+    body = as_body(body)
     spec = solid
     if isinstance(spec, str) and spec == "auto":
         spec = getattr(body, "shape", None)
@@ -200,7 +201,7 @@ def solid_faces(body, solid="auto"):
         frame = Body.t_handle(l1, l2, w).frame
     elif kind == "box":
         a, b, c = (float(v) for v in spec[1:4])
-        faces = _box_faces((-a / 2, -b / 2, -c / 2), (a / 2, b / 2, c / 2))
+        faces = box_faces((-a / 2, -b / 2, -c / 2), (a / 2, b / 2, c / 2))
         frame = Body((b * b + c * c, a * a + c * c, a * a + b * b)).frame
     elif kind == "cylinder":
         a, length, b = (float(v) for v in spec[1:4])
@@ -218,13 +219,6 @@ def solid_faces(body, solid="auto"):
         )
     # caller's axes -> sorted principal axes: v_principal = frame @ v
     return kind, [face @ frame.T for face in faces]
-
-
-def _box_faces(lo, hi):
-    """The six faces of an axis-aligned box (as :mod:`orbits.plotting` draws it)."""
-    from .plotting import _box_faces as faces
-
-    return faces(lo, hi)
 
 
 def t_handle_boxes(l1, l2, w):
@@ -271,7 +265,7 @@ def _cylinder_faces(a, b, length, sides=24):
 def _t_handle_faces(l1, l2, w):
     faces = []
     for lo, hi in t_handle_boxes(l1, l2, w):
-        faces += _box_faces(lo, hi)
+        faces += box_faces(lo, hi)
     return faces
 
 
@@ -863,7 +857,7 @@ def _motion_from(source, theta, dtheta, phi, speed, row_body=None):
         if row_body is None:
             body = Body(moments, name=row.get("body"))
         else:
-            body = _as_body(row_body)
+            body = as_body(row_body)
             if not np.allclose(body.normalized_moments, moments, rtol=1e-12, atol=0.0):
                 raise InputError(
                     "the catalog row is not of the given body: its moments "
@@ -881,7 +875,7 @@ def _motion_from(source, theta, dtheta, phi, speed, row_body=None):
             + _closure_text(row, q)
         )
         return motion, float(q), label
-    body = _as_body(source)
+    body = as_body(source)
     if theta is None and dtheta is None:
         raise InputError("give the spin: theta or dtheta (or pass a Motion or a catalog row)")
     return Motion.from_spin(body, theta, dtheta=dtheta, phi=phi, speed=speed), 1.0, None

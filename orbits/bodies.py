@@ -15,14 +15,16 @@ import math
 
 import numpy as np
 
-from ._args import integer, real_array
-from .errors import InputError, NonPhysicalBodyError, SymmetricTopError
+from ._args import broadcast, finite_array, flat_broadcast, integer, real_array
+from .errors import AngleError, InputError, NonPhysicalBodyError, SymmetricTopError
+from .limits import check_resolution, format_bytes, memory_budget
+from .threads import size_aware
 
 # Relative slack for I3 <= I1 + I2: a flat body built in floating point
 # (e.g. I3 = fl(I1 + I2)) may exceed the bound by a few rounding errors.
 # Within it the body is moved exactly onto the flat edge (see
 # :func:`canonical_moments`); beyond it, it is rejected.
-_FLAT_SLACK = 8.0 * np.finfo(float).eps
+FLAT_SLACK = 8.0 * np.finfo(float).eps
 
 
 def _two_sum(a, b):
@@ -100,7 +102,7 @@ def canonical_moments(moments):
     with np.errstate(under="ignore"):
         unit = np.ldexp(flat, -exponent[:, None])
     excess = flat_excess(unit)
-    bad = excess > _FLAT_SLACK * unit[:, 2]
+    bad = excess > FLAT_SLACK * unit[:, 2]
     if bad.any():
         raise NonPhysicalBodyError(
             f"moments {_row(flat, bad)} violate the triangle inequality "
@@ -463,8 +465,6 @@ class Body:
 
     def critical_angle(self, phi=0.0):
         """Polar angle of the separatrix spin, radians; see :func:`orbits.critical_angle`."""
-        from .phases import critical_angle
-
         return critical_angle(self, phi)
 
     def __repr__(self):
@@ -677,7 +677,7 @@ class Body:
         hertz = np.sort(np.array(values)) * factors[unit]  # C <= B <= A
         i_c, i_b, i_a = codata.h / (8.0 * math.pi**2 * hertz)
         excess = i_c - (i_a + i_b)
-        if excess > _FLAT_SLACK * i_c:
+        if excess > FLAT_SLACK * i_c:
             amu_a2 = codata.physical_constants["atomic mass constant"][0] * 1e-20
             text = (
                 f"inertial defect Delta = I_C - I_A - I_B = "
@@ -765,7 +765,7 @@ def region_moments(i1, i2):
     rest = 1.0 - i1 * i1 - i2 * i2
     i3 = np.sqrt(np.clip(rest, 0.0, None))
     inside = (
-        (rest > 0.0) & (i1 > 0.0) & (i1 < i2) & (i2 < i3) & (i3 <= (i1 + i2) * (1.0 + _FLAT_SLACK))
+        (rest > 0.0) & (i1 > 0.0) & (i1 < i2) & (i2 < i3) & (i3 <= (i1 + i2) * (1.0 + FLAT_SLACK))
     )
     return np.stack([i1, i2, i3], axis=-1), inside
 
@@ -780,10 +780,8 @@ def region_grid(resolution):
     ------
     InputError
         ``resolution`` not an integer >= 2, or a grid larger than half the
-        machine's memory (:func:`orbits.survey.check_resolution`).
+        machine's memory (:func:`orbits.limits.check_resolution`).
     """
-    from .survey import check_resolution
-
     resolution = check_resolution(resolution)
     (lo1, hi1), (lo2, hi2) = REGION_BOX
     axis1 = lo1 + (np.arange(resolution) + 0.5) * (hi1 - lo1) / resolution
@@ -811,14 +809,12 @@ def region_sample(count):
     """
     from scipy.stats import qmc
 
-    from .catalog import _bytes, memory_budget
-
     count = integer("count", count, minimum=1)
     if count * _BYTES_PER_SAMPLE > memory_budget():
         raise InputError(
             f"region_sample({count}) would need about "
-            f"{_bytes(count * _BYTES_PER_SAMPLE)} of memory, more than the "
-            f"{_bytes(memory_budget())} allowed (half of this machine's)"
+            f"{format_bytes(count * _BYTES_PER_SAMPLE)} of memory, more than the "
+            f"{format_bytes(memory_budget())} allowed (half of this machine's)"
         )
     (lo1, hi1), (lo2, hi2) = REGION_BOX
     sampler = qmc.Halton(d=2, scramble=False)
@@ -833,6 +829,47 @@ def region_sample(count):
         kept.append(moments[inside])
         total += int(inside.sum())
     return np.concatenate(kept)[:count]
+
+
+# --------------------------------------------------------------- separatrix
+@size_aware
+def critical_angle(body_or_moments, phi=0.0):
+    """Polar angle ``theta_c`` of omega0 on the separatrix ``M^2 = 2 E I2``.
+
+    ``tan(theta_c) = sqrt(I3 (I3 - I2) / (I1 (I2 - I1) cos^2 phi))``.  This is
+    the paper's ``theta_crit = arccot(sqrt(beta))`` with the erratum in
+    eqn:beta corrected: ``beta = I1 (I2-I1) / (I3 (I3-I2))``.
+
+    Parameters
+    ----------
+    body_or_moments : Body or array_like, shape (..., 3)
+    phi : float or array_like
+        Azimuth of omega0 from the I1 axis, radians.
+
+    Returns
+    -------
+    float or ndarray
+        Radians in ``(0, pi/2]``; broadcast over bodies and ``phi``.
+
+    Raises
+    ------
+    NonPhysicalBodyError, SymmetricTopError
+        Invalid moments.
+    AngleError
+        ``phi`` not finite.
+    """
+    from .core import phase as _kernels
+
+    moments, _ = unit_moments(body_or_moments)
+    phi = finite_array("phi", phi, AngleError)
+    shape = broadcast([("moments", moments.shape[:-1]), ("phi", phi.shape)])
+    out = np.empty(shape)
+    _kernels.critical_angle_many(
+        *(flat_broadcast(moments[..., k], shape) for k in range(3)),
+        flat_broadcast(phi, shape),
+        out.reshape(-1),
+    )
+    return float(out) if out.ndim == 0 else out
 
 
 PRESETS = {

@@ -22,7 +22,6 @@ Bodies files (``--bodies``) are read strictly by :func:`read_bodies_csv`.
 import csv
 import hashlib
 import io
-import math
 import os
 import re
 from dataclasses import dataclass, field
@@ -30,12 +29,14 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ._args import path_argument
+from ._args import integer, path_argument
 from ._version import __version__
 from .atomic import atomic_path, csv_float_options
-from .bodies import Body
+from .bodies import FLAT_SLACK, Body, flat_excess, validate_moments
+from .cells import neutralize, unneutralize
 from .errors import ArgumentTypeError, InputError, OrbitsError
-from .search import CATALOG_COLUMNS, _count, closed_orbits
+from .limits import check_search_bounds
+from .search import CATALOG_COLUMNS, closed_orbits
 
 VERIFIED_COLUMN = "closure_error"
 CLOSURE_TOLERANCE = 1e-8
@@ -45,130 +46,6 @@ READ_HINT = (
 )
 ROWS_KEY = "rows: "
 CHECKSUM_KEY = "sha256 of the data section: "
-# first characters a spreadsheet takes as the start of a formula (OWASP CSV
-# injection); the quote itself is escaped too so that reading back is exact
-FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
-_ESCAPE = "'"
-
-
-# --------------------------------------------------------------- bounds
-def memory_budget():
-    """Bytes one run may use: half the machine's physical memory."""
-    try:
-        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
-    except (ValueError, OSError, AttributeError):
-        total = 8 << 30
-    return total // 2
-
-
-# measured here (phase_levels(1000, 30): 465,000 candidate fractions in 1.9 s)
-_SECONDS_PER_CANDIDATE = 4e-6
-_BYTES_PER_LEVEL = 400  # Fraction set, sorted list and level arrays
-_BYTES_PER_ROW = 600  # catalog row: search arrays, DataFrame, CSV text
-_SECONDS_PER_BODY_LEVEL = 2e-7  # root search per body and level, one core
-MAX_SECONDS = 24 * 3600
-
-
-def _as_float(number):
-    """A count as a float; inf beyond the doubles (not OverflowError)."""
-    try:
-        return float(number)
-    except OverflowError:
-        return math.inf
-
-
-def level_estimate(n_max, q_max):
-    """``(candidates, levels)``: fractions tried and kept by :func:`phase_levels`.
-
-    The levels are the fractions ``p/q <= n_max`` with ``q <= q_max`` in
-    lowest terms: about ``(6/pi^2) n_max q_max^2 / 2`` of them, built from
-    ``n_max q_max (q_max + 1) / 2`` candidates.  Floats (inf beyond a double).
-    """
-    n = _as_float(n_max)
-    candidates = n * q_max * (q_max + 1) / 2.0
-    return candidates, candidates * 6.0 / math.pi**2 + n
-
-
-def search_estimate(n_max, q_max, bodies=1):
-    """Rough memory (bytes) and time (s) of a closed-orbit search.
-
-    Levels as :func:`level_estimate`; each body gives at most two orbits
-    per level.
-    """
-    candidates, levels = level_estimate(n_max, q_max)
-    # bodies = 0 adds nothing (not inf * 0 = NaN when n_max overflows a double)
-    rows = 2.0 * levels * bodies if bodies else 0.0
-    memory = levels * _BYTES_PER_LEVEL + rows * _BYTES_PER_ROW
-    seconds = candidates * _SECONDS_PER_CANDIDATE + 0.5 * rows * _SECONDS_PER_BODY_LEVEL
-    return memory, seconds
-
-
-def check_search_bounds(n_max, q_max, bodies=1, what="this search"):
-    """Refuse a search whose memory or time would exceed the machine.
-
-    Returns
-    -------
-    memory, seconds : float
-        The estimate, for a progress message.
-
-    Raises
-    ------
-    InputError
-        The estimate exceeds :func:`memory_budget` or a day.
-    """
-    memory, seconds = search_estimate(n_max, q_max, bodies)
-    budget = memory_budget()
-    n_max, q_max = _short(n_max), _short(q_max)
-    if not memory <= budget:  # also a NaN estimate (inf * 0 for a huge n_max)
-        raise InputError(
-            f"{what} (n_max={n_max}, q_max={q_max}, {bodies} body(ies)) "
-            f"would need {_about_bytes(memory)} of memory, more than the "
-            f"{_bytes(budget)} allowed (half of this machine's); "
-            "lower --n-max or --q-max"
-        )
-    if not seconds <= MAX_SECONDS:
-        raise InputError(
-            f"{what} (n_max={n_max}, q_max={q_max}, {bodies} body(ies)) "
-            f"would take {_about_duration(seconds)}; lower --n-max or --q-max"
-        )
-    return memory, seconds
-
-
-def _short(number):
-    """A count for a message: digits up to 1e15, else ~1.2e+30."""
-    if abs(number) < 10**15:
-        return str(number)
-    try:
-        return f"~{float(number):.2g}"
-    except OverflowError:
-        return "beyond 1e308"
-
-
-def _bytes(count):
-    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
-        if count < 1024 or unit == "PiB":
-            return f"{count:.3g} {unit}"
-        count /= 1024
-    return f"{count:.3g} EiB"
-
-
-def _about_bytes(count):
-    """``about 3.2 GiB``, or a phrase for an estimate beyond a double."""
-    return f"about {_bytes(count)}" if math.isfinite(count) else "more than a double can count"
-
-
-def _about_duration(seconds):
-    return f"about {_duration(seconds)}" if math.isfinite(seconds) else "forever"
-
-
-def _duration(seconds):
-    if seconds < 120:
-        return f"{seconds:.0f} s"
-    if seconds < 7200:
-        return f"{seconds / 60:.0f} min"
-    if seconds < 3 * 86400:
-        return f"{seconds / 3600:.1f} h"
-    return f"{seconds / 86400:.3g} days"
 
 
 # --------------------------------------------------------------- building
@@ -211,7 +88,7 @@ def catalog(bodies, n_max=10, q_max=1, *, verify=False, progress=None):
     bodies = [b if isinstance(b, Body) else Body(b) for b in bodies]
     if not bodies:
         raise InputError("no bodies given")
-    n_max, q_max = _count("n_max", n_max), _count("q_max", q_max)
+    n_max, q_max = integer("n_max", n_max, minimum=1), integer("q_max", q_max, minimum=1)
     check_search_bounds(n_max, q_max, len(bodies), "the catalog")
     frames = []
     for body in bodies:
@@ -227,18 +104,6 @@ def catalog(bodies, n_max=10, q_max=1, *, verify=False, progress=None):
 
 
 # --------------------------------------------------------------- CSV text
-def neutralize(text):
-    """A text cell safe for spreadsheets (OWASP): formula starts get a ``'``."""
-    if text[:1] in FORMULA_STARTS or text[:1] == _ESCAPE:
-        return _ESCAPE + text
-    return text
-
-
-def unneutralize(text):
-    """Inverse of :func:`neutralize`."""
-    return text[1:] if text[:1] == _ESCAPE else text
-
-
 def csv_text(frame):
     """The CSV text of a DataFrame: floats exact, text quoted and neutralised.
 
@@ -760,8 +625,6 @@ def _validated(path, header, cells, skip_invalid):
 
 def _invalid_moments(moments):
     """Indices of rows that :func:`orbits.bodies.validate_moments` rejects."""
-    from .bodies import _FLAT_SLACK, flat_excess, validate_moments
-
     if moments.shape[0] == 0:
         return []
     ordered = np.sort(moments, axis=1)
@@ -781,7 +644,7 @@ def _invalid_moments(moments):
             | (ordered[:, 0] <= 0)
             | (ordered[:, 0] == ordered[:, 1])
             | (ordered[:, 1] == ordered[:, 2])
-            | (flat_excess(unit) > _FLAT_SLACK * unit[:, 2])
+            | (flat_excess(unit) > FLAT_SLACK * unit[:, 2])
         )
     bad = set(np.flatnonzero(flags).tolist())
     rest = np.flatnonzero(~flags)

@@ -34,7 +34,7 @@ from .core import quadrature as _quadrature
 from .core.exact import separatrix_gap_exact
 from .core.ode import STATE_SIZE, euler_rhs
 from .errors import AngleError, InputError
-from .motion import Motion, _as_body
+from .motion import Motion, as_body
 
 TOLERANCE = 1e-9
 # longest closure check: q periods integrated at rtol 1e-13
@@ -57,7 +57,7 @@ MontgomeryCheck = namedtuple(
 
 
 def _unit_motion(body_or_moments, theta, dtheta, phi):
-    body = _as_body(body_or_moments)
+    body = as_body(body_or_moments)
     return Motion.from_spin(body, theta, dtheta=dtheta, phi=phi)
 
 
@@ -318,7 +318,7 @@ def verify_body(body, n_angles=22, *, tolerance=TOLERANCE, progress=None, chunk=
     """
     if int(n_angles) != n_angles or n_angles < 1:
         raise InputError(f"angles must be a positive integer, got {n_angles}")
-    unit = _as_body(body).normalized_moments
+    unit = as_body(body).normalized_moments
     return _verify_grid(unit[None, :], n_angles, tolerance, progress, chunk)
 
 

@@ -16,6 +16,13 @@ import sys
 from ._version import __version__
 from .bodies import PRESETS, Body
 from .errors import InputError, OrbitsError
+from .limits import (
+    check_resolution,
+    check_search_bounds,
+    format_bytes,
+    format_duration,
+    memory_budget,
+)
 
 EXIT_CHECK_FAILED = 1
 EXIT_USAGE = 2
@@ -560,10 +567,8 @@ def _check_out(path):
 def announce(command, seconds, memory):
     """One stderr line before a step estimated to take more than 2 s."""
     if seconds > 2:
-        from .catalog import _bytes, _duration
-
         print(
-            f"orbits {command}: estimated {_duration(seconds)}, up to {_bytes(memory)}"
+            f"orbits {command}: estimated {format_duration(seconds)}, up to {format_bytes(memory)}"
             " of memory; working...",
             file=sys.stderr,
             flush=True,
@@ -574,7 +579,7 @@ def _cmd_catalog(args):
     import time
     import warnings
 
-    from .catalog import CLOSURE_TOLERANCE, catalog, check_search_bounds, write_catalog
+    from .catalog import CLOSURE_TOLERANCE, catalog, write_catalog
     from .search import UnresolvedOrbitsWarning
 
     _check_out(args.out)
@@ -702,7 +707,6 @@ def _cmd_figures(args):
         if args.n_max is None:
             raise InputError("orbits figures: --n-max is required with a body")
         body = body_from_args(args)
-        from .catalog import check_search_bounds
         from .search import closed_orbits
 
         check_search_bounds(args.n_max, args.q_max, 1, "the figures' search")
@@ -934,10 +938,10 @@ def _cmd_survey(args):
     announced = False
     if args.resolution is not None:
         # say it before building the grid, which itself takes seconds when large
-        from .survey import _GRID_INSIDE, check_resolution, check_survey_bounds
+        from .survey import GRID_INSIDE, check_survey_bounds
 
         check_resolution(args.resolution)
-        count = max(1, int(_GRID_INSIDE * args.resolution**2))
+        count = max(1, int(GRID_INSIDE * args.resolution**2))
         check_survey_bounds(count, args.n_max, args.q_max, args.chunk)
         announce("survey", *reversed(survey_estimate(count, args.n_max, args.q_max, args.chunk)))
         announced = True
@@ -1145,14 +1149,12 @@ def _cmd_verify(args):
     body = body_from_args(args) if one else None
     n_bodies = 1 if one else args.bodies
     total = n_bodies * args.angles
-    from .catalog import _bytes, memory_budget
-
     memory = total * _VERIFY_BYTES_PER_CONDITION
     if memory > memory_budget():
         raise InputError(
             f"verify with {n_bodies} bodies x {args.angles} angles = "
-            f"{total} initial conditions would need about {_bytes(memory)} "
-            f"of memory, more than the {_bytes(memory_budget())} allowed "
+            f"{total} initial conditions would need about {format_bytes(memory)} "
+            f"of memory, more than the {format_bytes(memory_budget())} allowed "
             "(half of this machine's)"
         )
     announce("verify", total * _VERIFY_SECONDS_PER_CONDITION, memory)

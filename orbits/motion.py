@@ -51,7 +51,8 @@ about_momentum : 2 pi T / Delta alpha, the mean rotation period about L.
 """
 
 
-def _as_body(body_or_moments):
+def as_body(body_or_moments):
+    """A :class:`Body` as given, or one built from moments of a single body."""
     if isinstance(body_or_moments, Body):
         return body_or_moments
     moments = real_array("moments", body_or_moments)
@@ -122,7 +123,7 @@ class Motion:
     """
 
     def __init__(self, body, omega0, _gap=None):
-        body = _as_body(body)
+        body = as_body(body)
         omega0 = real_array("omega0", omega0, AngleError)
         if omega0.shape != (3,) or not all(math.isfinite(v) for v in omega0.tolist()):
             raise AngleError("omega0 must be a finite 3-vector")
@@ -192,7 +193,7 @@ class Motion:
         AngleError, SeparatrixError
             As :func:`orbits.total_phase`; ``speed`` must be positive.
         """
-        body = _as_body(body)
+        body = as_body(body)
         speed = real_scalar("speed", speed, AngleError)
         if not (math.isfinite(speed) and speed > 0.0):
             raise AngleError(f"speed must be positive, got {speed}")
@@ -424,7 +425,7 @@ def _grid(motion, periods, points):
 
 
 def _paper_motion(body_or_moments, theta, dtheta, phi):
-    body = _as_body(body_or_moments)
+    body = as_body(body_or_moments)
     unit = Body(body.normalized_moments, name=body.name)
     return Motion.from_spin(unit, theta, dtheta=dtheta, phi=phi)
 
@@ -456,7 +457,7 @@ def herpolhode(body_or_moments, theta=None, *, dtheta=None, phi=0.0, periods=1, 
     As :func:`orbits.total_phase`; InputError for bad ``periods``/``points``.
     """
     # omega(t) does not depend on the scale of I: no need to normalise
-    motion = Motion.from_spin(_as_body(body_or_moments), theta, dtheta=dtheta, phi=phi)
+    motion = Motion.from_spin(as_body(body_or_moments), theta, dtheta=dtheta, phi=phi)
     t = _grid(motion, periods, points)
     return t, motion.omega_space(t)
 

@@ -42,8 +42,12 @@ from collections import namedtuple
 import numpy as np
 import pandas as pd
 
-from ._args import broadcast, real_array
-from .bodies import unit_moments
+from ._args import broadcast, finite_array, real_array
+from ._args import flat_broadcast as _flat
+from .bodies import (
+    critical_angle,  # noqa: F401 (re-exported: defined in bodies, below this layer)
+    unit_moments,
+)
 from .core import phase as _kernels
 from .core import solid_angle as _solid
 from .errors import AngleError, InputError, SeparatrixError
@@ -57,13 +61,6 @@ PhaseLimits.__doc__ = """Limits of the total phase at the two ends of 0 < theta 
 theta_zero : eqn:alphamin1, ``2 pi sqrt(I1 I2 / ((I3-I2)(I3-I1)))``
 theta_half_pi : eqn:alphamin2, ``2 pi sqrt(I2 I3 / ((I2-I1)(I3-I1)))``
 """
-
-
-def _float_array(name, value):
-    array = real_array(name, value, AngleError)
-    if not np.all(np.isfinite(array)):
-        raise AngleError(f"{name} must be finite, got {_first_bad(array)}")
-    return array
 
 
 def _first_bad(array):
@@ -132,16 +129,12 @@ def _spin_inputs(moments, theta, dtheta, phi):
     from_offset = dtheta is not None
     name = "dtheta" if from_offset else "theta"
     angle = real_array(name, dtheta if from_offset else theta, AngleError)
-    phi = _float_array("phi", phi)
+    phi = finite_array("phi", phi, AngleError)
     if not from_offset:
         angle = fold_angle(angle)
     phi = fold_angle(phi)
     shape = broadcast([("moments", moments.shape[:-1]), (name, angle.shape), ("phi", phi.shape)])
     return from_offset, angle, phi, shape
-
-
-def _flat(array, shape):
-    return np.ascontiguousarray(np.broadcast_to(array, shape), dtype=float).ravel()
 
 
 def _check_status(status, moments, angle, phi, shape, from_offset):
@@ -168,42 +161,6 @@ def _check_status(status, moments, angle, phi, shape, from_offset):
         f"(theta_c = {theta_c:.17g}), where the period and the total phase "
         "are infinite; pass a nonzero dtheta = theta - theta_crit instead"
     )
-
-
-@size_aware
-def critical_angle(body_or_moments, phi=0.0):
-    """Polar angle ``theta_c`` of omega0 on the separatrix ``M^2 = 2 E I2``.
-
-    ``tan(theta_c) = sqrt(I3 (I3 - I2) / (I1 (I2 - I1) cos^2 phi))``.  This is
-    the paper's ``theta_crit = arccot(sqrt(beta))`` with the erratum in
-    eqn:beta corrected: ``beta = I1 (I2-I1) / (I3 (I3-I2))``.
-
-    Parameters
-    ----------
-    body_or_moments : Body or array_like, shape (..., 3)
-    phi : float or array_like
-        Azimuth of omega0 from the I1 axis, radians.
-
-    Returns
-    -------
-    float or ndarray
-        Radians in ``(0, pi/2]``; broadcast over bodies and ``phi``.
-
-    Raises
-    ------
-    NonPhysicalBodyError, SymmetricTopError
-        Invalid moments.
-    AngleError
-        ``phi`` not finite.
-    """
-    moments, _ = unit_moments(body_or_moments)
-    phi = _float_array("phi", phi)
-    shape = broadcast([("moments", moments.shape[:-1]), ("phi", phi.shape)])
-    out = np.empty(shape)
-    _kernels.critical_angle_many(
-        *(_flat(moments[..., k], shape) for k in range(3)), _flat(phi, shape), out.reshape(-1)
-    )
-    return float(out) if out.ndim == 0 else out
 
 
 @size_aware

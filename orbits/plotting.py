@@ -18,7 +18,7 @@ import math
 import numpy as np
 
 from .bodies import REGION_BOX, Body, region_moments
-from .motion import Motion, _as_body, herpolhode, polhode
+from .motion import Motion, as_body, herpolhode, polhode
 from .phases import critical_angle, phase_limits, phases, total_phase
 
 TWO_PI = 2.0 * np.pi
@@ -103,7 +103,7 @@ def herpolhode_radii(body, theta=None, *, dtheta=None, phi=0.0):
         In rad/s for ``|omega0| = 1``.  The subtraction loses about
         ``1e-16 / r`` relative accuracy for tiny radii (drawing only).
     """
-    motion = Motion.from_spin(_as_body(body), theta, dtheta=dtheta, phi=phi)
+    motion = Motion.from_spin(as_body(body), theta, dtheta=dtheta, phi=phi)
     moments = motion.body.moments
     two_e, m2 = 2.0 * motion.energy, motion.momentum**2
     zeros = (0, 1) if motion.branch == "SAM" else (1, 2)
@@ -237,7 +237,7 @@ def plot_phase_curves(ax, body, *, points=1500, period_axis=True):
         The lines by name (``total``, ``dynamic``, ``geometric``,
         ``period``) and the twin axes under ``period_axes``.
     """
-    body = _as_body(body)
+    body = as_body(body)
     theta_c = critical_angle(body)
     grid = _theta_grid(theta_c, points)
     table = phases(body, grid)
@@ -300,7 +300,7 @@ def plot_total_phase(ax, body, orbits=None, *, n_levels=None, points=2000, legen
         (PathCollection or None), ``level_axis`` (the right-hand axis that
         names the levels).
     """
-    body = _as_body(body)
+    body = as_body(body)
     theta_c = critical_angle(body)
     theta = _theta_grid(theta_c, points)
     values = total_phase(body, theta)
@@ -481,7 +481,8 @@ def _ellipsoid_surface(semi_axes, center=(0.0, 0.0, 0.0), resolution=40):
     return x, y, z
 
 
-def _box_faces(lo, hi):
+def box_faces(lo, hi):
+    """The six faces of the axis-aligned box with corners ``lo`` and ``hi``, as (4, 3) arrays."""
     (x0, y0, z0), (x1, y1, z1) = lo, hi
     corners = np.array(
         [
@@ -529,7 +530,7 @@ def plot_t_handle(ax3d, l1=8.0, l2=4.0, w=1.0, *, shrink=0.25, bars="solid", ell
         ((-l1 / 2, -w / 2 - com_y, -w / 2), (l1 / 2, w / 2 - com_y, w / 2)),
         ((-w / 2, w / 2 - com_y, -w / 2), (w / 2, w / 2 + l2 - com_y, w / 2)),
     ]
-    faces = _box_faces(*boxes[0]) + _box_faces(*boxes[1])
+    faces = box_faces(*boxes[0]) + box_faces(*boxes[1])
     if bars == "outline":
         drawn = Poly3DCollection(
             faces, facecolor=(0, 0, 0, 0), edgecolor="darkgreen", linewidths=0.6
@@ -594,7 +595,7 @@ def plot_binet(ax3d, body, theta=None, *, dtheta=None, phi=0.0):
         row = body
         momentum = body.angular_momentum(np.linspace(0.0, body.period, 1500))
     else:
-        unit = _as_body(body).normalized_moments
+        unit = as_body(body).normalized_moments
         row = phases(unit, theta, phi, dtheta=dtheta).iloc[0]
         _, momentum = polhode(unit, theta, dtheta=dtheta, phi=phi, points=1500)
     x, y, z = _ellipsoid_surface([row.momentum] * 3, resolution=50)
@@ -635,7 +636,7 @@ def plot_omega_components(ax, body, theta=None, *, dtheta=None, phi=0.0, periods
     if isinstance(body, Motion):
         motion = body
     else:
-        motion = Motion.from_spin(_as_body(body), theta, dtheta=dtheta, phi=phi)
+        motion = Motion.from_spin(as_body(body), theta, dtheta=dtheta, phi=phi)
     t = np.linspace(0.0, periods * motion.period, points)
     omega = motion.omega(t)
     styles = (
@@ -686,7 +687,7 @@ def plot_polhode_foliation(
     """
     import matplotlib as mpl
 
-    body = _as_body(body)
+    body = as_body(body)
     unit = body.normalized_moments
     theta_c = critical_angle(unit)
     thetas = np.concatenate(

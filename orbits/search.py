@@ -18,6 +18,7 @@ from ._args import integer
 from .bodies import Body, unit_moments
 from .core import search as _kernels
 from .errors import InputError
+from .limits import check_search_bounds
 from .phases import phases_of_unit_moments
 
 CATALOG_COLUMNS = (
@@ -67,10 +68,8 @@ def phase_levels(n_max, q_max=1):
     InputError
         ``n_max`` or ``q_max`` not an integer >= 1 (``ArgumentTypeError`` for
         a wrong type), or so many levels that building them would exceed the
-        machine (:func:`orbits.catalog.check_search_bounds`).
+        machine (:func:`orbits.limits.check_search_bounds`).
     """
-    from .catalog import check_search_bounds
-
     n_max = _count("n_max", n_max)
     q_max = _count("q_max", q_max)
     check_search_bounds(n_max, q_max, 0, "the phase levels")
@@ -176,8 +175,6 @@ def closed_orbits(body, n_max=10, q_max=1):
     theta get all their roots.  Every root is checked:
     ``|Delta alpha - 2 pi p/q| <= 1e-10 * 2 pi p/q``.
     """
-    from .catalog import check_search_bounds
-
     n_max, q_max = _count("n_max", n_max), _count("q_max", q_max)
     check_search_bounds(n_max, q_max, 1, "this search")
     moments, _ = unit_moments(body)

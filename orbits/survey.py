@@ -33,8 +33,20 @@ from ._args import integer, path_argument, real_array
 from ._version import __version__
 from .atomic import FLOAT_FORMAT, atomic_path, write_text_atomic
 from .bodies import as_moments, region_grid, unit_moments
+from .cells import neutralize, unneutralize
 from .core import search as _kernels
 from .errors import ArgumentTypeError, InputError
+from .limits import (
+    MAX_SECONDS,
+    about_bytes,
+    about_duration,
+    check_resolution,
+    format_bytes,
+    level_estimate,
+    memory_budget,
+    search_estimate,
+    short_number,
+)
 from .phases import phase_limits
 from .search import catalog_rows, phase_levels, searched
 
@@ -180,8 +192,7 @@ def _body_rows(moments, ids, info, orbits, body_of_row):
 _SECONDS_PER_BODY = 2e-5
 _SECONDS_PER_BODY_LEVEL = 2e-7
 _BYTES_PER_ROW = 600  # an orbit row: kernel arrays, DataFrame, CSV text
-_BYTES_PER_GRID_POINT = 200  # region_grid: meshgrid, moments and masks
-_GRID_INSIDE = 0.39  # fraction of the bounding box inside the region
+GRID_INSIDE = 0.39  # fraction of the bounding box inside the region
 
 
 def survey_estimate(bodies, n_max, q_max, chunk):
@@ -190,8 +201,6 @@ def survey_estimate(bodies, n_max, q_max, chunk):
     A chunk holds up to two orbits per level and body; the memory is two
     chunks' rows (one being written while the next is computed).
     """
-    from .catalog import level_estimate, search_estimate
-
     level_memory, _ = search_estimate(n_max, q_max, bodies=0)
     _, levels = level_estimate(n_max, q_max)
     per_chunk = min(chunk, bodies)
@@ -210,8 +219,6 @@ def check_survey_bounds(bodies, n_max, q_max, chunk):
     InputError
         With the estimate and the largest ``chunk`` that would fit.
     """
-    from .catalog import MAX_SECONDS, _about_bytes, _about_duration, _bytes, _short, memory_budget
-
     memory, seconds = survey_estimate(bodies, n_max, q_max, chunk)
     budget = memory_budget()
     if not memory <= budget:  # also a NaN estimate (inf * 0 for a huge n_max)
@@ -221,34 +228,20 @@ def check_survey_bounds(bodies, n_max, q_max, chunk):
         fits = int(room) if math.isfinite(room) and room >= 1.0 else 0
         advice = f"use --chunk {fits} or less" if fits >= 1 else "lower --n-max or --q-max"
         raise InputError(
-            f"this survey (n_max={_short(n_max)}, q_max={_short(q_max)}, chunk={chunk}) "
-            f"would need {_about_bytes(memory)} of memory per chunk, more "
-            f"than the {_bytes(budget)} allowed (half of this machine's); "
+            f"this survey (n_max={short_number(n_max)}, q_max={short_number(q_max)}, "
+            f"chunk={chunk}) "
+            f"would need {about_bytes(memory)} of memory per chunk, more "
+            f"than the {format_bytes(budget)} allowed (half of this machine's); "
             f"{advice}"
         )
     if not seconds <= MAX_SECONDS:
         raise InputError(
-            f"this survey ({bodies} bodies, n_max={_short(n_max)}, q_max={_short(q_max)}) "
-            f"would take {_about_duration(seconds)}; use fewer bodies or "
+            f"this survey ({bodies} bodies, n_max={short_number(n_max)}, "
+            f"q_max={short_number(q_max)}) "
+            f"would take {about_duration(seconds)}; use fewer bodies or "
             "a lower --n-max"
         )
     return memory, seconds
-
-
-def check_resolution(resolution):
-    """Refuse a grid whose construction alone would exceed the machine."""
-    from .catalog import _bytes, memory_budget
-
-    resolution = integer("resolution", resolution, minimum=2)
-    # integer arithmetic: float(resolution) ** 2 overflows for absurd grids
-    memory = float(min(resolution * resolution * _BYTES_PER_GRID_POINT, 10**300))
-    if memory > memory_budget():
-        raise InputError(
-            f"--resolution {resolution} would need about {_bytes(memory)} "
-            f"of memory for the grid alone, more than the "
-            f"{_bytes(memory_budget())} allowed (half of this machine's)"
-        )
-    return int(resolution)
 
 
 # --------------------------------------------------------------- the survey
@@ -878,13 +871,11 @@ def _write_table(frame, path, fmt, engine=None):
     CSV goes through pyarrow's writer when it is installed (ten times
     faster than pandas here, and like it writes the shortest decimal that
     reads back to the same double); otherwise through pandas.  Names are
-    neutralised against spreadsheet formulas (:func:`orbits.catalog.neutralize`).
+    neutralised against spreadsheet formulas (:func:`orbits.cells.neutralize`).
     """
     if engine is None:
         engine = "arrow" if _have_pyarrow() else "pandas"
     if fmt == "csv" and "name" in frame.columns:
-        from .catalog import neutralize
-
         frame = frame.assign(name=[neutralize(str(v)) for v in frame["name"]])
     with atomic_path(path) as temporary:
         if fmt == "parquet":
@@ -926,7 +917,6 @@ _CSV_DTYPES = _csv_dtypes()
 
 def _read_part(path):
     from .atomic import csv_float_options
-    from .catalog import unneutralize
 
     if path.suffix == ".parquet":
         return pd.read_parquet(path)

@@ -20,7 +20,7 @@ import pytest
 from orbits import Body, Motion
 from orbits.checks import exact_motion_mpmath
 from orbits.core import grid
-from orbits.core.motion import SLOT_KC, SLOT_N, SLOT_RATE, SLOT_TAU0, _pi_of_u
+from orbits.core.motion import SLOT_KC, SLOT_N, SLOT_RATE, SLOT_TAU0, pi_of_u
 
 EPS = np.finfo(float).eps
 FIG6 = Body(Body.preset("fig6").normalized_moments)
@@ -176,7 +176,7 @@ def test_a_failed_block_is_recomputed_point_by_point():
     good = pieces.copy()
     assert not grid.block_pieces(orbit, times, delta, offsets, nodes, weights * 1.0001, 3, pieces)
     for i in range(grid.BLOCK):
-        exact = _pi_of_u(orbit, orbit[SLOT_TAU0] + orbit[SLOT_RATE] * times[3 * grid.BLOCK + i])
+        exact = pi_of_u(orbit, orbit[SLOT_TAU0] + orbit[SLOT_RATE] * times[3 * grid.BLOCK + i])
         assert pieces[grid.PIECE_PI, i] == exact[0]
         assert pieces[grid.PIECE_SN, i] == exact[1]
         assert abs(good[grid.PIECE_PI, i] - exact[0]) <= 64 * EPS * abs(exact[0])

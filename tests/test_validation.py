@@ -279,7 +279,7 @@ def test_huge_level_counts_are_refused_before_any_allocation(n_max, tmp_path):
     is False: phase_levels then tried to build 1e308 fractions.  Every
     entry point now refuses with a one-line message.
     """
-    from orbits.catalog import check_search_bounds
+    from orbits.limits import check_search_bounds
     from orbits.search import phase_levels
     from orbits.survey import check_survey_bounds
 

@@ -10,7 +10,7 @@ delta`` both have cheaper exact forms:
   22.8.1-22.8.3).  Every point is one addition away from an exactly
   evaluated anchor, so rounding does not accumulate along the grid.
 * ``P(u) = Pi(n; am u | m) = int_0^u dv / (1 - n sn^2 v)`` (the continued
-  Legendre integral of :func:`orbits.core.motion._pi_of_u`) as a running
+  Legendre integral of :func:`orbits.core.motion.pi_of_u`) as a running
   sum of its increments over each step, each by Gauss-Legendre quadrature
   with :data:`GAUSS_ORDER` nodes, whose ``sn`` are again additions.
 
@@ -45,9 +45,9 @@ from .motion import (
     SLOT_QUARTER,
     SLOT_RATE,
     SLOT_TAU0,
-    _pi_of_u,
     omega_space_at,
     omega_space_from_pieces,
+    pi_of_u,
     rotation_from_euler,
     state_at,
     state_from_pieces,
@@ -189,7 +189,7 @@ def _step_integral(s, c, d, nodes, weights, n):
 
 @njit(cache=True, nogil=True)
 def _exact_piece(orbit, u, pieces, k):
-    value, sn, cn, dn, j = _pi_of_u(orbit, u)
+    value, sn, cn, dn, j = pi_of_u(orbit, u)
     pieces[PIECE_PI, k] = value
     pieces[PIECE_SN, k] = sn
     pieces[PIECE_CN, k] = cn
@@ -239,7 +239,7 @@ def block_pieces(orbit, times, delta, offsets, nodes, weights, b, pieces):
     if end == lo:
         return True
     u_end = tau0 + rate * times[end]
-    exact, s_end, c_end, d_end, _ = _pi_of_u(orbit, u_end)
+    exact, s_end, c_end, d_end, _ = pi_of_u(orbit, u_end)
     # the two u_end differ by rounding: a few ulps of u times |d/du| <= 1
     slack = BLOCK_TOLERANCE * EPS * (1.0 + abs(u_end))
     if (

@@ -79,7 +79,7 @@ ORBIT_SIZE = SLOT_GEOMETRIC + AGM_LEVELS
 
 
 @njit(cache=True, nogil=True)
-def _pi_of_u(orbit, u):
+def pi_of_u(orbit, u):
     """``Pi(n; am(u) | m)`` continued through every half period, with sn, cn, dn.
 
     Also returns the half-period index ``j`` of ``am(u) = j pi + am(r)``.
@@ -198,7 +198,7 @@ def orbit_setup(i1, i2, i3, w1, w2, w3, scale, offset, closing, orbit):
     orbit[SLOT_LEVELS] = levels
     tau0 = start_argument(sin0, cos0, kc, quarter)
     orbit[SLOT_TAU0] = tau0
-    orbit[SLOT_PI_START] = _pi_of_u(orbit, tau0)[0]
+    orbit[SLOT_PI_START] = pi_of_u(orbit, tau0)[0]
     return branch
 
 
@@ -210,7 +210,7 @@ def state_at(orbit, t):
     continuous too: on SAM it winds by -2 pi sign(w3) per period, on LAM it
     stays in one half-plane.
     """
-    pi_u, sn, cn, dn, j = _pi_of_u(orbit, orbit[SLOT_TAU0] + orbit[SLOT_RATE] * t)
+    pi_u, sn, cn, dn, j = pi_of_u(orbit, orbit[SLOT_TAU0] + orbit[SLOT_RATE] * t)
     return state_from_pieces(orbit, t, pi_u, sn, cn, dn, j)
 
 
@@ -273,7 +273,7 @@ def omega_space_at(orbit, t):
     ``2E/M``; its part in that plane is ``Rz(phi)`` of
     ``((I2 - I1) w1 w2, w3 (2EI3 - M^2) / M) / (M sin(theta))``.
     """
-    pi_u, sn, cn, dn, _ = _pi_of_u(orbit, orbit[SLOT_TAU0] + orbit[SLOT_RATE] * t)
+    pi_u, sn, cn, dn, _ = pi_of_u(orbit, orbit[SLOT_TAU0] + orbit[SLOT_RATE] * t)
     return omega_space_from_pieces(orbit, t, pi_u, sn, cn, dn)
 
 
