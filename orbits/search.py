@@ -204,8 +204,8 @@ def closed_orbits(body, n_max=10, q_max=1):
     -------
     pandas.DataFrame
         One row per closed orbit, sorted by ``theta`` (i.e. by ``dtheta``),
-        with the columns of :data:`CATALOG_COLUMNS` (see the README's
-        catalog schema).  ``n`` is ``p``; ``q`` is 1 for integer orbits.
+        with the columns of :data:`CATALOG_COLUMNS` (see :data:`CATALOG_SCHEMA`
+        and the documentation's catalog schema).  ``n`` is ``p``; ``q`` is 1 for integer orbits.
 
     Raises
     ------
