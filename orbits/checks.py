@@ -160,14 +160,46 @@ def _rotation_scipy(moments, omega0, periods, rtol, atol):
 
 
 def montgomery(body_or_moments, theta=None, *, dtheta=None, phi=0.0, rtol=1e-14):
-    """Check (b): ``2ET/M - Omega`` with T and Omega by quadrature.
+    r"""Check (b): ``2ET/M - Omega`` with T and Omega by quadrature.
+
+    Parameters
+    ----------
+    body_or_moments : Body or array_like, shape (3,)
+        Principal moments, any order and scale.
+    theta, dtheta, phi : float
+        The spin direction as in :func:`orbits.total_phase` (radians; one of
+        ``theta`` and ``dtheta``), with :math:`|oldsymbol\omega_0| = 1`.
+    rtol : float
+        Relative tolerance of the adaptive Gauss-Legendre quadratures.
 
     Returns
     -------
     MontgomeryCheck
         ``total_phase = dynamic_phase - solid_angle``; ``solid_angle`` is
         signed by the right-hand rule (positive on SAM, negative on LAM).
-        For the T-handle spin of the paper it is 2.12519.
+        For the T-handle spin of the paper it is 2.12519.  All in radians,
+        ``period`` in units of :math:`1/|oldsymbol\omega_0|`.
+
+    Notes
+    -----
+    Montgomery's formula, Mecholsky's Eq. (1) (eqn:montgomery),
+
+    .. math::
+
+        \Deltalpha = rac{2ET}{M} - \Omega ,
+
+    with the period :math:`T` and the solid angle :math:`\Omega` enclosed by
+    the polhode both found by quadrature along the polhode, parameterised by
+    its azimuth about the axis it circles: no elliptic function is used, so
+    the check shares no formula with the closed form of Eq. (20).
+
+    Examples
+    --------
+    >>> import numpy as np, orbits
+    >>> body = orbits.Body.preset("t-handle")
+    >>> check = orbits.montgomery(body, np.pi / 2 - 0.15, phi=np.pi / 2 - 0.2)
+    >>> round(check.total_phase, 4), round(check.solid_angle, 5)
+    (21.5303, 2.12519)
     """
     motion = _unit_motion(body_or_moments, theta, dtheta, phi)
     i1, i2, i3 = motion.body.moments
