@@ -168,7 +168,7 @@ def montgomery(body_or_moments, theta=None, *, dtheta=None, phi=0.0, rtol=1e-14)
         Principal moments, any order and scale.
     theta, dtheta, phi : float
         The spin direction as in :func:`orbits.total_phase` (radians; one of
-        ``theta`` and ``dtheta``), with :math:`|oldsymbol\omega_0| = 1`.
+        ``theta`` and ``dtheta``), with :math:`|\boldsymbol\omega_0| = 1`.
     rtol : float
         Relative tolerance of the adaptive Gauss-Legendre quadratures.
 
@@ -178,7 +178,7 @@ def montgomery(body_or_moments, theta=None, *, dtheta=None, phi=0.0, rtol=1e-14)
         ``total_phase = dynamic_phase - solid_angle``; ``solid_angle`` is
         signed by the right-hand rule (positive on SAM, negative on LAM).
         For the T-handle spin of the paper it is 2.12519.  All in radians,
-        ``period`` in units of :math:`1/|oldsymbol\omega_0|`.
+        ``period`` in units of :math:`1/|\boldsymbol\omega_0|`.
 
     Notes
     -----
@@ -186,7 +186,7 @@ def montgomery(body_or_moments, theta=None, *, dtheta=None, phi=0.0, rtol=1e-14)
 
     .. math::
 
-        \Deltalpha = rac{2ET}{M} - \Omega ,
+        \Delta\alpha = \frac{2ET}{M} - \Omega ,
 
     with the period :math:`T` and the solid angle :math:`\Omega` enclosed by
     the polhode both found by quadrature along the polhode, parameterised by
