@@ -105,7 +105,9 @@ sphinx_gallery_conf = {
     "show_memory": False,
     "reference_url": {"orbits": None},
     "doc_module": ("orbits",),
-    "backreferences_dir": None,
+    # which examples use which name: each API entry lists them (the
+    # minigallery of docs/_templates/autosummary)
+    "backreferences_dir": "generated/backreferences",
     "min_reported_time": 1,
     # after sphinx-gallery's own reset of matplotlib (docs/_ext)
     "reset_modules": ("matplotlib", "gallery_setup.reset_matplotlib"),
