@@ -45,6 +45,7 @@ _LAZY = {
     "motion_phase": "checks",
     "rotation_by_integration": "checks",
     "verify": "checks",
+    "AxesWarning": "motion",
     "Motion": "motion",
     "MotionState": "motion",
     "TumblingPeriods": "motion",
@@ -105,6 +106,7 @@ def __dir__():
 __all__ = [
     "AngleError",
     "ArgumentTypeError",
+    "AxesWarning",
     "CATALOG_COLUMNS",
     "Body",
     "InertialDefectWarning",

@@ -70,8 +70,8 @@ def _omega_table(body, args):
     from ..phases import spin_phases
 
     omega = np.array(args.omega) * OMEGA_UNITS[args.units]
-    principal = body.frame @ omega
-    motion = Motion.from_omega(body, principal)
+    motion = Motion.from_omega(body, omega, axes="body")
+    principal = motion.omega0
     periods = motion.tumbling_periods()
     total = motion.total_phase()
     dynamic = 2.0 * motion.energy * motion.period / motion.momentum
