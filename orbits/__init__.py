@@ -26,6 +26,7 @@ from ._version import __version__
 from .errors import (
     AngleError,
     ArgumentTypeError,
+    DeviceError,
     InputError,
     NonPhysicalBodyError,
     OrbitsError,
@@ -107,6 +108,7 @@ __all__ = [
     "ArgumentTypeError",
     "CATALOG_COLUMNS",
     "Body",
+    "DeviceError",
     "InertialDefectWarning",
     "InputError",
     "Motion",

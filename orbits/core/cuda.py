@@ -1,0 +1,130 @@
+"""CUDA kernels over the same scalar functions as the CPU kernels (numba-cuda).
+
+Imported only for ``device="cuda"`` (through :mod:`orbits.device`, which
+turns a missing GPU, a missing ``orbits[cuda]`` extra or a failing compile
+into :class:`orbits.DeviceError`); nothing on the CPU path imports this
+module or ``numba.cuda``.
+
+One source of truth: every kernel here is a thin launcher, one thread per
+point or per body, that calls the ``@njit`` scalar functions of
+:mod:`orbits.core.phase`, :mod:`orbits.core.phase_table` and
+:mod:`orbits.core.search` (numba-cuda compiles them as device functions).
+Device code allocates nothing: per-thread scratch is a fixed-size
+``cuda.local.array``, the output rows are arrays the caller provides.
+
+With ``NUMBA_ENABLE_CUDASIM=1`` the kernels run in numba's CUDA simulator
+(slow: Python per thread), which is how the tests check them without a GPU.
+On hardware NVVM contracts ``a * b + c`` into fused multiply-adds, so
+results may differ from the CPU path by a few ulps.
+"""
+
+import math
+
+import numpy as np
+from numba import cuda
+
+from .phase import STATUS_OK, body_constants, spin_from_angle, total_from_spin
+from .phase_table import table_values
+
+TWO_PI = 2.0 * math.pi
+THREADS_PER_BLOCK = 128
+
+
+def _blocks(n, per_block):
+    return max(1, (n + per_block - 1) // per_block)
+
+
+@cuda.jit(device=True)
+def _total_one(i1, i2, i3, phi, angle, from_offset):
+    """``(total phase >= 2 pi, status)`` of one point: the scalar path of
+    :func:`orbits.core.phase.total_phase_many_scalar`."""
+    code, _, _, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
+        body_constants(i1, i2, i3, phi), angle, from_offset
+    )
+    if code != STATUS_OK:
+        return math.inf, code
+    total = total_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing)
+    return (TWO_PI if total < TWO_PI else total), code
+
+
+@cuda.jit
+def _total_phase_one_body_kernel(i1, i2, i3, phi, angles, from_offset, out, status):
+    k = cuda.grid(1)
+    if k < angles.shape[0]:
+        out[k], status[k] = _total_one(i1, i2, i3, phi, angles[k], from_offset)
+
+
+@cuda.jit
+def _total_phase_many_kernel(i1, i2, i3, phi, angles, from_offset, out, status):
+    k = cuda.grid(1)
+    if k < angles.shape[0]:
+        out[k], status[k] = _total_one(i1[k], i2[k], i3[k], phi[k], angles[k], from_offset)
+
+
+@cuda.jit
+def _phase_table_kernel(i1, i2, i3, phi, angles, from_offset, out, status):
+    k = cuda.grid(1)
+    if k < angles.shape[0]:
+        code, values = table_values(i1[k], i2[k], i3[k], phi[k], angles[k], from_offset)
+        status[k] = code
+        for j in range(11):
+            out[k, j] = values[j]
+
+
+def total_phase_one_body(i1, i2, i3, phi, angles, from_offset, out, status):
+    """The GPU twin of :func:`orbits.core.phase.total_phase_one_body` (host
+    arrays in and out); ``theta`` already folded (``np.fmod`` does not
+    compile for CUDA: the caller folds on the host)."""
+    n = angles.shape[0]
+    if n == 0:
+        return
+    d_angles = cuda.to_device(angles)
+    d_out = cuda.device_array(n, dtype=np.float64)
+    d_status = cuda.device_array(n, dtype=np.int8)
+    _total_phase_one_body_kernel[_blocks(n, THREADS_PER_BLOCK), THREADS_PER_BLOCK](
+        float(i1), float(i2), float(i3), float(phi), d_angles, bool(from_offset), d_out, d_status
+    )  # fmt: skip
+    d_out.copy_to_host(out)
+    d_status.copy_to_host(status)
+
+
+def total_phase_many(i1, i2, i3, phi, angles, from_offset, out, status):
+    """The GPU twin of :func:`orbits.core.phase.total_phase_many`."""
+    n = angles.shape[0]
+    if n == 0:
+        return
+    args = [cuda.to_device(np.ascontiguousarray(a)) for a in (i1, i2, i3, phi, angles)]
+    d_out = cuda.device_array(n, dtype=np.float64)
+    d_status = cuda.device_array(n, dtype=np.int8)
+    _total_phase_many_kernel[_blocks(n, THREADS_PER_BLOCK), THREADS_PER_BLOCK](
+        *args, bool(from_offset), d_out, d_status
+    )
+    d_out.copy_to_host(out)
+    d_status.copy_to_host(status)
+
+
+def phase_table_many(i1, i2, i3, phi, angles, from_offset, out, status):
+    """The GPU twin of :func:`orbits.core.phase_table.phase_table_many`."""
+    n = angles.shape[0]
+    if n == 0:
+        return
+    args = [cuda.to_device(np.ascontiguousarray(a)) for a in (i1, i2, i3, phi, angles)]
+    d_out = cuda.device_array(out.shape, dtype=np.float64)
+    d_status = cuda.device_array(n, dtype=np.int8)
+    _phase_table_kernel[_blocks(n, THREADS_PER_BLOCK), THREADS_PER_BLOCK](
+        *args, bool(from_offset), d_out, d_status
+    )
+    d_out.copy_to_host(out)
+    d_status.copy_to_host(status)
+
+
+def device_name():
+    """The current GPU's name (``"CUDA simulator"`` under ``NUMBA_ENABLE_CUDASIM``)."""
+    device = cuda.get_current_device()
+    name = device.name
+    return name.decode() if isinstance(name, bytes) else str(name)
+
+
+def synchronize():
+    """Wait for the GPU (for timings)."""
+    cuda.synchronize()

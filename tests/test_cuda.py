@@ -1,0 +1,224 @@
+"""The CUDA path (device="cuda") without a GPU: numba's CUDA simulator.
+
+``NUMBA_ENABLE_CUDASIM=1`` must be set before ``numba.cuda`` is first
+imported, so every simulator check runs in a fresh subprocess.  The
+simulator runs each GPU thread as Python, so the inputs are small.  The
+kernels are the same ``@njit`` scalar functions as the CPU path, so the
+simulator checks the launchers, the argument flow and the host side; that
+the kernels also compile for real hardware is checked by the ``gpu``-marked
+test (skipped without a GPU).
+"""
+
+import importlib.util
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import orbits
+from orbits import device as device_module
+from orbits.errors import DeviceError
+
+ROOT = Path(__file__).resolve().parents[1]
+HAS_NUMBA_CUDA = importlib.util.find_spec("numba_cuda") is not None
+needs_numba_cuda = pytest.mark.skipif(
+    not HAS_NUMBA_CUDA, reason='numba-cuda not installed (pip install ".[cuda]")'
+)
+
+
+def _run(code, simulator=True):
+    env = dict(os.environ)
+    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
+    env.pop("NUMBA_ENABLE_CUDASIM", None)
+    if simulator:
+        env["NUMBA_ENABLE_CUDASIM"] = "1"
+    result = subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code)],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=ROOT,
+        timeout=900,
+    )
+    assert result.returncode == 0, result.stderr[-3000:]
+    return json.loads(result.stdout.strip().splitlines()[-1])
+
+
+def test_cpu_path_never_imports_cuda():
+    out = _run(
+        """
+        import json, sys
+        import orbits
+        orbits.total_phase((1.0, 2.0, 2.5), [0.3, 2.0, -7.0])
+        orbits.phases((1.0, 2.0, 2.5), [0.3, 1.2])
+        print(json.dumps(sorted(m for m in sys.modules if m.startswith(("numba.cuda", "numba_cuda")))))
+        """,
+        simulator=False,
+    )
+    assert out == []
+
+
+def test_unknown_device_is_refused():
+    for device in ("gpu", "CUDA", None, 0):
+        with pytest.raises(DeviceError, match='device must be "cpu" or "cuda"'):
+            orbits.total_phase((1.0, 2.0, 2.5), 0.3, device=device)
+    with pytest.raises(DeviceError, match='device must be "cpu" or "cuda"'):
+        orbits.phases((1.0, 2.0, 2.5), 0.3, device="tpu")
+
+
+def test_missing_extra_is_one_line(monkeypatch):
+    real = importlib.util.find_spec
+    monkeypatch.setattr(
+        device_module.importlib.util,
+        "find_spec",
+        lambda name, *a: None if name == "numba_cuda" else real(name, *a),
+    )
+    with pytest.raises(DeviceError) as caught:
+        orbits.total_phase((1.0, 2.0, 2.5), 0.3, device="cuda")
+    message = str(caught.value)
+    assert "\n" not in message
+    assert 'pip install "orbits[cuda]"' in message
+
+
+@needs_numba_cuda
+def test_no_gpu_is_one_line():
+    """Without the simulator and with no usable GPU: DeviceError, not a traceback."""
+    out = _run(
+        """
+        import json
+        from unittest import mock
+        from numba import cuda
+        import orbits
+        with mock.patch.object(cuda, "is_available", lambda: False):
+            try:
+                orbits.total_phase((1.0, 2.0, 2.5), 0.3, device="cuda")
+            except orbits.DeviceError as error:
+                print(json.dumps(["DeviceError", str(error)]))
+            else:
+                print(json.dumps(["no error", ""]))
+        """,
+        simulator=False,
+    )
+    assert out[0] == "DeviceError"
+    assert "no usable NVIDIA GPU" in out[1] and "\n" not in out[1]
+
+
+def test_compile_failure_is_one_line():
+    """A numba-cuda that cannot compile beside this NumPy (0.30.4 with NumPy 2.5:
+    np.row_stack removed) raises DeviceError with one line."""
+
+    def broken(*args):
+        raise AttributeError("module 'numpy' has no attribute 'row_stack'\n  more")
+
+    with pytest.raises(DeviceError) as caught:
+        device_module.run_cuda(broken, 1, 2)
+    message = str(caught.value)
+    assert "\n" not in message
+    assert "row_stack" in message and "NumPy" in message
+
+
+@needs_numba_cuda
+def test_total_phase_simulator_matches_cpu():
+    """total_phase(device="cuda") within 4 ulps of the CPU path: one body
+    (theta to fold, dtheta), many bodies with phi, and the errors."""
+    out = _run(
+        """
+        import json
+        import numpy as np
+        import orbits
+        rng = np.random.default_rng(7)
+        body = (1.0, 1.7, 2.3)
+        theta = np.concatenate([rng.uniform(-7.0, 7.0, 20), [0.0, np.pi / 2, 1e-9]])
+        dtheta = np.concatenate([-np.geomspace(1e-300, 0.5, 8), np.geomspace(1e-300, 0.3, 8)])
+        moments = np.array([[1.0, 2.0, 2.5], [0.3, 0.9, 1.1], [2.0, 3.0, 4.5]])
+        theta3 = rng.uniform(0.05, 1.5, (4, 3))
+        phi3 = rng.uniform(-3.0, 3.0, (4, 3))
+        result = {}
+        for label, kwargs in [
+            ("theta", dict(body_or_moments=body, theta=theta)),
+            ("dtheta", dict(body_or_moments=body, dtheta=dtheta)),
+            ("phi", dict(body_or_moments=body, theta=theta[:6], phi=0.7)),
+            ("many", dict(body_or_moments=moments, theta=theta3, phi=phi3)),
+        ]:
+            cpu = orbits.total_phase(**kwargs)
+            gpu = orbits.total_phase(**kwargs, device="cuda")
+            assert gpu.shape == cpu.shape and gpu.dtype == cpu.dtype
+            result[label] = [cpu.ravel().tolist(), gpu.ravel().tolist()]
+        errors = []
+        for kwargs in [dict(theta=[0.2, np.nan]), dict(dtheta=[0.1, 5.0]), dict(theta=1e9)]:
+            for device in ("cpu", "cuda"):
+                try:
+                    orbits.total_phase(body, **kwargs, device=device)
+                except orbits.OrbitsError as error:
+                    errors.append([device, type(error).__name__, str(error)])
+        result["errors"] = errors
+        print(json.dumps(result))
+        """
+    )
+    for label in ("theta", "dtheta", "phi", "many"):
+        cpu, gpu = (np.array(v) for v in out[label])
+        assert np.all(np.isfinite(cpu)) and np.all(cpu >= 2 * np.pi)
+        np.testing.assert_array_max_ulp(gpu, cpu, maxulp=4)
+    errors = out["errors"]
+    assert len(errors) == 6
+    for cpu_error, gpu_error in zip(errors[0::2], errors[1::2]):
+        assert cpu_error[0] == "cpu" and gpu_error[0] == "cuda"
+        assert cpu_error[1:] == gpu_error[1:]
+
+
+@needs_numba_cuda
+def test_phases_simulator_matches_cpu():
+    out = _run(
+        """
+        import json
+        import numpy as np
+        import orbits
+        theta = np.linspace(-3.0, 3.0, 13)
+        cpu = orbits.phases((1.0, 1.7, 2.3), theta, 0.4)
+        gpu = orbits.phases((1.0, 1.7, 2.3), theta, 0.4, device="cuda")
+        assert list(cpu.columns) == list(gpu.columns)
+        assert (cpu["branch"] == gpu["branch"]).all()
+        numeric = [c for c in cpu.columns if c != "branch"]
+        print(json.dumps({c: [cpu[c].tolist(), gpu[c].tolist()] for c in numeric}))
+        """
+    )
+    assert len(out) == 15
+    for column, (cpu, gpu) in out.items():
+        cpu, gpu = np.array(cpu), np.array(gpu)
+        assert np.all(np.isfinite(cpu)), column
+        # dtheta on the folded-theta path is exact in both: compare like the rest
+        np.testing.assert_array_max_ulp(gpu, cpu, maxulp=4)
+
+
+@pytest.mark.gpu
+@needs_numba_cuda
+def test_total_phase_on_hardware():
+    """On a real GPU (skips without one): 10^5 angles against the CPU path.
+
+    NVVM contracts ``a * b + c`` into fused multiply-adds, so the bound is
+    relative (1e-14), not the simulator's 4 ulps.
+    """
+    out = _run(
+        """
+        import json
+        from numba import cuda
+        if not cuda.is_available():
+            print(json.dumps(None))
+            raise SystemExit
+        import numpy as np
+        import orbits
+        theta = np.linspace(1e-6, np.pi / 2 - 1e-6, 100_000)
+        cpu = orbits.total_phase((1.0, 1.7, 2.3), theta)
+        gpu = orbits.total_phase((1.0, 1.7, 2.3), theta, device="cuda")
+        print(json.dumps(float(np.max(np.abs(gpu / cpu - 1.0)))))
+        """,
+        simulator=False,
+    )
+    if out is None:
+        pytest.skip("no NVIDIA GPU")
+    assert out < 1e-14
