@@ -222,3 +222,127 @@ def test_total_phase_on_hardware():
     if out is None:
         pytest.skip("no NVIDIA GPU")
     assert out < 1e-14
+
+
+@needs_numba_cuda
+def test_search_simulator_matches_cpu():
+    """search_bodies(device="cuda") gives the CPU search's rows exactly (the
+    simulator runs the same compiled scalar search per thread)."""
+    out = _run(
+        """
+        import json
+        import numpy as np
+        import orbits
+        from orbits.bodies import unit_moments
+        from orbits.search import phase_levels, searched
+        moments = unit_moments([[1.0, 2.0, 2.5], [0.3, 0.9, 1.1], [2.0, 3.0, 4.5]])[0]
+        p, q, values = phase_levels(4, 2)
+        levels = values[searched(p, q)]
+        cpu = orbits.search_bodies(moments, levels)
+        gpu = orbits.search_bodies(moments, levels, device="cuda")
+        result = {"counts": [cpu.counts.tolist(), gpu.counts.tolist()]}
+        for name in ("branch", "level", "offset"):
+            rows = []
+            for rows_of in (cpu, gpu):
+                a = getattr(rows_of, name)
+                rows.append([a[b, : cpu.counts[b]].tolist() for b in range(3)])
+            result[name] = rows
+        result["info"] = [cpu.info.tolist(), gpu.info.tolist()]
+        print(json.dumps(result))
+        """
+    )
+    cpu_counts, gpu_counts = out["counts"]
+    assert cpu_counts == gpu_counts
+    assert sum(cpu_counts) >= 6 and min(cpu_counts) > 0
+    for name in ("branch", "level", "offset", "info"):
+        assert out[name][0] == out[name][1], name
+
+
+def test_search_bodies_cpu_equals_search_many():
+    """The entry point's CPU rows are core.search.search_many's."""
+    from orbits.bodies import unit_moments
+    from orbits.core import search as kernels
+    from orbits.search import phase_levels, search_bodies, searched
+
+    moments = np.ascontiguousarray(unit_moments(orbits.region_grid(12))[0])
+    p, q, values = phase_levels(6, 2)
+    levels = np.ascontiguousarray(values[searched(p, q)])
+    rows = search_bodies(moments, levels)
+    n, capacity = moments.shape[0], 2 * levels.size + 8
+    ref = (
+        np.empty((n, capacity), np.int8),
+        np.empty((n, capacity), np.int64),
+        np.empty((n, capacity)),
+        np.empty(n, np.int64),
+        np.empty((n, kernels.INFO_SIZE)),
+    )
+    kernels.search_many(moments, levels, *ref)
+    np.testing.assert_array_equal(rows.counts, ref[3])
+    assert rows.counts.sum() > 3 * n
+    for b in range(n):
+        k = rows.counts[b]
+        np.testing.assert_array_equal(rows.branch[b, :k], ref[0][b, :k])
+        np.testing.assert_array_equal(rows.level[b, :k], ref[1][b, :k])
+        np.testing.assert_array_equal(rows.offset[b, :k], ref[2][b, :k])
+    np.testing.assert_array_equal(rows.info, ref[4])
+
+
+def test_search_bodies_refuses_bad_input():
+    from orbits.search import search_bodies
+
+    with pytest.raises(orbits.InputError, match="shape"):
+        search_bodies(np.ones(3), [10.0])
+    with pytest.raises(orbits.InputError, match="ascending order"):
+        search_bodies([[1.0, 2.0, 2.5]], [20.0, 10.0])
+    with pytest.raises(orbits.InputError, match="strictly ascending"):
+        search_bodies([[2.0, 1.0, 2.5]], [10.0])
+
+
+@needs_numba_cuda
+def test_kernels_compile_to_ptx():
+    """Every CUDA kernel compiles to PTX for sm_90 (an H100): no Python object,
+    allocation or unsupported call in device code.  Needs the CUDA toolkit's
+    NVVM and NVRTC libraries but no GPU (numba-cuda asks the device for its
+    compute capability, which is given here); skips without the toolkit."""
+    out = _run(
+        """
+        import json, types
+        import numba.cuda.dispatcher as dispatcher
+        dispatcher.get_current_device = lambda: types.SimpleNamespace(compute_capability=(9, 0))
+        from numba import boolean, cuda, float64, int8, int64
+        try:
+            from orbits.core import cuda as kernels
+            one = (float64, float64, float64, float64, float64[::1], boolean)
+            many = (float64[::1],) * 5 + (boolean,)
+            sigs = {
+                "_total_phase_one_body_kernel": one + (float64[::1], int8[::1]),
+                "_total_phase_many_kernel": many + (float64[::1], int8[::1]),
+                "_phase_table_kernel": many + (float64[:, ::1], int8[::1]),
+                "_search_kernel": (
+                    float64[:, ::1], float64[::1], int8[:, ::1], int64[:, ::1],
+                    float64[:, ::1], int64[::1], float64[:, ::1],
+                ),
+            }
+            sizes = {}
+            for name, sig in sigs.items():
+                ptx, _ = cuda.compile_ptx(getattr(kernels, name).py_func, sig, cc=(9, 0))
+                sizes[name] = len(ptx)
+        except Exception as error:
+            text = str(error)
+            if any(word in text for word in ("libnvvm", "libnvrtc", "NVVM", "libdevice")):
+                print(json.dumps(None))
+                raise SystemExit
+            raise
+        print(json.dumps(sizes))
+        """,
+        simulator=False,
+    )
+    if out is None:
+        pytest.skip("no CUDA toolkit (NVVM/NVRTC) to compile PTX with")
+    assert set(out) == {
+        "_total_phase_one_body_kernel",
+        "_total_phase_many_kernel",
+        "_phase_table_kernel",
+        "_search_kernel",
+    }
+    assert min(out.values()) > 1000

@@ -21,13 +21,16 @@ results may differ from the CPU path by a few ulps.
 import math
 
 import numpy as np
-from numba import cuda
+from numba import config, cuda, float64, int64
 
 from .phase import STATUS_OK, body_constants, spin_from_angle, total_from_spin
 from .phase_table import table_values
+from .search import SCRATCH_FLOATS, SCRATCH_INTS, search_body_with
 
 TWO_PI = 2.0 * math.pi
 THREADS_PER_BLOCK = 128
+# the search: each thread holds ~13 kB of local scratch
+SEARCH_THREADS_PER_BLOCK = 64
 
 
 def _blocks(n, per_block):
@@ -69,6 +72,70 @@ def _phase_table_kernel(i1, i2, i3, phi, angles, from_offset, out, status):
         status[k] = code
         for j in range(11):
             out[k, j] = values[j]
+
+
+if config.ENABLE_CUDASIM:
+
+    def _plain(array):
+        """The simulator's stand-in for a device array, as the NumPy array it
+        wraps: the ``@njit`` search functions take NumPy arrays (on hardware
+        this is the identity)."""
+        while hasattr(array, "_item"):
+            array = array._item
+        return getattr(array, "_ary", array)
+
+else:
+
+    @cuda.jit(device=True, inline="always")
+    def _plain(array):
+        return array
+
+
+@cuda.jit
+def _search_kernel(moments, levels, root_branch, root_level, root_offset, counts, info):
+    """One thread per body: :func:`orbits.core.search.search_body_with` with
+    per-thread local scratch, roots into row ``b`` of the outputs."""
+    b = cuda.grid(1)
+    if b < moments.shape[0]:
+        floats = cuda.local.array(SCRATCH_FLOATS, float64)
+        ints = cuda.local.array(SCRATCH_INTS, int64)
+        counts[b] = search_body_with(
+            moments[b, 0],
+            moments[b, 1],
+            moments[b, 2],
+            _plain(levels),
+            _plain(root_branch[b]),
+            _plain(root_level[b]),
+            _plain(root_offset[b]),
+            _plain(info[b]),
+            _plain(floats),
+            _plain(ints),
+        )
+
+
+def search_many(moments, levels, root_branch, root_level, root_offset, counts, info):
+    """The GPU twin of :func:`orbits.core.search.search_many` (host arrays in
+    and out, the same shapes and dtypes); returns the kernel's own seconds
+    (launch to finish, without the copies)."""
+    n = moments.shape[0]
+    if n == 0:
+        return 0.0
+    d_moments = cuda.to_device(np.ascontiguousarray(moments))
+    d_levels = cuda.to_device(np.ascontiguousarray(levels))
+    outputs = [
+        cuda.device_array(a.shape, dtype=a.dtype)
+        for a in (root_branch, root_level, root_offset, counts, info)
+    ]
+    start, stop = cuda.event(), cuda.event()
+    start.record()
+    _search_kernel[_blocks(n, SEARCH_THREADS_PER_BLOCK), SEARCH_THREADS_PER_BLOCK](
+        d_moments, d_levels, *outputs
+    )
+    stop.record()
+    stop.synchronize()
+    for device_array, host in zip(outputs, (root_branch, root_level, root_offset, counts, info)):
+        device_array.copy_to_host(host)
+    return start.elapsed_time(stop) / 1e3  # meaningless (-1 ms) in the simulator
 
 
 def total_phase_one_body(i1, i2, i3, phi, angles, from_offset, out, status):
