@@ -420,36 +420,49 @@ def phases_of_unit_moments(moments, theta=None, phi=0.0, *, dtheta=None, device=
     from_offset, angle, phi_folded, shape = inputs
     if gpu and not from_offset:
         angle = fold_angle(angle)  # np.fmod has no CUDA form: folded here
-    i1, i2, i3 = (_flat(moments[..., k], shape) for k in range(3))
-    phi_flat, angle_flat = _flat(phi_folded, shape), _flat(angle, shape)
-    table = np.empty((i1.shape[0], len(_kernels.PARTS_COLUMNS) + 1))
-    status = np.empty(i1.shape[0], dtype=np.int8)
+    # one body or one azimuth: length-1 arrays, broadcast inside the kernel
+    i1, i2, i3 = (
+        moments[k : k + 1] if moments.ndim == 1 else _flat(moments[..., k], shape)
+        for k in range(3)
+    )
+    phi_flat = phi_folded.reshape(1) if phi_folded.ndim == 0 else _flat(phi_folded, shape)
+    angle_flat = _flat(angle, shape)
+    n = angle_flat.shape[0]
+    columns = np.empty((len(_table.COLUMNS), n))
+    branch = np.empty(n, dtype=np.int8)
+    status = np.empty(n, dtype=np.int8)
     args = (i1, i2, i3, phi_flat, angle_flat, from_offset)
     if gpu:
-        run_cuda(gpu.phase_table_many, *args, table, status)
+        run_cuda(gpu.phases_columns, *args, columns, branch, status)
     else:
-        _table.phase_table_many(*args, FOLD_LIMIT, table, status)
+        _table.phases_columns(*args, FOLD_LIMIT, columns, branch, status)
     if status.any():  # the rare case: the reference path names the error
         _raise_for(status.reshape(shape), moments, theta, dtheta, phi)
-    (theta, dtheta, theta_c, two_e, m_sq, m_param, branch, period, dynamic, total, geometric) = (
-        table.T
-    )
-    norm = np.sqrt(i1 * i1 + i2 * i2 + i3 * i3)
-    return pd.DataFrame(
-        {
-            "I1": i1 / norm,
-            "I2": i2 / norm,
-            "I3": i3 / norm,
-            "theta": theta,
-            "dtheta": dtheta,
-            "phi": phi_flat,
-            "theta_crit": theta_c,
-            **_parts_columns(
-                norm, two_e, m_sq, m_param, branch, period, dynamic, total, geometric
-            ),
-        },
-        copy=False,  # one block per column: no consolidating copy
-    )
+    # every column computed in the kernel (phase_table.phases_row): the
+    # frame only wraps them
+    table = dict(zip(_table.COLUMNS, columns))
+    table["branch"] = pd.Categorical.from_codes(branch, categories=["SAM", "LAM"])
+    return pd.DataFrame({name: table[name] for name in PHASES_COLUMNS}, copy=False)
+
+
+PHASES_COLUMNS = (
+    "I1",
+    "I2",
+    "I3",
+    "theta",
+    "dtheta",
+    "phi",
+    "theta_crit",
+    "branch",
+    "energy",
+    "momentum",
+    "D",
+    "m",
+    "period",
+    "dynamic_phase",
+    "total_phase",
+    "geometric_phase",
+)
 
 
 def _parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total, geometric):

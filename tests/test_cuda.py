@@ -317,7 +317,7 @@ def test_kernels_compile_to_ptx():
             sigs = {
                 "_total_phase_one_body_kernel": one + (float64[::1], int8[::1]),
                 "_total_phase_many_kernel": many + (float64[::1], int8[::1]),
-                "_phase_table_kernel": many + (float64[:, ::1], int8[::1]),
+                "_phases_kernel": many + (float64[:, ::1], int8[::1], int8[::1]),
                 "_search_kernel": (
                     float64[:, ::1], float64[::1], int8[:, ::1], int64[:, ::1],
                     float64[:, ::1], int64[::1], float64[:, ::1],
@@ -342,7 +342,7 @@ def test_kernels_compile_to_ptx():
     assert set(out) == {
         "_total_phase_one_body_kernel",
         "_total_phase_many_kernel",
-        "_phase_table_kernel",
+        "_phases_kernel",
         "_search_kernel",
     }
     assert min(out.values()) > 1000

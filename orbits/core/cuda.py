@@ -24,7 +24,7 @@ import numpy as np
 from numba import config, cuda, float64, int64
 
 from .phase import STATUS_OK, body_constants, spin_from_angle, total_from_spin
-from .phase_table import table_values
+from .phase_table import N_COLUMNS, phases_row
 from .search import SCRATCH_FLOATS, SCRATCH_INTS, search_body_with
 
 TWO_PI = 2.0 * math.pi
@@ -65,13 +65,18 @@ def _total_phase_many_kernel(i1, i2, i3, phi, angles, from_offset, out, status):
 
 
 @cuda.jit
-def _phase_table_kernel(i1, i2, i3, phi, angles, from_offset, out, status):
+def _phases_kernel(i1, i2, i3, phi, angles, from_offset, columns, branch, status):
+    """:func:`orbits.core.phase_table.phases_columns` per thread (``theta``
+    already folded on the host)."""
     k = cuda.grid(1)
     if k < angles.shape[0]:
-        code, values = table_values(i1[k], i2[k], i3[k], phi[k], angles[k], from_offset)
+        j = 0 if i1.shape[0] == 1 else k
+        a = 0 if phi.shape[0] == 1 else k
+        code, lam, row = phases_row(i1[j], i2[j], i3[j], phi[a], angles[k], from_offset)
         status[k] = code
-        for j in range(11):
-            out[k, j] = values[j]
+        branch[k] = lam
+        for c in range(N_COLUMNS):
+            columns[c, k] = row[c]
 
 
 if config.ENABLE_CUDASIM:
@@ -170,19 +175,19 @@ def total_phase_many(i1, i2, i3, phi, angles, from_offset, out, status):
     d_status.copy_to_host(status)
 
 
-def phase_table_many(i1, i2, i3, phi, angles, from_offset, out, status):
-    """The GPU twin of :func:`orbits.core.phase_table.phase_table_many`."""
+def phases_columns(i1, i2, i3, phi, angles, from_offset, columns, branch, status):
+    """The GPU twin of :func:`orbits.core.phase_table.phases_columns` (host
+    arrays in and out; ``theta`` already folded)."""
     n = angles.shape[0]
     if n == 0:
         return
     args = [cuda.to_device(np.ascontiguousarray(a)) for a in (i1, i2, i3, phi, angles)]
-    d_out = cuda.device_array(out.shape, dtype=np.float64)
-    d_status = cuda.device_array(n, dtype=np.int8)
-    _phase_table_kernel[_blocks(n, THREADS_PER_BLOCK), THREADS_PER_BLOCK](
-        *args, bool(from_offset), d_out, d_status
+    outputs = [cuda.device_array(a.shape, dtype=a.dtype) for a in (columns, branch, status)]
+    _phases_kernel[_blocks(n, THREADS_PER_BLOCK), THREADS_PER_BLOCK](
+        *args, bool(from_offset), *outputs
     )
-    d_out.copy_to_host(out)
-    d_status.copy_to_host(status)
+    for device_array, host in zip(outputs, (columns, branch, status)):
+        device_array.copy_to_host(host)
 
 
 def device_name():
