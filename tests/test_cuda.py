@@ -94,18 +94,31 @@ def test_no_gpu_is_one_line():
         from unittest import mock
         from numba import cuda
         import orbits
+        from orbits import bench
+        from orbits.search import search_bodies
+        calls = [
+            lambda: orbits.total_phase((1.0, 2.0, 2.5), 0.3, device="cuda"),
+            lambda: orbits.phases((1.0, 2.0, 2.5), 0.3, device="cuda"),
+            lambda: search_bodies([[1.0, 2.0, 2.5]], [10.0], device="cuda"),
+            lambda: bench.run(device="cuda"),
+        ]
+        result = []
         with mock.patch.object(cuda, "is_available", lambda: False):
-            try:
-                orbits.total_phase((1.0, 2.0, 2.5), 0.3, device="cuda")
-            except orbits.DeviceError as error:
-                print(json.dumps(["DeviceError", str(error)]))
-            else:
-                print(json.dumps(["no error", ""]))
+            for call in calls:
+                try:
+                    call()
+                except orbits.DeviceError as error:
+                    result.append(["DeviceError", str(error)])
+                else:
+                    result.append(["no error", ""])
+        print(json.dumps(result))
         """,
         simulator=False,
     )
-    assert out[0] == "DeviceError"
-    assert "no usable NVIDIA GPU" in out[1] and "\n" not in out[1]
+    assert len(out) == 4
+    for kind, message in out:
+        assert kind == "DeviceError"
+        assert "no usable NVIDIA GPU" in message and "\n" not in message
 
 
 def test_compile_failure_is_one_line():
@@ -346,3 +359,23 @@ def test_kernels_compile_to_ptx():
         "_search_kernel",
     }
     assert min(out.values()) > 1000
+
+
+@needs_numba_cuda
+def test_bench_rows_under_simulator():
+    """The GPU bench rows run end to end (tiny sizes; the simulator's timings
+    mean nothing) and report the device, rates and the agreement."""
+    out = _run(
+        """
+        import json
+        from orbits import bench
+        phase = bench.bench_cuda_total_phase(points=48, repeats=1)
+        search = bench.bench_cuda_search(resolution=6, n_max=3, repeats=1)
+        print(json.dumps([phase, search]))
+        """
+    )
+    phase, search = out
+    for row in out:
+        assert row["device"] and row["ours_s"] > 0 and row["baseline_s"] > 0
+    assert phase["angles_per_s"] > 0 and "max relative difference" in phase["note"]
+    assert search["bodies_per_s"] > 0 and "root counts equal" in search["note"]

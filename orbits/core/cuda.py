@@ -19,6 +19,7 @@ results may differ from the CPU path by a few ulps.
 """
 
 import math
+import time
 
 import numpy as np
 from numba import config, cuda, float64, int64
@@ -120,8 +121,8 @@ def _search_kernel(moments, levels, root_branch, root_level, root_offset, counts
 
 def search_many(moments, levels, root_branch, root_level, root_offset, counts, info):
     """The GPU twin of :func:`orbits.core.search.search_many` (host arrays in
-    and out, the same shapes and dtypes); returns the kernel's own seconds
-    (launch to finish, without the copies)."""
+    and out, the same shapes and dtypes); returns the kernel's own wall
+    seconds (launch to finish, without the copies)."""
     n = moments.shape[0]
     if n == 0:
         return 0.0
@@ -131,16 +132,16 @@ def search_many(moments, levels, root_branch, root_level, root_offset, counts, i
         cuda.device_array(a.shape, dtype=a.dtype)
         for a in (root_branch, root_level, root_offset, counts, info)
     ]
-    start, stop = cuda.event(), cuda.event()
-    start.record()
+    cuda.synchronize()
+    start = time.perf_counter()
     _search_kernel[_blocks(n, SEARCH_THREADS_PER_BLOCK), SEARCH_THREADS_PER_BLOCK](
         d_moments, d_levels, *outputs
     )
-    stop.record()
-    stop.synchronize()
+    cuda.synchronize()
+    seconds = time.perf_counter() - start
     for device_array, host in zip(outputs, (root_branch, root_level, root_offset, counts, info)):
         device_array.copy_to_host(host)
-    return start.elapsed_time(stop) / 1e3  # meaningless (-1 ms) in the simulator
+    return seconds
 
 
 def total_phase_one_body(i1, i2, i3, phi, angles, from_offset, out, status):
@@ -190,8 +191,31 @@ def phases_columns(i1, i2, i3, phi, angles, from_offset, columns, branch, status
         device_array.copy_to_host(host)
 
 
+def total_phase_kernel_seconds(i1, i2, i3, angles, repeats):
+    """Best wall seconds of the one-body total-phase kernel alone (``phi = 0``,
+    the angles already on the GPU, no copies), over ``repeats`` launches
+    after a warm-up; for ``orbits bench``."""
+    n = angles.shape[0]
+    d_angles = cuda.to_device(np.ascontiguousarray(angles))
+    d_out = cuda.device_array(n, dtype=np.float64)
+    d_status = cuda.device_array(n, dtype=np.int8)
+    launch = _total_phase_one_body_kernel[_blocks(n, THREADS_PER_BLOCK), THREADS_PER_BLOCK]
+    args = (float(i1), float(i2), float(i3), 0.0, d_angles, False, d_out, d_status)
+    launch(*args)
+    best = math.inf
+    for _ in range(repeats):
+        cuda.synchronize()
+        start = time.perf_counter()
+        launch(*args)
+        cuda.synchronize()
+        best = min(best, time.perf_counter() - start)
+    return best
+
+
 def device_name():
     """The current GPU's name (``"CUDA simulator"`` under ``NUMBA_ENABLE_CUDASIM``)."""
+    if config.ENABLE_CUDASIM:
+        return "CUDA simulator"
     device = cuda.get_current_device()
     name = device.name
     return name.decode() if isinstance(name, bytes) else str(name)
