@@ -449,6 +449,105 @@ BENCHMARKS = {
 }
 
 
+# ------------------------------------------------------------------ GPU rows
+def bench_cuda_total_phase(points=100_000_000, repeats=7, seed=0):
+    """Total phase of the Fig. 6 body on the GPU, angles/s: the kernel alone and
+    ``total_phase(..., device="cuda")`` end to end, against the CPU path.
+
+    Raises DeviceError (one line) without a usable GPU or numba-cuda.
+    """
+    from .device import cuda_kernels
+
+    gpu = cuda_kernels()
+    body = Body.preset("fig6")
+    moments = body.normalized_moments
+    theta = np.random.default_rng(seed).uniform(0.0, 0.5 * np.pi, points)
+    kernel = gpu.total_phase_kernel_seconds(*moments, theta, repeats)
+    end_to_end = best_time(lambda: total_phase(body, theta, device="cuda"), repeats)
+    cpu_points = min(points, 10_000_000)
+    cpu = best_time(lambda: total_phase(body, theta[:cpu_points]), max(1, repeats // 2))
+    cpu = cpu * points / cpu_points
+    sample = theta[:1_000_000]
+    reference = total_phase(body, sample)
+    difference = np.max(np.abs(total_phase(body, sample, device="cuda") / reference - 1.0))
+    return {
+        "task": f"total phase on the GPU, {points:.0e} random theta (fig6 body)",
+        "device": gpu.device_name(),
+        "ours_s": kernel,
+        "baseline": f"orbits.total_phase on the CPU ({numba.get_num_threads()} threads)",
+        "baseline_s": cpu,
+        "speedup": cpu / kernel,
+        "angles_per_s": points / kernel,
+        "end_to_end_s": end_to_end,
+        "note": f"kernel {points / kernel:.3g} angles/s on {gpu.device_name()}; "
+        f"end to end (copies, fold and checks on the host) {points / end_to_end:.3g} "
+        f"angles/s; CPU {points / cpu:.3g} angles/s; max relative difference "
+        f"GPU vs CPU {difference:.1e}",
+    }
+
+
+def bench_cuda_search(resolution=400, n_max=30, repeats=3):
+    """The survey's search on the GPU, bodies/s: the kernel alone and
+    :func:`orbits.search.search_bodies` end to end, against the CPU search.
+
+    Raises DeviceError (one line) without a usable GPU or numba-cuda.
+    """
+    from .bodies import region_grid, unit_moments
+    from .device import cuda_kernels
+    from .search import phase_levels, search_bodies, searched
+
+    gpu = cuda_kernels()
+    moments = np.ascontiguousarray(unit_moments(region_grid(resolution))[0])
+    count = moments.shape[0]
+    p, q, values = phase_levels(n_max)
+    levels = np.ascontiguousarray(values[searched(p, q)])
+    capacity = 2 * levels.size + 8
+    rows = search_bodies(moments, levels, device="cuda")  # compile, and the check
+
+    def kernel_only():
+        outputs = (
+            np.empty((count, capacity), np.int8),
+            np.empty((count, capacity), np.int64),
+            np.empty((count, capacity)),
+            np.empty(count, np.int64),
+            np.empty((count, rows.info.shape[1])),
+        )
+        return gpu.search_many(moments, levels, *outputs)
+
+    kernel = min(kernel_only() for _ in range(repeats))
+    end_to_end = best_time(lambda: search_bodies(moments, levels, device="cuda"), repeats)
+    cpu_rows = search_bodies(moments, levels)
+    cpu = best_time(lambda: search_bodies(moments, levels), max(1, repeats // 2))
+    same_counts = bool(np.array_equal(rows.counts, cpu_rows.counts))
+    worst = 0.0
+    for b in range(count):
+        k = max(cpu_rows.counts[b], 0)
+        if k and rows.counts[b] == cpu_rows.counts[b]:
+            ours, theirs = rows.offset[b, :k], cpu_rows.offset[b, :k]
+            worst = max(worst, float(np.max(np.abs(ours / theirs - 1.0))))
+    return {
+        "task": f"survey search on the GPU, {count} bodies, n <= {n_max} (grid {resolution})",
+        "device": gpu.device_name(),
+        "ours_s": kernel,
+        "baseline": f"the same search on the CPU ({numba.get_num_threads()} threads)",
+        "baseline_s": cpu,
+        "speedup": cpu / kernel,
+        "bodies_per_s": count / kernel,
+        "end_to_end_s": end_to_end,
+        "note": f"kernel {count / kernel:.3g} bodies/s on {gpu.device_name()}; with "
+        f"the copies {count / end_to_end:.3g} bodies/s; CPU {count / cpu:.3g} "
+        f"bodies/s; {int(cpu_rows.counts.clip(0).sum())} roots, root counts "
+        f"{'equal' if same_counts else 'DIFFER'}, largest relative dtheta "
+        f"difference {worst:.1e}",
+    }
+
+
+CUDA_BENCHMARKS = {
+    "cuda_phase": bench_cuda_total_phase,
+    "cuda_search": bench_cuda_search,
+}
+
+
 # under load, each row's own time may grow at most by this factor
 LOAD_LIMIT = 2.0
 
@@ -508,15 +607,29 @@ def load_check(rows):
         }
 
 
-def run(names=None, quick=False, load=True):
+def run(names=None, quick=False, load=True, device="cpu"):
     """Run the named benchmarks (all by default); return a JSON-able dict.
 
     With ``load`` each row's task is then re-timed beside a CPU-bound
-    process (:func:`load_check`).
+    process (:func:`load_check`).  With ``device="cuda"`` the rows are those
+    of :data:`CUDA_BENCHMARKS` (the GPU named in ``machine["gpu"]``); without
+    a usable GPU that raises :class:`orbits.DeviceError` before any timing.
     """
-    names = list(BENCHMARKS) if not names else names
+    from .device import check_device, cuda_kernels
+
+    gpu = cuda_kernels() if check_device(device) == "cuda" else None
+    table = CUDA_BENCHMARKS if gpu else BENCHMARKS
+    names = list(table) if not names else names
     rows = []
     for name in names:
+        if gpu:
+            kwargs = {}
+            if quick and name == "cuda_phase":
+                kwargs = {"points": 10_000_000}
+            if quick and name == "cuda_search":
+                kwargs = {"resolution": 100}
+            rows.append(dict(name=name, **table[name](**kwargs)))
+            continue
         kwargs = {}
         if quick and name in ("phase", "motion_rate"):
             kwargs = {"points": 100_000}
@@ -531,17 +644,17 @@ def run(names=None, quick=False, load=True):
         load_check(rows)
     for row in rows:
         row.pop("_ours", None)
-    return {
-        "machine": {
-            "cpu_count": os.cpu_count(),
-            "numba_threads": numba.get_num_threads(),
-            "python": platform.python_version(),
-            "numpy": np.__version__,
-            "scipy": scipy.__version__,
-            "numba": numba.__version__,
-        },
-        "results": rows,
+    machine = {
+        "cpu_count": os.cpu_count(),
+        "numba_threads": numba.get_num_threads(),
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "numba": numba.__version__,
     }
+    if gpu:
+        machine["gpu"] = gpu.device_name()
+    return {"machine": machine, "results": rows}
 
 
 def format_table(report):
@@ -551,7 +664,8 @@ def format_table(report):
         f"orbits bench: {machine['cpu_count']} cores, "
         f"{machine['numba_threads']} numba threads, Python "
         f"{machine['python']}, NumPy {machine['numpy']}, SciPy "
-        f"{machine['scipy']}, numba {machine['numba']}",
+        f"{machine['scipy']}, numba {machine['numba']}"
+        + (f", GPU {machine['gpu']}" if "gpu" in machine else ""),
         "",
         f"{'task':<52} {'ours':>10} {'baseline':>10} {'ratio':>8}",
     ]

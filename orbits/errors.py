@@ -50,3 +50,10 @@ class ArgumentTypeError(InputError, TypeError):
 
     Derives from :class:`TypeError` too, so ``except TypeError`` catches it.
     """
+
+
+class DeviceError(OrbitsError):
+    """A compute device that cannot be used: ``device="cuda"`` without an
+    NVIDIA GPU and driver, without the ``orbits[cuda]`` extra (numba-cuda),
+    or with a numba-cuda that cannot compile beside the installed NumPy; or
+    a ``device`` that is neither ``"cpu"`` nor ``"cuda"``."""

@@ -37,6 +37,7 @@ is evaluated in its own closed form (:mod:`orbits.core.solid_angle`), not as
 that difference, which loses every digit near the sphere.
 """
 
+import math
 from collections import namedtuple
 
 import numpy as np
@@ -48,8 +49,11 @@ from .bodies import (
     critical_angle,  # noqa: F401 (re-exported: defined in bodies, below this layer)
     unit_moments,
 )
+from .core import angles as _angles
 from .core import phase as _kernels
+from .core import phase_table as _table
 from .core import solid_angle as _solid
+from .device import check_device, cuda_kernels, run_cuda
 from .errors import AngleError, InputError, SeparatrixError
 from .threads import size_aware
 
@@ -103,8 +107,6 @@ def fold_angle(angle):
     AngleError
         A finite ``|angle| > FOLD_LIMIT``.
     """
-    from .core import angles as _angles
-
     angle = np.asarray(angle, dtype=float)
     flat = np.ascontiguousarray(angle).reshape(-1)
     if _angles.all_folded(flat):
@@ -164,7 +166,49 @@ def _check_status(status, moments, angle, phi, shape, from_offset):
 
 
 @size_aware
-def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0):
+def _fast_inputs(moments, theta, dtheta, phi):
+    """The inputs of the in-kernel path: ``(from_offset, angle, phi, shape)``.
+
+    ``angle`` is the polar angle *as given* (the kernels fold and check it,
+    :func:`orbits.core.phase.given_angle`); ``phi`` is checked and folded here
+    (usually a scalar).  ``None`` when any of these checks fails: the caller
+    then runs :func:`_spin_inputs`, which raises the error (in the order of
+    the reference path).
+    """
+    if (theta is None) == (dtheta is None):
+        raise AngleError("give exactly one of theta and dtheta")
+    from_offset = dtheta is not None
+    name = "dtheta" if from_offset else "theta"
+    angle = real_array(name, dtheta if from_offset else theta, AngleError)
+    phi = real_array("phi", phi, AngleError)
+    if phi.ndim == 0:
+        value = float(phi)
+        if not (math.isfinite(value) and abs(value) <= FOLD_LIMIT):
+            return None
+        phi = np.asarray(_angles.fold_one(value))
+    else:
+        if not np.all(np.isfinite(phi)):
+            return None
+        try:
+            phi = fold_angle(phi)
+        except AngleError:
+            return None
+    try:
+        shape = np.broadcast_shapes(moments.shape[:-1], angle.shape, phi.shape)
+    except ValueError:
+        return None
+    return from_offset, angle, phi, shape
+
+
+def _raise_for(status, moments, theta, dtheta, phi):
+    """Raise the error of the reference path for inputs the kernels flagged."""
+    from_offset, angle, phi, shape = _spin_inputs(moments, theta, dtheta, phi)
+    _check_status(status, moments, angle, phi, shape, from_offset)
+    raise AssertionError("a kernel flagged a point that the reference path accepts")
+
+
+@size_aware
+def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0, device="cpu"):
     """Total phase ``Delta alpha`` (eqn:GeometricPhase), radians.
 
     Parameters
@@ -183,6 +227,11 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0):
     phi : float or array_like
         Azimuth of omega0 from the I1 axis, radians (default 0); any
         value, folded into [0, pi/2].
+    device : {"cpu", "cuda"}
+        Where the kernels run.  ``"cuda"`` needs an NVIDIA GPU and the
+        ``orbits[cuda]`` extra; it evaluates the same scalar functions
+        (one ``cel`` loop per point, :func:`orbits.core.phase.total_from_spin`)
+        and agrees with the CPU path to a few ulps.
 
     Returns
     -------
@@ -200,6 +249,9 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0):
         ``theta_c + dtheta`` outside [0, pi/2].
     SeparatrixError
         ``theta`` exactly on the separatrix (``dtheta == 0``).
+    DeviceError
+        ``device`` not ``"cpu"``/``"cuda"``, or ``"cuda"`` unavailable (no
+        GPU, no numba-cuda, or a numba-cuda that does not compile here).
 
     Notes
     -----
@@ -217,34 +269,47 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0):
     :math:`\\operatorname{cel}(k_c, p, a, b)` with :math:`k_c = \\sqrt{1-k^2}`
     formed from the factored separatrix distance, never as :math:`1 - m`
     (docs: Numerical methods).
+
+    The checks (finite, range), the fold of ``theta`` and the clamp at
+    ``2 pi`` (:func:`at_least_two_pi`) run inside the parallel kernels; only
+    when a kernel flags a point is the error worked out on the host.
     """
+    device = check_device(device)
     moments, _ = unit_moments(body_or_moments)
-    from_offset, angle, phi, shape = _spin_inputs(moments, theta, dtheta, phi)
+    gpu = cuda_kernels() if device == "cuda" else None
+    inputs = _fast_inputs(moments, theta, dtheta, phi)
+    if inputs is None:
+        _spin_inputs(moments, theta, dtheta, phi)  # raises
+        raise AssertionError("the reference checks accept inputs the fast checks refused")
+    from_offset, angle, phi_folded, shape = inputs
+    if gpu and not from_offset:
+        angle = fold_angle(angle)  # np.fmod has no CUDA form: folded here
     out = np.empty(shape)
     status = np.empty(shape, dtype=np.int8)
-    if moments.ndim == 1 and phi.ndim == 0:
+    if moments.ndim == 1 and phi_folded.ndim == 0:
         # one body: its constants are computed once, angles used in place
-        _kernels.total_phase_one_body(
+        args = (
             moments[0],
             moments[1],
             moments[2],
-            float(phi),
+            float(phi_folded),
             np.ascontiguousarray(angle, dtype=float).reshape(-1),
-            from_offset,
-            out.reshape(-1),
-            status.reshape(-1),
         )
+        kernel = gpu.total_phase_one_body if gpu else _kernels.total_phase_one_body
     else:
-        _kernels.total_phase_many(
+        args = (
             *(_flat(moments[..., k], shape) for k in range(3)),
-            _flat(phi, shape),
+            _flat(phi_folded, shape),
             _flat(angle, shape),
-            from_offset,
-            out.reshape(-1),
-            status.reshape(-1),
         )
-    _check_status(status, moments, angle, phi, shape, from_offset)
-    return at_least_two_pi(out)
+        kernel = gpu.total_phase_many if gpu else _kernels.total_phase_many
+    if gpu:
+        run_cuda(kernel, *args, from_offset, out.reshape(-1), status.reshape(-1))
+    else:
+        kernel(*args, from_offset, FOLD_LIMIT, out.reshape(-1), status.reshape(-1))
+    if status.any():  # the rare case: the reference path names the error
+        _raise_for(status, moments, theta, dtheta, phi)
+    return out
 
 
 def at_least_two_pi(total):
@@ -259,10 +324,12 @@ def at_least_two_pi(total):
 
 
 @size_aware
-def phases(body_or_moments, theta=None, phi=0.0, *, dtheta=None):
+def phases(body_or_moments, theta=None, phi=0.0, *, dtheta=None, device="cpu"):
     """Closed-form phases and their ingredients, one row per initial spin.
 
-    Parameters are as for :func:`total_phase`.
+    Parameters are as for :func:`total_phase` (``device`` included: on
+    ``"cuda"`` every column is computed on the GPU by the same scalar
+    functions, and agrees with the CPU path to a few ulps).
 
     Returns
     -------
@@ -307,40 +374,68 @@ def phases(body_or_moments, theta=None, phi=0.0, *, dtheta=None):
     ------
     As :func:`total_phase`.
     """
-    return phases_of_unit_moments(unit_moments(body_or_moments)[0], theta, phi, dtheta=dtheta)
+    device = check_device(device)
+    return phases_of_unit_moments(
+        unit_moments(body_or_moments)[0], theta, phi, dtheta=dtheta, device=device
+    )
 
 
 @size_aware
-def phases_of_unit_moments(moments, theta=None, phi=0.0, *, dtheta=None):
+def phases_of_unit_moments(moments, theta=None, phi=0.0, *, dtheta=None, device="cpu"):
     """:func:`phases` for moments already in the canonical form of
     :func:`orbits.bodies.unit_moments` (no second normalisation: the
     catalog and survey pass their roots here)."""
-    from_offset, angle, phi, shape = _spin_inputs(moments, theta, dtheta, phi)
-    i1, i2, i3 = (_flat(moments[..., k], shape) for k in range(3))
-    phi_flat, angle_flat = _flat(phi, shape), _flat(angle, shape)
-    parts = np.empty((i1.shape[0], len(_kernels.PARTS_COLUMNS)))
-    status = np.empty(i1.shape[0], dtype=np.int8)
-    _kernels.phase_parts_many(i1, i2, i3, phi_flat, angle_flat, from_offset, parts, status)
-    _check_status(status, moments, angle, phi, shape, from_offset)
-    geometric = np.empty(i1.shape[0])
-    _solid.solid_angle_many(i1, i2, i3, phi_flat, angle_flat, from_offset, geometric)
-    (theta, dtheta, theta_c, two_e, m_sq, m_param, branch, period, dynamic, total) = parts.T
-    norm = np.sqrt(i1 * i1 + i2 * i2 + i3 * i3)
-    return pd.DataFrame(
-        {
-            "I1": i1 / norm,
-            "I2": i2 / norm,
-            "I3": i3 / norm,
-            "theta": theta,
-            "dtheta": dtheta,
-            "phi": _flat(phi, shape),
-            "theta_crit": theta_c,
-            **_parts_columns(
-                norm, two_e, m_sq, m_param, branch, period, dynamic, total, geometric
-            ),
-        },
-        copy=False,  # one block per column: no consolidating copy
+    gpu = cuda_kernels() if check_device(device) == "cuda" else None
+    inputs = _fast_inputs(moments, theta, dtheta, phi)
+    if inputs is None:
+        _spin_inputs(moments, theta, dtheta, phi)  # raises
+        raise AssertionError("the reference checks accept inputs the fast checks refused")
+    from_offset, angle, phi_folded, shape = inputs
+    if gpu and not from_offset:
+        angle = fold_angle(angle)  # np.fmod has no CUDA form: folded here
+    # one body or one azimuth: length-1 arrays, broadcast inside the kernel
+    i1, i2, i3 = (
+        moments[k : k + 1] if moments.ndim == 1 else _flat(moments[..., k], shape)
+        for k in range(3)
     )
+    phi_flat = phi_folded.reshape(1) if phi_folded.ndim == 0 else _flat(phi_folded, shape)
+    angle_flat = _flat(angle, shape)
+    n = angle_flat.shape[0]
+    columns = np.empty((len(_table.COLUMNS), n))
+    branch = np.empty(n, dtype=np.int8)
+    status = np.empty(n, dtype=np.int8)
+    args = (i1, i2, i3, phi_flat, angle_flat, from_offset)
+    if gpu:
+        run_cuda(gpu.phases_columns, *args, columns, branch, status)
+    else:
+        _table.phases_columns(*args, FOLD_LIMIT, columns, branch, status)
+    if status.any():  # the rare case: the reference path names the error
+        _raise_for(status.reshape(shape), moments, theta, dtheta, phi)
+    # every column computed in the kernel (phase_table.phases_row): the
+    # frame only wraps them
+    table = dict(zip(_table.COLUMNS, columns))
+    table["branch"] = pd.Categorical.from_codes(branch, categories=["SAM", "LAM"])
+    return pd.DataFrame({name: table[name] for name in PHASES_COLUMNS}, copy=False)
+
+
+PHASES_COLUMNS = (
+    "I1",
+    "I2",
+    "I3",
+    "theta",
+    "dtheta",
+    "phi",
+    "theta_crit",
+    "branch",
+    "energy",
+    "momentum",
+    "D",
+    "m",
+    "period",
+    "dynamic_phase",
+    "total_phase",
+    "geometric_phase",
+)
 
 
 def _parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total, geometric):

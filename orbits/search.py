@@ -9,6 +9,7 @@ angle they accumulate geometrically, so each root is stored as its offset
 """
 
 import warnings
+from collections import namedtuple
 from fractions import Fraction
 
 import numpy as np
@@ -17,6 +18,7 @@ import pandas as pd
 from ._args import integer
 from .bodies import Body, unit_moments
 from .core import search as _kernels
+from .device import check_device, cuda_kernels, run_cuda
 from .errors import InputError
 from .limits import check_search_bounds
 from .phases import phases_of_unit_moments
@@ -185,6 +187,89 @@ def find_roots(moments, levels):
         if count >= 0:
             return branch[:count], level[:count], offset[:count], info
         capacity *= 4
+
+
+SearchRows = namedtuple("SearchRows", ["branch", "level", "offset", "counts", "info"])
+SearchRows.__doc__ = """Per-body roots of :func:`search_bodies` (row ``b`` is body ``b``).
+
+branch : ndarray (n, capacity) int8
+    +1 SAM, -1 LAM, in ``[b, :counts[b]]``.
+level : ndarray (n, capacity) int64
+    Index into ``levels`` of each root.
+offset : ndarray (n, capacity) float64
+    ``dtheta`` of each root (radians, phi = 0, ``|omega0| = 1``).
+counts : ndarray (n,) int64
+    Roots of body ``b``, or -1 when its row was too short (search that body
+    again with more room, e.g. :func:`orbits.core.search.search_body`).
+info : ndarray (n, INFO_SIZE) float64
+    Per body, the ``info`` of :func:`orbits.core.search.search_body`.
+"""
+
+
+def search_bodies(moments, levels, *, capacity=None, device="cpu"):
+    """Every root of ``Delta alpha = levels[j]`` for many bodies: the survey's search.
+
+    The arrays are those that :func:`orbits.core.search.search_many` fills,
+    on the CPU (all of numba's threads) or, with ``device="cuda"``, on an
+    NVIDIA GPU (one thread per body, the same scalar search code,
+    :func:`orbits.core.search.search_body_with`).  The roots agree between
+    the devices; on hardware the last bits may differ (fused multiply-adds).
+
+    Parameters
+    ----------
+    moments : array_like (n, 3) float64
+        Principal moments per body, ascending in each row, any positive
+        scale (the survey passes :func:`orbits.bodies.unit_moments` rows).
+    levels : array_like (m,) float64
+        Target total phases ``2 pi p/q``, ascending, finite (e.g.
+        :func:`phase_levels` masked by :func:`searched`).
+    capacity : int, optional
+        Roots per body row; default ``2 m + 8`` (the survey's).
+    device : {"cpu", "cuda"}
+
+    Returns
+    -------
+    SearchRows
+        ``(branch, level, offset, counts, info)``, see :class:`SearchRows`;
+        roots of a body are ordered by branch (SAM first), then ascending
+        level within the branch.
+
+    Raises
+    ------
+    InputError
+        Shapes, order or values not as above.
+    DeviceError
+        ``device="cuda"`` unavailable.
+    """
+    device = check_device(device)
+    moments = np.ascontiguousarray(moments, dtype=float)
+    levels = np.ascontiguousarray(levels, dtype=float)
+    if moments.ndim != 2 or moments.shape[1] != 3:
+        raise InputError(f"moments must have shape (n, 3), got {moments.shape}")
+    if levels.ndim != 1 or not np.all(np.isfinite(levels)) or np.any(np.diff(levels) < 0):
+        raise InputError("levels must be a 1-d array of finite values in ascending order")
+    if not (
+        np.all(np.isfinite(moments))
+        and np.all(moments > 0)
+        and np.all(np.diff(moments, axis=1) > 0)
+    ):
+        raise InputError("moments must be finite, positive and strictly ascending in each row")
+    if capacity is None:
+        capacity = 2 * levels.size + 8
+    capacity = integer("capacity", capacity, minimum=1)
+    count = moments.shape[0]
+    rows = SearchRows(
+        np.empty((count, capacity), dtype=np.int8),
+        np.empty((count, capacity), dtype=np.int64),
+        np.empty((count, capacity)),
+        np.empty(count, dtype=np.int64),
+        np.empty((count, _kernels.INFO_SIZE)),
+    )
+    if device == "cuda":
+        run_cuda(cuda_kernels().search_many, moments, levels, *rows)
+    else:
+        _kernels.search_many(moments, levels, *rows)
+    return rows
 
 
 def closed_orbits(body, n_max=10, q_max=1):

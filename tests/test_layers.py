@@ -36,7 +36,7 @@ LAYERS = [
     ["phases"],
     ["bodies"],
     ["limits", "cells"],
-    ["_args", "atomic", "threads"],
+    ["_args", "atomic", "threads", "device"],
     ["core", "errors", "_version"],
 ]
 RANK = {name: len(LAYERS) - k for k, row in enumerate(LAYERS) for name in row}

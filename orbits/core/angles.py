@@ -36,6 +36,18 @@ def fold_one(x):
 
 
 @njit(cache=True, nogil=True)
+def fold_checked(x, limit):
+    """``(fold_one(x), True)``, or ``(x, False)`` for a finite ``|x| > limit``.
+
+    Scalar, allocation-free: shared by the CPU kernels and the CUDA kernels
+    (:mod:`orbits.core.cuda`).
+    """
+    if math.isfinite(x) and abs(x) > limit:
+        return x, False
+    return fold_one(x), True
+
+
+@njit(cache=True, nogil=True)
 def fold_many(values, limit, out):
     """``out[i] = fold_one(values[i])``; the index of the first finite value
     with ``|value| > limit`` (not folded), or -1."""

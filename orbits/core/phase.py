@@ -45,6 +45,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from .angles import fold_checked
 from .elliptic import cel, cel_lanes, cel_pair, cel_passes
 from .exact import separatrix_gap_exact
 from .trig import cos_small, sin_small
@@ -66,6 +67,8 @@ STATUS_OK = 0
 STATUS_OUT_OF_RANGE = 1
 STATUS_SEPARATRIX = 2
 STATUS_NOT_FINITE = 3
+# |theta| beyond the fold limit (orbits.phases.FOLD_LIMIT): not folded
+STATUS_TOO_LARGE = 4
 
 
 @njit(cache=True, nogil=True)
@@ -144,6 +147,21 @@ def angle_triplet(angle, from_offset, theta_c, co_theta_c):
     if dtheta == 0.0:
         return theta, dtheta, co_theta, STATUS_SEPARATRIX
     return theta, dtheta, co_theta, STATUS_OK
+
+
+@njit(cache=True, nogil=True)
+def given_angle(angle, from_offset, fold_limit):
+    """The polar angle as the kernels use it, and a status code.
+
+    ``theta`` (``from_offset`` false) is folded into ``[0, pi/2]``
+    (:func:`orbits.core.angles.fold_one`) unless it is finite with
+    ``|theta| > fold_limit`` (``STATUS_TOO_LARGE``); ``dtheta`` is not
+    folded.  NaN and inf pass through (:func:`angle_triplet` flags them).
+    """
+    if from_offset:
+        return angle, STATUS_OK
+    folded, ok = fold_checked(angle, fold_limit)
+    return folded, STATUS_OK if ok else STATUS_TOO_LARGE
 
 
 @njit(cache=True, nogil=True)
@@ -357,7 +375,7 @@ def _lane_setup(work, j, i1, i2, i3, constants, angle, from_offset):
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _lane_finish(work, count, out, lo):
-    """``cel`` of the filled lanes, then ``out[lo + j]``."""
+    """``cel`` of the filled lanes, then ``out[lo + j]``, at least ``2 pi``."""
     smallest = 1.0
     for j in range(count):
         smallest = min(smallest, work[0, j])
@@ -374,7 +392,9 @@ def _lane_finish(work, count, out, lo):
         work[9],
     )
     for j in range(count):
-        out[lo + j] = work[4, j] * work[6, j] - work[5, j]
+        total = work[4, j] * work[6, j] - work[5, j]
+        # >= 2 pi (orbits.phases.at_least_two_pi); NaN stays NaN, as np.maximum
+        out[lo + j] = TWO_PI if total < TWO_PI else total
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
@@ -433,9 +453,12 @@ def _one_body_setup(i1, i2, i3, constants, theta, dtheta, co_theta, work, count)
 
 
 @njit(cache=True, nogil=True, parallel=True)
-def total_phase_one_body(i1, i2, i3, phi, angles, from_offset, out, status):
+def total_phase_one_body(i1, i2, i3, phi, angles, from_offset, fold_limit, out, status):
     """Total phase of one body at many polar angles (scalar ``phi``).
 
+    ``angles`` are ``theta`` as given (folded here, :func:`given_angle`) or,
+    with ``from_offset``, ``dtheta``; ``phi`` is already folded.  ``out``
+    is at least ``2 pi`` (``orbits.phases.at_least_two_pi``).
     Per-body constants are computed once.  ``status`` receives one of the
     ``STATUS_*`` codes per point; ``out`` is inf where it is not OK.
     Batches of :data:`LANES` angles run through SIMD loops: the set-up of
@@ -459,9 +482,11 @@ def total_phase_one_body(i1, i2, i3, phi, angles, from_offset, out, status):
             count = min(n, lo + LANES) - lo
             bad = 0
             for j in range(count):
-                theta, dtheta, co_theta, code = angle_triplet(
-                    angles[lo + j], from_offset, theta_c, co_theta_c
-                )
+                angle, code = given_angle(angles[lo + j], from_offset, fold_limit)
+                if code == STATUS_OK:
+                    theta, dtheta, co_theta, code = angle_triplet(
+                        angle, from_offset, theta_c, co_theta_c
+                    )
                 status[lo + j] = code
                 if code != STATUS_OK:
                     bad += 1
@@ -487,8 +512,11 @@ def total_phase_one_body(i1, i2, i3, phi, angles, from_offset, out, status):
 
 
 @njit(cache=True, nogil=True, parallel=True)
-def total_phase_many(i1, i2, i3, phi, angles, from_offset, out, status):
-    """Total phase with every input an array of the same length (SIMD path)."""
+def total_phase_many(i1, i2, i3, phi, angles, from_offset, fold_limit, out, status):
+    """Total phase with every input an array of the same length (SIMD path).
+
+    ``angles`` and ``out`` as for :func:`total_phase_one_body`; ``phi`` folded.
+    """
     n = angles.shape[0]
     task = LANES * BATCHES
     for t in prange((n + task - 1) // task):
@@ -497,6 +525,10 @@ def total_phase_many(i1, i2, i3, phi, angles, from_offset, out, status):
             count = min(n, lo + LANES) - lo
             for j in range(count):
                 k = lo + j
+                angle, code = given_angle(angles[k], from_offset, fold_limit)
+                if code != STATUS_OK:
+                    # a valid stand-in; its result is never read (the status)
+                    angle = 0.5
                 status[k] = _lane_setup(
                     work,
                     j,
@@ -504,9 +536,11 @@ def total_phase_many(i1, i2, i3, phi, angles, from_offset, out, status):
                     i2[k],
                     i3[k],
                     body_constants(i1[k], i2[k], i3[k], phi[k]),
-                    angles[k],
+                    angle,
                     from_offset,
                 )
+                if code != STATUS_OK:
+                    status[k] = code
             if count == LANES:
                 _lane_finish(work, LANES, out, lo)
             else:

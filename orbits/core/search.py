@@ -32,6 +32,12 @@ branch:
 
 Levels above ``Delta alpha(2.2e-308)`` would need ``|dtheta|`` below the
 smallest normal double; they are counted, not solved.
+
+Scratch space: the per-body search (:func:`search_body_with`) allocates
+nothing; it works in two caller-provided arrays, ``SCRATCH_FLOATS`` doubles
+and ``SCRATCH_INTS`` int64 (:func:`new_scratch`).  The CPU kernels allocate
+them once per chunk of bodies, the CUDA kernel (:mod:`orbits.core.cuda`)
+as per-thread local arrays, so both run the same scalar code.
 """
 
 import math
@@ -84,6 +90,42 @@ BRANCH_INFO_SIZE = 4  # minimum, where, value at the smallest offset, unreached
 # params: I1, I2, I3, sign, the 7 body constants, the evaluation counter
 PARAMS_SIZE = 12
 _COUNTER = 11
+
+# the float scratch of one body's search: params, branch info, then the scan
+# grid, its values and the two merge buffers of branch_grid
+_AT_INFO = PARAMS_SIZE
+_AT_GRID = _AT_INFO + BRANCH_INFO_SIZE
+_AT_VALUES = _AT_GRID + GRID_SIZE
+_AT_HEAD = _AT_VALUES + GRID_SIZE
+_AT_MERGED = _AT_HEAD + GRID_SIZE
+SCRATCH_FLOATS = _AT_MERGED + GRID_SIZE
+# the int scratch: the starts of the monotone pieces of search_branch
+SCRATCH_INTS = GRID_SIZE + 2
+# bodies per parallel task of search_many (the scratch is allocated per task)
+BODIES_PER_TASK = 16
+
+
+@njit(cache=True, nogil=True)
+def new_scratch():
+    """Fresh scratch arrays for :func:`search_body_with` (CPU callers)."""
+    return np.empty(SCRATCH_FLOATS), np.empty(SCRATCH_INTS, dtype=np.int64)
+
+
+@njit(cache=True, nogil=True)
+def _sorted_index(values, x, right):
+    """``np.searchsorted(values, x, side="right" if right else "left")`` for
+    ascending ``values``, without NumPy (device code has none)."""
+    lo = 0
+    hi = values.shape[0]
+    if x != x:  # NaN sorts last, as in NumPy
+        return hi
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if values[mid] < x or (right and values[mid] == x):
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
 
 
 @njit(cache=True, nogil=True)
@@ -154,18 +196,21 @@ def _merge_two(a, b, out):
 
 
 @njit(cache=True, nogil=True)
-def _merge_runs(values, first_end, second_end):
-    """``values`` sorted, given it is three ascending runs split at the two ends."""
-    head = np.empty(second_end)
-    _merge_two(values[:first_end], values[first_end:second_end], head)
-    merged = np.empty(values.size)
-    _merge_two(head, values[second_end:], merged)
+def _merge_runs(values, first_end, second_end, head, merged):
+    """``merged[:values.size]``: ``values`` sorted, given it is three ascending
+    runs split at the two ends (``head`` holds ``second_end`` values)."""
+    _merge_two(values[:first_end], values[first_end:second_end], head[:second_end])
+    _merge_two(head[:second_end], values[second_end:], merged[: values.size])
     return merged
 
 
 @njit(cache=True, nogil=True)
-def branch_grid(width, out):
-    """Scan points ``d`` in (0, width], ascending; returns how many."""
+def branch_grid(width, out, head, merged):
+    """Scan points ``d`` in (0, width], ascending; returns how many.
+
+    ``out``, ``head`` and ``merged`` hold ``GRID_SIZE`` values each (the
+    last two are scratch).
+    """
     count = 0
     ratio = math.log(width / SMALLEST_OFFSET)
     for k in range(LOG_POINTS):
@@ -179,7 +224,7 @@ def branch_grid(width, out):
         count += 1
     # three ascending runs: merge them (the same order as np.sort, whose
     # generic quicksort cost more compile time than the whole scan)
-    grid = _merge_runs(out[:count], LOG_POINTS, LOG_POINTS + UNIFORM_POINTS)
+    grid = _merge_runs(out[:count], LOG_POINTS, LOG_POINTS + UNIFORM_POINTS, head, merged)
     unique = 0
     for k in range(count):
         if k == 0 or grid[k] > grid[k - 1]:
@@ -324,6 +369,17 @@ def _bracket(values, start, stop, level):
 
 @njit(cache=True, nogil=True)
 def search_branch(kind, params, width, levels, root_level, root_offset, found, branch_info):
+    """:func:`search_branch_with` with scratch space of its own."""
+    floats, ints = new_scratch()
+    return search_branch_with(
+        kind, params, width, levels, root_level, root_offset, found, branch_info, floats, ints
+    )
+
+
+@njit(cache=True, nogil=True)
+def search_branch_with(
+    kind, params, width, levels, root_level, root_offset, found, branch_info, floats, ints
+):
     """Every ``d`` in (0, width) with ``f(d)`` equal to a level.
 
     ``f`` is :func:`phase_of_offset` (``kind = KIND_PHASE``), the phase at
@@ -333,12 +389,16 @@ def search_branch(kind, params, width, levels, root_level, root_offset, found, b
     (``d``, not signed).  ``branch_info`` receives the minimum of ``f`` and
     where it lies, ``f`` at the smallest offset and how many levels exceed
     that.  Returns the new count, or -1 if the arrays are too short.
+    ``floats`` and ``ints`` are the scratch of :func:`search_body_with`
+    (its ``params`` and branch info slots are not touched here).
     """
-    grid = np.empty(GRID_SIZE)
-    values = np.empty(GRID_SIZE)
-    piece_lo = np.empty(GRID_SIZE + 2, dtype=np.int64)
+    grid = floats[_AT_GRID:_AT_VALUES]
+    values = floats[_AT_VALUES:_AT_HEAD]
+    piece_lo = ints
     capacity = root_offset.shape[0]
-    count = branch_grid(width, grid)
+    count = branch_grid(
+        width, grid, floats[_AT_HEAD:_AT_MERGED], floats[_AT_MERGED:SCRATCH_FLOATS]
+    )
     for k in range(count):
         values[k] = _evaluate(kind, grid[k], params)
     # the phase at the smallest representable offset bounds the levels
@@ -387,7 +447,7 @@ def search_branch(kind, params, width, levels, root_level, root_offset, found, b
         stop = piece_lo[p + 1]
         low = min(values[start], values[stop])
         high = max(values[start], values[stop])
-        j = np.searchsorted(levels, low, side="right")
+        j = _sorted_index(levels, low, True)
         while j < levels.shape[0] and levels[j] < high:
             if found >= capacity:
                 return -1
@@ -574,7 +634,7 @@ def newton_branch(params, width, levels, root_level, root_offset, found, branch_
     if not (slope > 0.0):
         return -2
     log_width = math.log(width)
-    j = np.searchsorted(levels, top, side="left") - 1
+    j = _sorted_index(levels, top, False) - 1
     first = found
     while j >= 0 and levels[j] > f_end:
         level = levels[j]
@@ -646,20 +706,31 @@ def newton_branch(params, width, levels, root_level, root_offset, found, branch_
 
 
 @njit(cache=True, nogil=True)
-def _body_params(i1, i2, i3):
-    """The body's constants (phi = 0) and the parameter vector of the phase."""
+def _body_params(i1, i2, i3, params):
+    """The body's constants (phi = 0); fills ``params`` (PARAMS_SIZE), the
+    parameter vector of the phase, with the counter at 0."""
     constants = body_constants(i1, i2, i3, 0.0)
-    params = np.zeros(PARAMS_SIZE)
+    for k in range(PARAMS_SIZE):
+        params[k] = 0.0
     params[0] = i1
     params[1] = i2
     params[2] = i3
     for k in range(7):
         params[4 + k] = constants[k]
-    return constants, params
+    return constants
 
 
 @njit(cache=True, nogil=True)
 def search_body(i1, i2, i3, levels, root_branch, root_level, root_offset, info):
+    """:func:`search_body_with` with scratch space of its own."""
+    floats, ints = new_scratch()
+    return search_body_with(
+        i1, i2, i3, levels, root_branch, root_level, root_offset, info, floats, ints
+    )
+
+
+@njit(cache=True, nogil=True)
+def search_body_with(i1, i2, i3, levels, root_branch, root_level, root_offset, info, floats, ints):
     """All roots of ``Delta alpha = levels[j]`` on both branches of one body.
 
     Parameters
@@ -677,6 +748,10 @@ def search_body(i1, i2, i3, levels, root_branch, root_level, root_offset, info):
         that would lie closer to the separatrix than a double can say),
         and the branch width; then the number of phase evaluations and of
         branches that fell back to the bracketing search.
+    floats, ints : ndarray
+        Scratch space, ``SCRATCH_FLOATS`` float64 and ``SCRATCH_INTS`` int64
+        (:func:`new_scratch`); nothing is allocated here, so the same code
+        runs in a CUDA thread (:mod:`orbits.core.cuda`).
 
     Returns
     -------
@@ -690,8 +765,9 @@ def search_body(i1, i2, i3, levels, root_branch, root_level, root_offset, info):
     monotonicity check fails, by the scan-and-bracket
     :func:`search_branch` (see :func:`search_body_bracketing`).
     """
-    constants, params = _body_params(i1, i2, i3)
-    branch_info = np.empty(BRANCH_INFO_SIZE)
+    params = floats[:PARAMS_SIZE]
+    branch_info = floats[_AT_INFO:_AT_GRID]
+    constants = _body_params(i1, i2, i3, params)
     found = np.int64(0)  # not a literal: one compiled signature of the callees
     fallbacks = 0
     for branch_index in range(2):
@@ -701,8 +777,17 @@ def search_body(i1, i2, i3, levels, root_branch, root_level, root_offset, info):
         found = newton_branch(params, width, levels, root_level, root_offset, found, branch_info)
         if found == -2:
             fallbacks += 1
-            found = search_branch(
-                KIND_PHASE, params, width, levels, root_level, root_offset, start, branch_info
+            found = search_branch_with(
+                KIND_PHASE,
+                params,
+                width,
+                levels,
+                root_level,
+                root_offset,
+                start,
+                branch_info,
+                floats,
+                ints,
             )
         if found < 0:
             return -1
@@ -716,14 +801,26 @@ def search_body(i1, i2, i3, levels, root_branch, root_level, root_offset, info):
 
 @njit(cache=True, nogil=True)
 def search_body_newton(i1, i2, i3, levels, root_branch, root_level, root_offset, info):
+    """:func:`search_body_newton_with` with scratch space of its own."""
+    floats, ints = new_scratch()
+    return search_body_newton_with(
+        i1, i2, i3, levels, root_branch, root_level, root_offset, info, floats
+    )
+
+
+@njit(cache=True, nogil=True)
+def search_body_newton_with(
+    i1, i2, i3, levels, root_branch, root_level, root_offset, info, floats
+):
     """:func:`search_body` without its fallback: ``NEEDS_BRACKETING`` instead.
 
     Returns the same as :func:`search_body` whenever no branch needs the
     bracketing search, which is then never compiled: a cold first catalog
     compiles only this (the fallback is rare; call :func:`search_body`).
     """
-    constants, params = _body_params(i1, i2, i3)
-    branch_info = np.empty(BRANCH_INFO_SIZE)
+    params = floats[:PARAMS_SIZE]
+    branch_info = floats[_AT_INFO:_AT_GRID]
+    constants = _body_params(i1, i2, i3, params)
     found = np.int64(0)
     for branch_index in range(2):
         params[3] = -1.0 if branch_index == 0 else 1.0
@@ -765,15 +862,26 @@ def search_body_bracketing(i1, i2, i3, levels, root_branch, root_level, root_off
     in the tests and as its fallback.  Arguments, ``info`` and the result
     as for :func:`search_body` (no branch falls back: ``info`` counts 0).
     """
-    constants, params = _body_params(i1, i2, i3)
-    branch_info = np.empty(BRANCH_INFO_SIZE)
+    floats, ints = new_scratch()
+    params = floats[:PARAMS_SIZE]
+    branch_info = floats[_AT_INFO:_AT_GRID]
+    constants = _body_params(i1, i2, i3, params)
     found = np.int64(0)
     for branch_index in range(2):
         params[3] = -1.0 if branch_index == 0 else 1.0
         width = constants[2] if branch_index == 0 else constants[3]
         start = found
-        found = search_branch(
-            KIND_PHASE, params, width, levels, root_level, root_offset, found, branch_info
+        found = search_branch_with(
+            KIND_PHASE,
+            params,
+            width,
+            levels,
+            root_level,
+            root_offset,
+            found,
+            branch_info,
+            floats,
+            ints,
         )
         if found < 0:
             return -1
@@ -790,19 +898,26 @@ def search_many(moments, levels, root_branch, root_level, root_offset, counts, i
     """:func:`search_body` for every row of ``moments`` (n, 3), in parallel.
 
     Row ``b``'s roots go to ``root_*[b, :counts[b]]``; ``counts[b] = -1``
-    when its row of the output arrays was too short.
+    when its row of the output arrays was too short.  The scratch of
+    :func:`search_body_with` is allocated once per task of
+    ``BODIES_PER_TASK`` bodies.
     """
-    for b in prange(moments.shape[0]):
-        counts[b] = search_body(
-            moments[b, 0],
-            moments[b, 1],
-            moments[b, 2],
-            levels,
-            root_branch[b],
-            root_level[b],
-            root_offset[b],
-            info[b],
-        )
+    n = moments.shape[0]
+    for t in prange((n + BODIES_PER_TASK - 1) // BODIES_PER_TASK):
+        floats, ints = new_scratch()
+        for b in range(t * BODIES_PER_TASK, min(n, (t + 1) * BODIES_PER_TASK)):
+            counts[b] = search_body_with(
+                moments[b, 0],
+                moments[b, 1],
+                moments[b, 2],
+                levels,
+                root_branch[b],
+                root_level[b],
+                root_offset[b],
+                info[b],
+                floats,
+                ints,
+            )
 
 
 @njit(cache=True, nogil=True)
