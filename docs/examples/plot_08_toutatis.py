@@ -4,157 +4,220 @@ The tumbling asteroid 4179 Toutatis
 
 Toutatis, a 4.6 km near-Earth asteroid, does not spin about one axis: it
 tumbles in a *long-axis mode* (LAM), rotating about its long axis while
-that axis precesses about the fixed angular momentum.  Radar images gave
-its two periods:
+that axis precesses about the fixed angular momentum.  Radar and the
+Chang'e-2 flyby gave its two periods:
 
 * Hudson & Ostro (1995, Science 270, 84): rotation about the long axis
-  :math:`P_\\psi` = 5.41 d, precession of the long axis (average)
-  :math:`P_\\phi` = 7.35 d; dimensions along the principal axes
-  1.92, 2.40 and 4.60 km;
-* Zhao et al. (2015, MNRAS, arXiv:1504.02024, from Chang'e-2's flyby and
-  two decades of radar): 5.38 d and 7.40 d, ± 0.03 d in Zhao, Hu & Ji
-  (2016, IAU Symp. 318, 156).
+  :math:`P_\\psi` = 5.41 d, mean precession of the long axis
+  :math:`P_\\phi` = 7.35 d;
+* Zhao et al. (2015, MNRAS, arXiv:1504.02024): 5.38 d and 7.40 d,
+  ± 0.03 d in Zhao, Hu & Ji (2016, IAU Symp. 318, 156).
 
-Takahashi, Busch & Scheeres (2013, AJ 146, 95) estimated Toutatis'
-moments of inertia from the tidal changes of its spin over 1992–2008.
-**Their fitted moment ratios could not be retrieved for this page** (the
-sources reachable here give only the abstracts), so no number of theirs
-is used below.  What the same group summarised (Busch et al., AGU Fall
-Meeting 2012, P31A-1873) is that the moments about the short and
-intermediate axes, relative to the long-axis one, are 3 ± 1 % and
-4 ± 1 % larger than for a uniform density.  Two inertia models follow
-from the published numbers:
+Takahashi, Busch & Scheeres (2013, AJ 146, 95) fitted Toutatis' spin
+state and moments of inertia to the radar observations of 1992–2008.
+Their Table 2 is used below *as quoted in the Toutatis test of
+Principia's Euler solver* (mockingbirdnest/Principia,
+``physics/euler_solver_test.cpp``):
 
-1. a uniform ellipsoid with Hudson & Ostro's dimensions (a crude stand-in
-   for their shape model);
-2. the same with the short- and intermediate-axis moments raised by 3 %
-   and 4 % (the direction of Takahashi et al.'s result, applied to the
-   ellipsoid, not their fitted values).
+* principal moments 1, 3.0836, 3.235 (long axis smallest);
+* at 1992-11-09T17:49:47 UTC: angular velocity (−98.5, 14.5, 33.7) deg/d
+  along their x, y, z; ZXZ Euler angles (147.5°, 63.9°, 241.5°); angular
+  momentum toward ICRS latitude −54.75°, longitude 180.2°;
+* at 1992-12-02T21:40:00 UTC, 23.16 d later: (−97.0, −35.6, 7.2) deg/d;
+  Euler angles (122.2°, 86.5°, 107.0°).
 
-For each, the two observed periods fix the spin: their ratio fixes the
-orbit on the LAM branch (``orbits.spins_with_period_ratio``, the ratio is
-:math:`P_\\psi/P_\\phi = \\Delta\\alpha/2\\pi - 1` on LAM), and
-:math:`P_\\psi = T` fixes the time unit.  The precession period is then
-checked against a direct integration of Euler's equations and the
-attitude, which knows nothing of the closed form.
+Which moment goes with which of their axes is checked first, from the
+numbers alone.  Then the exact motion (``orbits.Motion``) gives the LAM
+periods beside the observed ones and carries the spin to the later date,
+beside Takahashi et al.'s values and a direct integration of Euler's
+equations.
 """
+
+import itertools
 
 import matplotlib.pyplot as plt
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.spatial.transform import Rotation
 
-import orbits
 from orbits import Body, Motion
 
-published = {
-    "Hudson & Ostro 1995": (5.41, 7.35),
-    "Zhao et al. 2015": (5.38, 7.40),
-}
-# semi-axes (km) along the long, intermediate and short axes
-ellipsoid = Body.from_semi_axes(4.60 / 2, 2.40 / 2, 1.92 / 2, name="uniform ellipsoid")
-i_long, i_mid, i_short = ellipsoid.moments
-segregated = Body((i_long, 1.04 * i_mid, 1.03 * i_short), name="ellipsoid, +4 %/+3 %")
-for body in (ellipsoid, segregated):
-    ratios = body.moments / body.moments[0]
-    print(f"{body.name:22s} I/I_long = {ratios.round(4)}")
+DEG = np.pi / 180.0  # deg/d -> rad/d: times below are in days
+moments = np.array([1.0, 3.0836, 3.235])
+toutatis = Body(moments, name="4179 Toutatis (Takahashi et al. 2013)")
+omega_epoch = np.array([-98.5, 14.5, 33.7])  # deg/d, Takahashi's x, y, z
+omega_later = np.array([-97.0, -35.6, 7.2])  # deg/d, 1992-12-02T21:40 UTC
+elapsed = 23.16  # d, from 1992-11-09T17:49:47 to 1992-12-02T21:40:00 UTC
+published = {"Hudson & Ostro 1995": (5.41, 7.35), "Zhao et al. 2015": (5.38, 7.40)}
 
 # %%
-# The spin that gives the observed periods
-# ----------------------------------------
-# Each row: the published periods (input), the LAM spin that reproduces
-# them (θ from the short axis, and its offset from the separatrix), the
-# nutation of the long axis about L (the range of the angle between them,
-# closed form), our precession period, and its relative difference from
-# the one measured by integration (``integr.``).
+# Which moment belongs to which axis
+# ----------------------------------
+# Each row puts Takahashi et al.'s x, y, z components along the principal
+# axes I1 < I2 < I3 in one of the six orders and gives the branch and the
+# periods of the resulting motion.  "x y z" (their x the long axis,
+# moment 1; y with 3.0836; z with 3.235) reproduces the observed periods;
+# "x z y" misses them by 1–3 %, and the other four are far off.  In
+# particular "z x y" (their x along I2, y along I3, z along I1), which
+# Principia's comment on the axes might suggest, gives 12.0 d and 3.7 d.
+# Principia's code pairs their x component with the moment 1; the comment
+# concerns the order of the body axes of the Euler angles, in which the
+# long axis comes third, as checked next.
 
+print("their axes along I1, I2, I3: branch, P_psi (d), P_phi (d)")
+for order in itertools.permutations(range(3)):
+    omega = np.empty(3)
+    omega[list(order)] = omega_epoch  # Takahashi's axis k along I_(order[k]+1)
+    trial = Motion.from_omega(toutatis, omega * DEG, axes="principal")
+    periods = trial.tumbling_periods()
+    label = " ".join("xyz"[order.index(k)] for k in range(3))
+    print(f"  {label}: {trial.branch}  {periods.rotation:6.3f}  {periods.precession:6.3f}")
 
-def long_axis_precession_by_integration(motion, periods=6):
-    """P_phi from DOP853: the mean rate of the long axis' azimuth about L."""
-    moments = motion.body.moments
-
-    def rhs(_, y):
-        w, rot = y[:3], y[3:].reshape(3, 3)
-        i1, i2, i3 = moments
-        dw = [
-            (i2 - i3) * w[1] * w[2] / i1,
-            (i3 - i1) * w[2] * w[0] / i2,
-            (i1 - i2) * w[0] * w[1] / i3,
-        ]
-        cross = np.array([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
-        return np.concatenate([dw, (rot @ cross).ravel()])
-
-    span = periods * motion.period
-    t = np.linspace(0.0, span, 40 * periods + 1)
-    y0 = np.concatenate([motion.omega0, np.eye(3).ravel()])
-    sol = solve_ivp(rhs, (0, span), y0, method="DOP853", rtol=1e-11, atol=1e-13, t_eval=t)
-    rot = sol.y[3:].reshape(3, 3, -1)
-    lz = moments * motion.omega0
-    lz /= np.linalg.norm(lz)  # L in space (R(0) = 1)
-    ex = np.cross(lz, [1.0, 0.0, 0.0] if abs(lz[0]) < 0.9 else [0.0, 1.0, 0.0])
-    ex /= np.linalg.norm(ex)
-    ey = np.cross(lz, ex)
-    axis = rot[:, 0, :]  # the long (I1) axis in space
-    azimuth = np.unwrap(np.arctan2(ey @ axis, ex @ axis))
-    return 2 * np.pi * span / abs(azimuth[-1] - azimuth[0])
-
-
-header = (
-    f"{'source':10s} {'model':9s} {'P_psi':>5s} {'P_phi':>5s} {'theta':>7s} {'dtheta':>7s} "
-    f"{'nutation':>11s} {'P_phi ours':>10s} {'integr.':>7s}"
+# %%
+# The same assignment is what makes the Euler angles and the direction of
+# the angular momentum agree: with the body axes of the ZXZ angles taken
+# as (y, z, x), the epoch attitude carries the body's angular momentum
+# :math:`I\\omega` to within a fraction of a degree of the published
+# direction (two independent numbers of Table 2).
+to_euler_axes = np.array([[0, 1, 0], [0, 0, 1], [1, 0, 0]])  # (x,y,z) -> (y,z,x)
+attitude_epoch = Rotation.from_euler("ZXZ", [147.5, 63.9, 241.5], degrees=True).as_matrix()
+lat, lon = np.radians(-54.75), np.radians(180.2)
+momentum_icrs = np.array([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)])
+momentum_body = to_euler_axes @ (moments * omega_epoch)
+carried = attitude_epoch @ momentum_body / np.linalg.norm(momentum_body)
+print(
+    "angle between R(epoch) I omega and the published L direction: "
+    f"{np.degrees(np.arccos(carried @ momentum_icrs)):.2f} deg"
 )
-print(header)
-short = {
-    "Hudson & Ostro 1995": "H&O 1995",
-    "Zhao et al. 2015": "Zhao 2015",
-    ellipsoid.name: "uniform",
-    segregated.name: "+4%/+3%",
-}
-motions = {}
-for source, (p_psi, p_phi) in published.items():
-    for body in (ellipsoid, segregated):
-        spins = orbits.spins_with_period_ratio(body, p_psi / p_phi)
-        lam = spins[spins["branch"] == "LAM"].iloc[0]
-        motion = Motion.from_spin(body, dtheta=lam["dtheta"])
-        days = motion.period / p_psi  # model time units per day
-        periods = motion.tumbling_periods()
-        t = np.linspace(0.0, motion.period, 2001)
-        # the angle between the long axis (I1) and L: cos = I1 w1 / M
-        along = motion.body.moments[0] * motion.omega(t)[:, 0] / motion.momentum
-        nutation = np.degrees(np.arccos(np.abs(along)))
-        measured = long_axis_precession_by_integration(motion)
-        motions[(source, body.name)] = motion
-        print(
-            f"{short[source]:10s} {short[body.name]:9s} {p_psi:5.2f} {p_phi:5.2f} "
-            f"{lam['theta']:7.4f} {lam['dtheta']:7.4f} "
-            f"{nutation.min():4.1f}–{nutation.max():4.1f}° {periods.precession / days:10.7f} "
-            f"{abs(measured / periods.precession - 1):7.0e}"
-        )
 
 # %%
-# Both inertia models reproduce both sets of periods (the observed ratio
-# lies on the LAM branch of each), and the precession period of the closed
-# form agrees with the integrated one to the integrator's accuracy.  The
-# periods alone do not pin down the moments: the spin state absorbs the
-# 3–4 % change of the model.  What distinguishes the models is the
-# orientation history over years, which is what Takahashi et al. fitted.
+# Periods
+# -------
+# The exact motion from the epoch spin, in days: its branch, ``D =
+# M^2/2E`` (LAM: below I2), the rotation period :math:`P_\\psi = T` (the
+# period of ω in the body) and the mean precession period :math:`P_\\phi`
+# of the long axis about L (``Motion.tumbling_periods``), beside the
+# observed periods.
+motion = Motion.from_omega(toutatis, omega_epoch * DEG, axes="principal")
+periods = motion.tumbling_periods()
+print(
+    f"{toutatis.name}: branch {motion.branch}, D = {motion.D:.5f} (I2 = {moments[1]}), "
+    f"axis {periods.axis}"
+)
+print(f"{'':22s} {'P_psi (d)':>9s} {'P_phi (d)':>9s} {'dP_psi':>8s} {'dP_phi':>8s}")
+print(f"{'orbits (Takahashi)':22s} {periods.rotation:9.4f} {periods.precession:9.4f}")
+for source, (p_psi, p_phi) in published.items():
+    print(
+        f"{source:22s} {p_psi:9.2f} {p_phi:9.2f} "
+        f"{periods.rotation / p_psi - 1:+8.2%} {periods.precession / p_phi - 1:+8.2%}"
+    )
+print(f"mean rotation about L, 2 pi T / Delta alpha: {periods.about_momentum:.4f} d")
+
+# %%
+# Takahashi et al.'s moments and epoch spin reproduce Zhao et al.'s
+# periods to their last digit, and Hudson & Ostro's to 0.6 % and 0.7 %.
 #
-# The long axis seen from L
-# -------------------------
-# Two rotation periods (2 × 5.41 d) of the long axis' path on the unit sphere,
-# projected on the plane perpendicular to L, for Hudson & Ostro's periods
-# and the uniform ellipsoid.
-motion = motions[("Hudson & Ostro 1995", ellipsoid.name)]
-t = np.linspace(0.0, 2 * motion.period, 1501)
-rot = motion.rotation(t)
-axis = rot[:, :, 0]
-fig, ax = plt.subplots(figsize=(5, 5), layout="constrained")
-ax.plot(axis[:, 0], axis[:, 1], lw=1.0)
-ax.plot(axis[0, 0], axis[0, 1], "o", color="k")
-ax.add_patch(plt.Circle((0, 0), 1, fill=False, color="0.7", lw=0.8))
-ax.set_aspect("equal")
-ax.set_xlim(-1.05, 1.05)
-ax.set_ylim(-1.05, 1.05)
-ax.set_xlabel("x (L along z)")
-ax.set_ylabel("y")
-ax.set_title("Toutatis: long axis over 2 × 5.41 d, seen along L")
+# A uniform ellipsoid with Hudson & Ostro's dimensions (1.92, 2.40, 4.60
+# km) has markedly different moment ratios; the same spin would tumble
+# with other periods, so the periods do constrain the mass distribution
+# once the spin is known.
+ellipsoid = Body.from_semi_axes(4.60 / 2, 2.40 / 2, 1.92 / 2, name="uniform ellipsoid")
+uniform = Motion.from_omega(ellipsoid, omega_epoch * DEG, axes="principal").tumbling_periods()
+print(
+    f"uniform ellipsoid: I/I1 = {(ellipsoid.moments / ellipsoid.moments[0]).round(4)}, "
+    f"same spin: P_psi = {uniform.rotation:.3f} d, P_phi = {uniform.precession:.3f} d"
+)
+
+# %%
+# 23.16 days later
+# ----------------
+# The exact motion at 1992-12-02T21:40 UTC, a DOP853 integration of
+# Euler's equations (rtol 1e-12) that knows nothing of the closed form,
+# and Takahashi et al.'s value, in deg/d along their x, y, z.
+i1, i2, i3 = moments
+
+
+def euler(_, w):
+    return [
+        (i2 - i3) * w[1] * w[2] / i1,
+        (i3 - i1) * w[2] * w[0] / i2,
+        (i1 - i2) * w[0] * w[1] / i3,
+    ]
+
+
+span = 60.0  # days shown in the figure
+integration = solve_ivp(
+    euler,
+    (0.0, span),
+    omega_epoch * DEG,
+    method="DOP853",
+    rtol=1e-12,
+    atol=1e-14,
+    dense_output=True,
+)
+exact_later = motion.omega(elapsed) / DEG
+integrated_later = integration.sol(elapsed) / DEG
+print(f"{'at +23.16 d (deg/d)':24s} {'x':>9s} {'y':>9s} {'z':>9s}")
+for label, value in (
+    ("orbits (exact)", exact_later),
+    ("integration (DOP853)", integrated_later),
+    ("Takahashi et al. 2013", omega_later),
+):
+    print(f"{label:24s} {value[0]:9.4f} {value[1]:9.4f} {value[2]:9.4f}")
+print(f"|exact - integration| = {np.abs(exact_later - integrated_later).max():.1e} deg/d")
+print(f"|exact - Takahashi|   = {np.linalg.norm(exact_later - omega_later):.2f} deg/d")
+
+# %%
+# The closed form and the integration agree to the integrator's accuracy.
+# Takahashi et al.'s later spin differs from the torque-free prediction by
+# a few deg/d, more than the rounding of their table (0.1 deg/d): the
+# two conserved quantities of torque-free motion, ``|L|`` and ``2E``, differ
+# by 3–4 % between their two states (below), and the direction of L
+# given by their later spin and Euler angles lies 15° from the published
+# one (0.16° at the epoch), so no torque-free motion of this body joins
+# the two states exactly.  (Their fit is not of torque-free motion
+# alone: it models the tidal torques on Toutatis.)  The attitude follows
+# the same pattern: carried forward from the epoch angles, the exact
+# motion gives the Euler angles below, beside theirs.
+later = moments * omega_later
+print(
+    "Takahashi's later / epoch state: |L| ratio "
+    f"{np.linalg.norm(later) / np.linalg.norm(moments * omega_epoch):.4f}, "
+    f"2E ratio {later @ omega_later / ((moments * omega_epoch) @ omega_epoch):.4f}"
+)
+attitude_later = Rotation.from_euler("ZXZ", [122.2, 86.5, 107.0], degrees=True).as_matrix()
+direction = attitude_later @ to_euler_axes @ later / np.linalg.norm(later)
+print(
+    "their later state's L direction is "
+    f"{np.degrees(np.arccos(direction @ momentum_icrs)):.1f} deg from the published one"
+)
+# principal -> ICRS at t: R_epoch (principal -> ICRS at 0) R_L(0)^T R_L(t),
+# R_L the closed form's body -> (z along L) orientation
+principal_to_icrs = attitude_epoch @ to_euler_axes
+carried = principal_to_icrs @ motion.rotation(0.0).T @ motion.rotation(elapsed)
+angles = Rotation.from_matrix(carried @ to_euler_axes.T).as_euler("ZXZ", degrees=True) % 360
+print(f"Euler angles ZXZ at +23.16 d: orbits {angles.round(1)}, Takahashi [122.2  86.5 107. ]")
+
+# %%
+# ω over 60 days
+# --------------
+# The three components of ω along Takahashi et al.'s axes: lines from the
+# closed form, open markers from the integration (every 1.5 days), filled
+# diamonds Takahashi et al.'s two published states.
+t = np.linspace(0.0, span, 1201)
+exact = motion.omega(t) / DEG
+marks = np.arange(0.0, span + 1e-9, 1.5)
+integrated = integration.sol(marks).T / DEG
+fig, ax = plt.subplots(figsize=(7.5, 4.2), layout="constrained")
+for k, (name, colour) in enumerate(zip("xyz", ("C0", "C1", "C2"))):
+    ax.plot(t, exact[:, k], color=colour, lw=1.2, label=f"$\\omega_{name}$ (exact)")
+    ax.plot(marks, integrated[:, k], "o", mfc="none", color=colour, ms=4)
+    ax.plot([0.0, elapsed], [omega_epoch[k], omega_later[k]], "D", color=colour, mec="k", ms=6)
+ax.plot([], [], "o", mfc="none", color="0.3", ms=4, label="integration (DOP853)")
+ax.plot([], [], "D", color="0.6", mec="k", ms=6, label="Takahashi et al. 2013")
+ax.axhline(0.0, color="0.8", lw=0.6)
+ax.set_xlabel("time since 1992-11-09T17:49:47 UTC (days)")
+ax.set_ylabel("angular velocity (deg/day)")
+ax.set_title("4179 Toutatis: body-frame angular velocity (moments 1 : 3.0836 : 3.235)")
+ax.legend(loc="center", bbox_to_anchor=(0.5, 0.3), fontsize=8, ncols=3)
 plt.show()
