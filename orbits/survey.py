@@ -31,7 +31,13 @@ import pandas as pd
 
 from ._args import integer, path_argument, real_array
 from ._version import __version__
-from .atomic import FLOAT_FORMAT, atomic_path, write_text_atomic
+from .atomic import (
+    FLOAT_FORMAT,
+    atomic_path,
+    read_bytes_nofollow,
+    refuse_link,
+    write_text_atomic,
+)
 from .bodies import as_moments, region_grid, unit_moments
 from .cells import neutralize, unneutralize
 from .core import search as _kernels
@@ -246,8 +252,11 @@ def check_survey_bounds(bodies, n_max, q_max, chunk):
 
 # --------------------------------------------------------------- the survey
 MANIFEST = "manifest.json"
+REPORT = "report.json"
 LOCK = ".lock"
-SURVEY_FORMAT = 2
+# 3: the manifest carries its own SHA-256; 2 (read, not resumed): without
+SURVEY_FORMAT = 3
+READABLE_FORMATS = (2, 3)
 TABLES = ("bodies", "orbits")
 
 
@@ -304,9 +313,10 @@ class Survey:
             "bodies": {"grid": int(source["grid"])} if "grid" in source else "list",
             "body_count": int(self.moments.shape[0]),
             "bodies_sha256": hashlib.sha256(self.moments.tobytes()).hexdigest(),
+            # JSON of the list: unambiguous (["a\nb", "c"] is not ["a", "b\nc"])
             "names_sha256": None
             if names is None
-            else hashlib.sha256("\n".join(names).encode("utf-8", "surrogatepass")).hexdigest(),
+            else hashlib.sha256(json.dumps(names).encode("ascii")).hexdigest(),
             "n_max": self.n_max,
             "q_max": self.q_max,
             "format": fmt,
@@ -357,8 +367,13 @@ class Survey:
 
         if self.out_dir.exists() and not self.out_dir.is_dir():
             raise InputError(f"{self.out_dir} exists and is not a directory")
-        if not self.out_dir.is_dir() or (self.out_dir / MANIFEST).exists():
+        if not self.out_dir.is_dir():
             return
+        refuse_links(self.out_dir)
+        if (self.out_dir / MANIFEST).exists():
+            return
+        if _has_parts(self.out_dir):
+            raise InputError(_NO_MANIFEST.format(directory=self.out_dir))
         # a survey being created (by another run, or one killed) has only these;
         # the manifest too, since another run may write it between the check
         # above and this listing (a report without a manifest is damage)
@@ -381,16 +396,20 @@ class Survey:
         """
         self._refuse_foreign_directory()
         manifest = self.out_dir / MANIFEST
-        if manifest.exists():
-            existing = load_manifest(self.out_dir)
+        existing = load_manifest(self.out_dir) if manifest.exists() else None
+        if existing is not None:
             self._compare(existing)
+        # a deleted table folder is made again (its chunks are recomputed)
+        try:
+            self.out_dir.mkdir(parents=True, exist_ok=True)
+            for sub in TABLES:
+                refuse_link(self.out_dir / sub)
+                (self.out_dir / sub).mkdir(exist_ok=True)
+        except OSError as error:
+            raise InputError(f"cannot create {self.out_dir}: {error.strerror}") from None
+        if existing is not None:
             self._ledger = existing["parts"]
         else:
-            try:
-                for sub in TABLES:
-                    (self.out_dir / sub).mkdir(parents=True, exist_ok=True)
-            except OSError as error:
-                raise InputError(f"cannot create {self.out_dir}: {error.strerror}") from None
             self._ledger = {}
             self._write_manifest()
 
@@ -402,7 +421,10 @@ class Survey:
             "skipped_rows": self.skipped,
             "parts": self._ledger,
         }
-        write_text_atomic(self.out_dir / MANIFEST, json.dumps(document, indent=1) + "\n")
+        document["sha256"] = manifest_checksum(document)
+        write_text_atomic(
+            self.out_dir / MANIFEST, json.dumps(document, indent=1) + "\n", follow_links=False
+        )
 
     def lock(self):
         """The directory's exclusive lock (a context manager).
@@ -421,7 +443,7 @@ class Survey:
         for table in TABLES:
             remove_stale_temporaries(self.out_dir / table, r"part-\d+\.\w+", regex=True)
         remove_stale_temporaries(self.out_dir, MANIFEST)
-        remove_stale_temporaries(self.out_dir, "report.json")
+        remove_stale_temporaries(self.out_dir, REPORT)
 
     def verify(self):
         """Check every ledger entry against its files; drop the bad ones.
@@ -434,7 +456,7 @@ class Survey:
         """
         damaged = []
         for key in sorted(self._ledger, key=int):
-            problem = _check_part(self.out_dir, self._ledger[key])
+            problem = _check_part(self.out_dir, key, self._ledger[key], self.parameters)
             if problem:
                 damaged.append(f"chunk {int(key)}: {problem}")
                 del self._ledger[key]
@@ -464,7 +486,7 @@ class Survey:
         }
         for table, frame in (("orbits", orbits), ("bodies", bodies)):
             path = self._part(table, index)
-            _write_table(frame, path, self.format)
+            _write_table(frame, path, self.format, follow_links=False)
             entry[table] = {
                 "file": f"{table}/{path.name}",
                 "rows": int(len(frame)),
@@ -522,6 +544,12 @@ class Survey:
             self._compare(load_manifest(self.out_dir))
 
     def _compare(self, existing):
+        if existing["orbits_survey"] != SURVEY_FORMAT:
+            raise InputError(
+                f"{self.out_dir} holds a survey of an older orbits format "
+                f"({existing['orbits_survey']}); it can be read but not resumed: "
+                "use a new directory"
+            )
         if existing["parameters"] != self.parameters:
             old, new = existing["parameters"], self.parameters
             changed = sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
@@ -692,7 +720,9 @@ class Survey:
             "bodies_with_unresolved_orbits": int((bodies["unresolved"] > 0).sum()),
             "skipped_rows": len(self.skipped),
         }
-        write_text_atomic(self.out_dir / "report.json", json.dumps(report, indent=2) + "\n")
+        write_text_atomic(
+            self.out_dir / REPORT, json.dumps(report, indent=2) + "\n", follow_links=False
+        )
         return report
 
 
@@ -703,13 +733,25 @@ class _DirectoryLock:
         self.path = Path(directory) / LOCK
 
     def __enter__(self):
+        import errno
         import fcntl
         import os
+        import stat
 
         try:
-            self.handle = open(self.path, "a+")
+            # never through a link planted as .lock (it would lock, and
+            # write the pid into, a file outside the directory)
+            descriptor = os.open(
+                self.path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o666
+            )
         except OSError as error:
+            if error.errno == errno.ELOOP:
+                refuse_link(self.path)
             raise InputError(f"cannot lock {self.path.parent}: {error.strerror}") from None
+        self.handle = os.fdopen(descriptor, "r+")
+        if not stat.S_ISREG(os.fstat(descriptor).st_mode):
+            self.handle.close()
+            raise InputError(f"cannot lock {self.path.parent}: {self.path} is not a regular file")
         try:
             fcntl.flock(self.handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
@@ -753,33 +795,149 @@ def _check_scheduler(scheduler):
 
 
 def _sha256(path):
+    """SHA-256 of a regular file, never through a symbolic link."""
+    import errno
+    import os
+
     digest = hashlib.sha256()
-    with open(path, "rb") as handle:
+    try:
+        descriptor = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC | os.O_NONBLOCK)
+    except OSError as error:
+        if error.errno == errno.ELOOP:
+            refuse_link(path)
+        raise
+    with os.fdopen(descriptor, "rb") as handle:
         for block in iter(lambda: handle.read(1 << 20), b""):
             digest.update(block)
     return digest.hexdigest()
 
 
-def _check_part(out_dir, entry):
-    """The first problem of a ledger entry's files, or '' if they match."""
-    import re
+def manifest_checksum(document):
+    """SHA-256 of a manifest's canonical JSON (every key but ``sha256``).
+
+    Canonical: keys sorted, no spaces, ASCII only, so that the same document
+    always hashes the same however it was indented.
+    """
+    body = {key: value for key, value in document.items() if key != "sha256"}
+    text = json.dumps(body, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
+    return hashlib.sha256(text.encode("ascii")).hexdigest()
+
+
+def chunk_bounds(parameters, index):
+    """``(first, last)`` body ids of chunk ``index`` of a survey's parameters."""
+    first = index * parameters["chunk"]
+    return first, min(first + parameters["chunk"], parameters["body_count"]) - 1
+
+
+def part_name(table, index, fmt):
+    """The ledger's file name of a chunk's part, e.g. ``bodies/part-00003.csv``."""
+    return f"{table}/part-{index:05d}.{fmt}"
+
+
+def _entry_problem(key, entry, parameters):
+    """What binds an entry to its chunk and the parameters, broken ('' if not)."""
+    chunks = -(-parameters["body_count"] // parameters["chunk"])
+    if not (isinstance(key, str) and key.isdigit() and key == str(int(key))):
+        return "malformed ledger key"
+    index = int(key)
+    if index >= chunks:
+        return f"not a chunk of this survey (it has {chunks})"
+    first, last = chunk_bounds(parameters, index)
+    if entry.get("first_body") != first or entry.get("last_body") != last:
+        return f"body ids {entry.get('first_body')}..{entry.get('last_body')} are not the chunk's"
+    for table in TABLES:
+        item = entry[table]
+        name = part_name(table, index, parameters["format"])
+        # only the chunk's own part: a ledger never points at another chunk
+        # or outside DIR/TABLE/
+        if item["file"] != name:
+            return f"ledger names {item['file']!r}, not the chunk's {name}"
+        rows = item["rows"]
+        if not isinstance(rows, int) or isinstance(rows, bool) or rows < 0:
+            return f"{name}: bad row count {rows!r}"
+        if table == "bodies" and rows != last - first + 1:
+            return f"{name}: {rows} rows for {last - first + 1} bodies"
+        if not isinstance(item["sha256"], str):
+            return f"{name}: bad SHA-256"
+    return ""
+
+
+def _check_part(out_dir, key, entry, parameters):
+    """The first problem of a ledger entry or its files, or '' if they match."""
+    import os
+    import stat
 
     try:
+        problem = _entry_problem(key, entry, parameters)
+        if problem:
+            return problem
         for table in TABLES:
             item = entry[table]
-            # only our own part names: a ledger never points outside DIR/TABLE/
-            if not re.fullmatch(rf"{table}/part-\d{{5,}}\.(?:csv|parquet)", item["file"]):
-                return f"malformed ledger entry (file {item['file']!r})"
             path = Path(out_dir) / item["file"]
-            if not path.is_file():
+            try:
+                mode = os.lstat(path).st_mode
+            except FileNotFoundError:
                 return f"{item['file']} is missing"
+            if stat.S_ISLNK(mode):
+                return f"{item['file']} is a symbolic link (never followed)"
+            if not stat.S_ISREG(mode):
+                return f"{item['file']} is not a regular file"
             if _sha256(path) != item["sha256"]:
                 return f"{item['file']} does not match its SHA-256 (changed or truncated)"
-    except (KeyError, TypeError):
+    except (KeyError, TypeError, AttributeError):
         return "malformed ledger entry"
+    except InputError as error:
+        return str(error)
     except OSError as error:
         return f"cannot read it: {error.strerror}"
     return ""
+
+
+_NO_MANIFEST = (
+    "{directory} holds survey parts but no manifest.json (deleted?); without "
+    "its ledger they cannot be verified: rerun the survey into a new directory"
+)
+
+
+def _has_parts(out_dir):
+    """Whether a directory without a manifest holds a survey's files."""
+    import re
+
+    if (Path(out_dir) / REPORT).exists():
+        return True
+    part = re.compile(r"part-\d{5,}\.(?:csv|parquet)")
+    for table in TABLES:
+        folder = Path(out_dir) / table
+        if folder.is_dir() and not folder.is_symlink():
+            if any(part.fullmatch(p.name) for p in folder.iterdir()):
+                return True
+    return False
+
+
+def refuse_links(out_dir):
+    """Refuse a survey directory with a symbolic link where orbits reads or writes.
+
+    The manifest, lock, report, the table folders and every entry inside
+    them: none is ever followed.
+
+    Raises
+    ------
+    InputError
+        One line naming the link.
+    """
+    import os
+
+    out_dir = Path(out_dir)
+    for name in (LOCK, MANIFEST, REPORT, *TABLES):
+        refuse_link(out_dir / name)
+    for table in TABLES:
+        try:
+            entries = list(os.scandir(out_dir / table))
+        except OSError:
+            continue
+        for entry in entries:
+            if entry.is_symlink():
+                refuse_link(entry.path)
 
 
 def load_manifest(out_dir):
@@ -794,18 +952,28 @@ def load_manifest(out_dir):
     manifest = Path(out_dir) / MANIFEST
     if not Path(out_dir).is_dir():
         raise InputError(f"{out_dir} is not a directory")
+    refuse_links(out_dir)
     try:
-        document = json.loads(manifest.read_text())
+        document = json.loads(read_bytes_nofollow(manifest).decode("utf-8"))
     except FileNotFoundError:
+        if _has_parts(out_dir):
+            raise InputError(_NO_MANIFEST.format(directory=out_dir)) from None
         raise InputError(f"{out_dir} is not a survey directory (no {MANIFEST})") from None
     except (ValueError, UnicodeDecodeError):
         raise InputError(f"{manifest} is damaged (not valid JSON)") from None
     except OSError as error:
         raise InputError(f"cannot read {manifest}: {error.strerror}") from None
-    if not isinstance(document, dict) or document.get("orbits_survey") != SURVEY_FORMAT:
+    version = document.get("orbits_survey") if isinstance(document, dict) else None
+    if version not in READABLE_FORMATS or isinstance(version, bool):
         raise InputError(
             f"{manifest} is not a survey manifest of this orbits version "
             "(no ledger); rerun the survey into a new directory"
+        )
+    if version >= 3 and document.get("sha256") != manifest_checksum(document):
+        raise InputError(
+            f"{manifest} does not match its own SHA-256 (edited by hand or "
+            "damaged): its ledger cannot be trusted; rerun the survey into a "
+            "new directory"
         )
     parameters = document.get("parameters")
     parts = document.get("parts")
@@ -845,7 +1013,7 @@ def check_survey(out_dir):
     chunks = -(-parameters["body_count"] // parameters["chunk"])
     damaged, verified = [], 0
     for key in sorted(ledger, key=lambda k: int(k) if str(k).isdigit() else -1):
-        problem = _check_part(out_dir, ledger[key]) if str(key).isdigit() else "bad key"
+        problem = _check_part(out_dir, key, ledger[key], parameters)
         if problem:
             damaged.append(f"chunk {key}: {problem}")
         else:
@@ -865,7 +1033,7 @@ def _require_pyarrow():
         raise InputError("--format parquet needs pyarrow: pip install 'orbits[parquet]'")
 
 
-def _write_table(frame, path, fmt, engine=None):
+def _write_table(frame, path, fmt, engine=None, follow_links=True):
     """Write one table part atomically.
 
     CSV goes through pyarrow's writer when it is installed (ten times
@@ -877,7 +1045,7 @@ def _write_table(frame, path, fmt, engine=None):
         engine = "arrow" if _have_pyarrow() else "pandas"
     if fmt == "csv" and "name" in frame.columns:
         frame = frame.assign(name=[neutralize(str(v)) for v in frame["name"]])
-    with atomic_path(path) as temporary:
+    with atomic_path(path, follow_links) as temporary:
         if fmt == "parquet":
             # dictionary pages only for text columns: on doubles they never
             # pay off and cost pyarrow ~4x the write time
@@ -916,13 +1084,16 @@ _CSV_DTYPES = _csv_dtypes()
 
 
 def _read_part(path):
+    import io
+
     from .atomic import csv_float_options
 
+    data = io.BytesIO(read_bytes_nofollow(path))  # never through a link
     if path.suffix == ".parquet":
-        return pd.read_parquet(path)
+        return pd.read_parquet(data)
     # Types by schema, not by inference: a part whose float column holds only
     # "-0" or "0" would otherwise come back as integers (losing the sign).
-    frame = pd.read_csv(path, dtype=_CSV_DTYPES, keep_default_na=False, **csv_float_options())
+    frame = pd.read_csv(data, dtype=_CSV_DTYPES, keep_default_na=False, **csv_float_options())
     if "name" in frame.columns:
         frame["name"] = frame["name"].map(unneutralize).astype(frame["name"].dtype)
     if "min_at_end" in frame.columns and frame["min_at_end"].dtype == object:
@@ -955,11 +1126,20 @@ def read_table(out_dir, table, verify=True):
             f"problem(s), first: {problems[0]}); rerun the survey command "
             "to recompute, or check it with 'orbits survey --check'"
         )
-    ledger = document["parts"]
+    ledger, parameters = document["parts"], document["parameters"]
     frames = []
     for key in sorted(ledger, key=int):
+        problem = _entry_problem(key, ledger[key], parameters)
+        if problem:
+            raise InputError(f"{out_dir}: chunk {key}: {problem}")
         try:
-            frames.append(_read_part(Path(out_dir) / ledger[key][table]["file"]))
+            frame = _read_part(Path(out_dir) / ledger[key][table]["file"])
+            problem = _rows_problem(frame, table, ledger[key], parameters)
+            if problem:
+                raise InputError(f"{out_dir}: chunk {key} of {table}: {problem}")
+            frames.append(frame)
+        except InputError:
+            raise
         except (OSError, ValueError, KeyError) as error:
             raise InputError(
                 f"{out_dir}: cannot read chunk {key} of {table}: {_one_line(error)}"
@@ -973,6 +1153,22 @@ def read_table(out_dir, table, verify=True):
     return pd.concat(frames, ignore_index=True)
 
 
+def _rows_problem(frame, table, entry, parameters):
+    """A part's rows against its ledger entry: count and body ids ('' if they agree)."""
+    if len(frame) != entry[table]["rows"]:
+        return f"{len(frame)} rows, the ledger says {entry[table]['rows']}"
+    if "body" not in frame.columns:
+        return "no body column"
+    body = frame["body"].to_numpy()
+    first, last = entry["first_body"], entry["last_body"]
+    if table == "bodies":
+        if not np.array_equal(body, np.arange(first, last + 1)):
+            return f"its body ids are not the chunk's {first}..{last}"
+    elif len(body) and (body.min() < first or body.max() > last or (np.diff(body) < 0).any()):
+        return f"its orbits are not of the chunk's bodies {first}..{last}"
+    return ""
+
+
 def read_survey(out_dir, verify=True):
     """``(bodies, orbits)`` DataFrames of a complete, verified survey directory.
 
@@ -982,7 +1178,14 @@ def read_survey(out_dir, verify=True):
         Not a survey directory, incomplete, or damaged (a part missing,
         changed or truncated: each is checked against the ledger's SHA-256).
     """
-    return read_table(out_dir, "bodies", verify), read_table(out_dir, "orbits", verify)
+    bodies = read_table(out_dir, "bodies", verify)
+    table = read_table(out_dir, "orbits", verify)
+    if len(table) != int(bodies["orbits"].sum()):
+        raise InputError(
+            f"{out_dir}: {len(table)} orbit rows, but the bodies table counts "
+            f"{int(bodies['orbits'].sum())}; rerun the survey into a new directory"
+        )
+    return bodies, table
 
 
 def survey_grid(out_dir):
