@@ -750,7 +750,7 @@ def test_cli(case, tmp_path, capsys, monkeypatch, surveys):
     directory.mkdir()
     keep = prepare(directory, files, surveys)
     monkeypatch.chdir(directory)
-    monkeypatch.setattr(orbits.survey, "CONNECT_TIMEOUT", 2)
+    monkeypatch.setattr(orbits.survey.runner, "CONNECT_TIMEOUT", 2)
     before, device = snapshot(directory), device_state()
     capsys.readouterr()
     code = main(_argv(argv, directory))
@@ -1011,7 +1011,7 @@ def test_api(case, tmp_path, surveys, monkeypatch):
 def test_scheduler_without_workers(tmp_path, capsys, monkeypatch):
     """A scheduler with no worker: one line stating the timeout, nothing written."""
     distributed = pytest.importorskip("distributed")
-    monkeypatch.setattr(orbits.survey, "CONNECT_TIMEOUT", 1)
+    monkeypatch.setattr(orbits.survey.runner, "CONNECT_TIMEOUT", 1)
     with distributed.LocalCluster(
         n_workers=0, processes=False, dashboard_address=None, protocol="tcp", scheduler_port=0
     ) as cluster:

@@ -17,12 +17,12 @@ from orbits.cli import main
 from orbits.survey import (
     BODY_COLUMNS,
     Survey,
-    _sha256,
-    _write_table,
     compute_chunk,
     load_manifest,
     read_survey,
+    sha256_file,
     survey_grid,
+    write_part,
 )
 
 
@@ -76,12 +76,12 @@ def test_report_lists_counterexamples(tmp_path):
     part = tmp_path / "s" / "bodies" / "part-00000.csv"
     frame = pd.read_csv(part, **csv_float_options())
     frame.loc[3, "min_at_end"] = False  # pretend one body's minimum is inside
-    _write_table(frame, part, "csv")
+    write_part(frame, part, "csv")
     with pytest.raises(InputError, match="damaged.*part-00000.csv does not match"):
         survey.report()  # the ledger notices the change
     # record the change in the ledger, as a run would have
-    survey._ledger["0"]["bodies"]["sha256"] = _sha256(part)
-    survey._write_manifest()
+    survey.ledger.parts["0"]["bodies"]["sha256"] = sha256_file(part)
+    survey.ledger.write_manifest()
     report = survey.report()
     assert not report["conjecture_minimum_at_the_ends"]["held_on_every_body"]
     assert [
@@ -92,10 +92,10 @@ def test_report_lists_counterexamples(tmp_path):
 def test_parquet_and_csv_engines_agree(tmp_path):
     bodies, table = compute_chunk(orbits.region_sample(30), 5)
     for engine in ("arrow", "pandas"):
-        _write_table(table, tmp_path / f"{engine}.csv", "csv", engine=engine)
+        write_part(table, tmp_path / f"{engine}.csv", "csv", engine=engine)
         again = pd.read_csv(tmp_path / f"{engine}.csv", **csv_float_options())
         pd.testing.assert_frame_equal(again, table, check_exact=True, check_dtype=False)
-    _write_table(table, tmp_path / "t.parquet", "parquet")
+    write_part(table, tmp_path / "t.parquet", "parquet")
     pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "t.parquet"), table, check_exact=True)
 
 
@@ -150,7 +150,7 @@ def test_resume_after_a_kill(tmp_path):
     assert 3 <= finished < total, "the kill came too late to test a resume"
     # a second run computes only the chunks missing from the ledger
     calls = []
-    import orbits.survey as module
+    import orbits.survey.compute as module
 
     original = module.compute_chunk
 
@@ -225,7 +225,7 @@ def test_fig2_from_a_survey(tmp_path, capsys):
 
 
 def test_cli_survey_and_errors(tmp_path, capsys, monkeypatch):
-    import orbits.survey as module
+    import orbits.survey.runner as module
 
     monkeypatch.setattr(module, "CONNECT_TIMEOUT", 2)
     bodies = tmp_path / "bodies.csv"
@@ -291,7 +291,7 @@ def test_a_failure_mid_run_leaves_whole_chunks(tmp_path, monkeypatch, failure):
     their SHA-256, no temporary is left, and a second run completes the
     survey to the same bytes as an uninterrupted one.
     """
-    import orbits.survey as module
+    import orbits.survey.compute as module
 
     reference = tmp_path / "reference"
     Survey.grid(reference, 40, 4, chunk=60).run()
@@ -324,7 +324,7 @@ def test_a_failure_mid_run_leaves_whole_chunks(tmp_path, monkeypatch, failure):
     assert sorted(ledger, key=int) == written
     for entry in ledger.values():
         for table in ("orbits", "bodies"):
-            assert _sha256(target / entry[table]["file"]) == entry[table]["sha256"]
+            assert sha256_file(target / entry[table]["file"]) == entry[table]["sha256"]
     assert not list(target.rglob("*.part"))
     monkeypatch.undo()
     Survey.grid(target, 40, 4, chunk=60).run()
