@@ -152,17 +152,17 @@ def test_resume_after_a_kill(tmp_path):
     calls = []
     import orbits.survey.compute as module
 
-    original = module.compute_chunk
+    original = module.search_chunk
 
     def counting(moments, *args, **kwargs):
         calls.append(len(moments))
         return original(moments, *args, **kwargs)
 
-    module.compute_chunk = counting
+    module.search_chunk = counting
     try:
         Survey.grid(target, 300, 6, chunk=400).run()
     finally:
-        module.compute_chunk = original
+        module.search_chunk = original
     assert len(calls) == total - finished
     assert read_bytes(target) == read_bytes(reference)  # nothing lost or doubled
     assert not list(target.rglob("*.part"))
@@ -284,12 +284,13 @@ def test_cli_survey_and_errors(tmp_path, capsys, monkeypatch):
 
 @pytest.mark.parametrize("failure", ["write", "interrupt"])
 def test_a_failure_mid_run_leaves_whole_chunks(tmp_path, monkeypatch, failure):
-    """Chunks are written by one thread while the next is computed.
+    """Chunks are made and written by a pool of threads while the next is searched.
 
     A failing write (the third chunk) or an interrupt while the fourth is
-    computed stops the run; every chunk in the ledger has both parts with
-    their SHA-256, no temporary is left, and a second run completes the
-    survey to the same bytes as an uninterrupted one.
+    searched stops the run; every chunk handed to the pool before is still
+    written, every chunk in the ledger has both parts with their SHA-256,
+    no temporary is left, and a second run completes the survey to the same
+    bytes as an uninterrupted one.
     """
     import orbits.survey.compute as module
 
@@ -297,7 +298,7 @@ def test_a_failure_mid_run_leaves_whole_chunks(tmp_path, monkeypatch, failure):
     Survey.grid(reference, 40, 4, chunk=60).run()
     target = tmp_path / "target"
     original_write = Survey.write_chunk
-    original_compute = module.compute_chunk
+    original_compute = module.search_chunk
     computed = []
 
     def failing_write(self, index, bodies, orbits):
@@ -315,13 +316,16 @@ def test_a_failure_mid_run_leaves_whole_chunks(tmp_path, monkeypatch, failure):
         monkeypatch.setattr(Survey, "write_chunk", failing_write)
         expected = pytest.raises(InputError, match="simulated")
     else:
-        monkeypatch.setattr(module, "compute_chunk", interrupted_compute)
+        monkeypatch.setattr(module, "search_chunk", interrupted_compute)
         expected = pytest.raises(KeyboardInterrupt)
     with expected:
         Survey.grid(target, 40, 4, chunk=60).run()
     ledger = load_manifest(target)["parts"]
-    written = ["0", "1"] if failure == "write" else ["0", "1", "2"]
-    assert sorted(ledger, key=int) == written
+    if failure == "write":
+        # chunk 3 may have been in the pool beside the failing chunk 2
+        assert {"0", "1"} <= set(ledger) <= {"0", "1", "3"}
+    else:
+        assert sorted(ledger, key=int) == ["0", "1", "2"]
     for entry in ledger.values():
         for table in ("orbits", "bodies"):
             assert sha256_file(target / entry[table]["file"]) == entry[table]["sha256"]

@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 
 from ..bodies import unit_moments
+from ..core import rows as _rows
 from ..core import search as _kernels
 from ..errors import InputError
 from ..limits import (
@@ -46,25 +47,43 @@ BODY_COLUMNS = (
 _END_TOLERANCE = 1e-12
 
 
-# --------------------------------------------------------------- computing
-def compute_chunk(moments, n_max, q_max=1, first_id=0):
-    """Closed orbits and minimum phases for a block of bodies.
+# the per-root columns a compact survey keeps (everything else is derived)
+COMPACT_COLUMNS = ("body", "branch", "n", "q", "dtheta")
+# the canonical moments (orbits.bodies.unit_moments) of each body, kept in a
+# compact survey's bodies table so that the derived columns are those of
+# orbits.catalog bit for bit
+UNIT_COLUMNS = ("unit_I1", "unit_I2", "unit_I3")
+LAYOUTS = ("compact", "all")
 
-    Parameters
+
+# --------------------------------------------------------------- computing
+class ChunkSearch:
+    """The search's result for one chunk: canonical moments, levels, flat roots.
+
+    Attributes
     ----------
     moments : ndarray (n, 3)
-        Principal moments, each row sorted or not, any scale.
-    n_max, q_max : int
-        As :func:`orbits.closed_orbits`.
-    first_id : int
-        Survey-wide id of the first body (the ``body`` column).
+        Canonical moments (:func:`orbits.bodies.unit_moments`).
+    p, q, levels : ndarray
+        The searched levels ``2 pi p/q``.
+    info : ndarray (n, INFO_SIZE)
+        The search's per-body information (minima, widths, unreached).
+    body, code, level, offset : ndarray
+        One entry per root: body index in the chunk, branch (0 SAM, 1 LAM),
+        level index, ``dtheta`` (rad); by body, then by ``dtheta``.
+    """
+
+    def __init__(self, moments, p, q, levels, info, rows):
+        self.moments, self.p, self.q, self.levels, self.info = moments, p, q, levels, info
+        self.body, self.code, self.level, self.offset = rows
+
+
+def search_chunk(moments, n_max, q_max=1):
+    """Search every body of a chunk (the parallel kernel, all cores).
 
     Returns
     -------
-    bodies, orbits : pandas.DataFrame
-        ``bodies`` has the columns :data:`BODY_COLUMNS`; ``orbits`` the
-        catalog schema (:data:`orbits.CATALOG_COLUMNS`) with ``body`` the
-        body's id.
+    ChunkSearch
     """
     moments = np.ascontiguousarray(unit_moments(moments)[0], dtype=float).reshape(-1, 3)
     count = moments.shape[0]
@@ -79,36 +98,156 @@ def compute_chunk(moments, n_max, q_max=1, first_id=0):
     offset = np.empty((count, capacity))
     found = np.empty(count, dtype=np.int64)
     _kernels.search_many(moments, levels, branch, level, offset, found, info)
-    rows_body, rows_level, rows_offset = _flatten(moments, levels, level, offset, found, info)
-    ids = first_id + np.arange(count)
-    orbits = catalog_rows(
-        ids[rows_body], moments[rows_body], rows_level, rows_offset, p, q, levels
-    )
-    bodies = _body_rows(moments, ids, info, orbits, rows_body)
+    rows = _flatten(moments, levels, branch, level, offset, found, info)
+    return ChunkSearch(moments, p, q, levels, info, rows)
+
+
+def compute_chunk(moments, n_max, q_max=1, first_id=0, columns="all"):
+    """Closed orbits and minimum phases for a block of bodies.
+
+    Parameters
+    ----------
+    moments : ndarray (n, 3)
+        Principal moments, each row sorted or not, any scale.
+    n_max, q_max : int
+        As :func:`orbits.closed_orbits`.
+    first_id : int
+        Survey-wide id of the first body (the ``body`` column).
+    columns : {"all", "compact"}
+        ``"all"``: every catalog column per orbit.  ``"compact"``: only
+        :data:`COMPACT_COLUMNS` per orbit, and the bodies table also keeps
+        :data:`UNIT_COLUMNS` (:func:`derive_orbit_rows` makes the rest).
+
+    Returns
+    -------
+    bodies, orbits : pandas.DataFrame
+        ``bodies`` has the columns :data:`BODY_COLUMNS` (and with
+        ``"compact"`` the unit moments); ``orbits`` the catalog schema
+        (:data:`orbits.CATALOG_COLUMNS`) or :data:`COMPACT_COLUMNS`, with
+        ``body`` the body's id.
+    """
+    return chunk_tables(search_chunk(moments, n_max, q_max), first_id, columns)
+
+
+def chunk_tables(found, first_id, columns="all"):
+    """The two tables of a searched chunk (:func:`search_chunk`).
+
+    Runs on one thread (the survey runs chunks side by side); see
+    :func:`compute_chunk` for the arguments and the result.
+    """
+    if columns not in LAYOUTS:
+        raise InputError(f"columns must be one of {', '.join(LAYOUTS)}, got {columns!r}")
+    ids = first_id + np.arange(found.moments.shape[0])
+    n, q = found.p[found.level], found.q[found.level]
+    if columns == "all":
+        orbits = catalog_rows(
+            ids[found.body],
+            found.moments[found.body],
+            found.level,
+            found.offset,
+            found.p,
+            found.q,
+            found.levels,
+        )
+    else:
+        orbits = pd.DataFrame(
+            {
+                "body": ids[found.body],
+                "branch": pd.Categorical.from_codes(found.code, categories=["SAM", "LAM"]),
+                "n": n,
+                "q": q,
+                "dtheta": found.offset,
+            },
+            columns=list(COMPACT_COLUMNS),
+            copy=False,
+        )
+    bodies = _body_rows(found, ids, n, q)
+    if columns == "compact":
+        for k, name in enumerate(UNIT_COLUMNS):
+            bodies[name] = found.moments[:, k]
     return bodies, orbits
 
 
-def _flatten(moments, levels, level, offset, found, info):
+def derive_orbit_rows(compact, unit, first_id, n_max, q_max):
+    """Every catalog column of a compact chunk's orbits, as :func:`orbits.catalog` gives them.
+
+    Parameters
+    ----------
+    compact : pandas.DataFrame
+        :data:`COMPACT_COLUMNS` of one chunk, by body then ``dtheta``.
+    unit : ndarray (n, 3)
+        The chunk's canonical moments (:data:`UNIT_COLUMNS`), body
+        ``first_id + k`` in row k.
+    n_max, q_max : int
+        The survey's (each row's level must be one of its levels).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The catalog schema, equal bit for bit to ``orbits.catalog`` of each
+        body (with ``body`` the id): the same kernels on the same canonical
+        moments and the same ``dtheta``.
+
+    Raises
+    ------
+    InputError
+        A row that is not an orbit of its body (not a level of the survey,
+        another branch than its ``dtheta`` says, or a missed level).
+    """
+    body = compact["body"].to_numpy()
+    n = compact["n"].to_numpy().astype(np.int64)
+    q = compact["q"].to_numpy().astype(np.int64)
+    offset = compact["dtheta"].to_numpy().astype(float)
+    p_all, q_all, values = phase_levels(n_max, q_max)
+    # each row's level: the index of (n, q) among the survey's levels
+    keys = p_all * (q_max + 1) + q_all
+    order = np.argsort(keys, kind="stable")
+    where = np.searchsorted(keys[order], n * (q_max + 1) + np.clip(q, 0, q_max))
+    level = order[np.minimum(where, len(order) - 1)]
+    if len(level) and (
+        (p_all[level] != n).any()
+        or (q_all[level] != q).any()
+        or not searched(n, q).all()
+        or (body - first_id).min() < 0
+        or (body - first_id).max() >= len(unit)
+    ):
+        raise InputError("orbit rows that are not orbits of the survey's levels and bodies")
+    try:
+        frame = catalog_rows(body, unit[body - first_id], level, offset, p_all, q_all, values)
+    except RuntimeError as error:  # a root that misses its level: damage
+        raise InputError(f"an orbit row misses its level ({error})") from None
+    stored = compact["branch"].astype(str).to_numpy()
+    if not np.array_equal(stored, frame["branch"].to_numpy()):
+        raise InputError("an orbit row's branch is not the branch of its dtheta")
+    return frame
+
+
+def _flatten(moments, levels, branch, level, offset, found, info):
     """Per-body root arrays to flat rows, sorted by body then dtheta.
 
     A body whose roots overflowed its row (``found < 0``: a phase with
     many monotone pieces) is searched again with room to spare.
     """
-    body, rows_level, rows_offset = _kernels.flatten_roots(level, offset, found)
+    rows = _rows.flat_rows(branch, level, offset, found)
     if not (found < 0).any():
-        return body, rows_level, rows_offset  # already by body, then dtheta
+        return rows  # already by body, then dtheta
+    body, code, rows_level, rows_offset = rows
     for b in np.flatnonzero(found < 0):
         size = 8 * level.shape[1]
         extra = (np.empty(size, np.int8), np.empty(size, np.int64), np.empty(size))
         n = _kernels.search_body(*moments[b], levels, *extra, info[b])
         body = np.concatenate([body, np.full(n, b)])
+        code = np.concatenate(
+            [code, np.where(extra[0][:n] > 0, _rows.CODE_SAM, _rows.CODE_LAM).astype(np.int8)]
+        )
         rows_level = np.concatenate([rows_level, extra[1][:n]])
         rows_offset = np.concatenate([rows_offset, extra[2][:n]])
     order = np.lexsort((rows_offset, body))
-    return body[order], rows_level[order], rows_offset[order]
+    return body[order], code[order], rows_level[order], rows_offset[order]
 
 
-def _body_rows(moments, ids, info, orbits, body_of_row):
+def _body_rows(found, ids, n, q):
+    moments, info = found.moments, found.info
     norm = np.linalg.norm(moments, axis=1)
     limits = phase_limits(moments)
     theta_c = info[:, _kernels.INFO_WIDTH_SAM]
@@ -123,15 +262,7 @@ def _body_rows(moments, ids, info, orbits, body_of_row):
         np.abs(np.abs(where) - np.where(use_sam, theta_c, info[:, _kernels.INFO_WIDTH_LAM]))
         <= 1e-9 * np.pi
     ) & (minimum >= end_value * (1.0 - _END_TOLERANCE))
-    integer = orbits["q"].to_numpy() == 1 if len(orbits) else np.zeros(0, bool)
-    counts = np.bincount(body_of_row, minlength=len(ids))
-    n_small = np.full(len(ids), -1, dtype=np.int64)
-    n_large = np.full(len(ids), -1, dtype=np.int64)
-    if integer.any():
-        frame = pd.DataFrame({"b": body_of_row[integer], "n": orbits["n"].to_numpy()[integer]})
-        grouped = frame.groupby("b")["n"]
-        n_small[grouped.min().index] = grouped.min().to_numpy()
-        n_large[grouped.max().index] = grouped.max().to_numpy()
+    counts, n_small, n_large = _rows.body_counts(found.body, n, q, len(ids))
     return pd.DataFrame(
         {
             "body": ids,

@@ -217,6 +217,8 @@ def load_manifest(out_dir):
         or not isinstance(parts, dict)
         or any(key not in parameters for key in required)
         or parameters["format"] not in FORMATS
+        or parameters.get("columns", "all") not in ("compact", "all")
+        or (document["orbits_survey"] >= 3 and "columns" not in parameters)
         or not all(
             isinstance(parameters[k], int) and parameters[k] >= 1
             for k in ("body_count", "n_max", "q_max", "chunk")
@@ -423,7 +425,8 @@ class Ledger:
             "parameters": self.parameters,
             "source": self.source,
             "skipped_rows": self.skipped,
-            "parts": self.parts,
+            # by chunk, whichever thread finished first
+            "parts": dict(sorted(self.parts.items(), key=lambda item: int(item[0]))),
         }
         document["sha256"] = manifest_checksum(document)
         write_text_atomic(

@@ -9,6 +9,7 @@ in-process or on a ``dask.distributed`` cluster, writes each chunk's parts
 
 import hashlib
 import json
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +20,7 @@ from ..bodies import as_moments, region_grid
 from ..errors import ArgumentTypeError, InputError
 from ..limits import check_resolution
 from . import compute
-from .compute import check_survey_bounds
+from .compute import LAYOUTS, check_survey_bounds
 from .ledger import FORMATS, Ledger, one_line, part_name, sha256_file
 from .report import survey_report
 from .tables import require_pyarrow, write_part
@@ -54,9 +55,13 @@ class Survey:
         chunk=DEFAULT_CHUNK,
         names=None,
         skipped=(),
+        columns="compact",
     ):
         if fmt not in FORMATS:
             raise InputError(f"format must be one of {', '.join(FORMATS)}, got {fmt!r}")
+        if columns not in LAYOUTS:
+            raise InputError(f"columns must be one of {', '.join(LAYOUTS)}, got {columns!r}")
+        self.columns = columns
         if fmt == "parquet":
             require_pyarrow()
         n_max, q_max, chunk = (
@@ -90,8 +95,12 @@ class Survey:
             "q_max": self.q_max,
             "format": fmt,
             "chunk": self.chunk,
+            # the layout: "compact" keeps per orbit only what cannot be
+            # recomputed cheaply; read_survey derives the other columns
+            "columns": columns,
         }
         self.ledger = Ledger(self.out_dir, self.parameters, source, skipped)
+        self._record_lock = threading.Lock()
 
     @classmethod
     def grid(cls, out_dir, resolution, n_max, **kwargs):
@@ -165,7 +174,8 @@ class Survey:
                 "rows": int(len(frame)),
                 "sha256": sha256_file(self.out_dir / name),
             }
-        self.ledger.record(index, entry)
+        with self._record_lock:  # chunks finish on several threads
+            self.ledger.record(index, entry)
 
     def run(self, scheduler=None, progress=None, notify=None, status=None):
         """Compute and write every missing chunk; then the report.
@@ -243,43 +253,55 @@ class Survey:
             )
 
     def _run_local(self, todo, progress):
-        """Compute the chunks in order; write each while the next is computed.
+        """Search the chunks in order; make, write and record their tables side by side.
 
-        One writer thread takes the finished chunks in order (files, SHA-256,
-        fsync and the ledger release the GIL), so the ledger grows exactly
-        as in a serial run.  At most one chunk waits to be written; on an
-        error or an interrupt it is still written (it is computed) before
-        the lock is released: a chunk is in the ledger with both its parts,
-        or not at all.
+        This thread runs the search of one chunk after another (the parallel
+        kernel, on all cores).  Each searched chunk goes to a pool of
+        :func:`table_workers` threads that build its tables (compiled
+        kernels that release the GIL), write both parts, hash them and then
+        record the chunk in the ledger (one at a time, under a lock).  At
+        most that many searched chunks wait; on an error or an interrupt
+        the ones already searched are still written before the lock on the
+        directory is released: a chunk is in the ledger with both its
+        parts, or not at all.
         """
-        from concurrent.futures import ThreadPoolExecutor
+        from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
-        writer = ThreadPoolExecutor(max_workers=1, thread_name_prefix="orbits-writer")
-        previous = None  # the chunk being written
+        workers, pool, pending = None, None, set()
         try:
             for index in todo:
-                bodies, orbits = compute.compute_chunk(
-                    self.chunk_moments(index), self.n_max, self.q_max, index * self.chunk
-                )
-                self._wait_for(previous, progress)  # on disk before the next is queued
-                previous = writer.submit(self._write_and_count, index, bodies, orbits)
-            self._wait_for(previous, progress)
+                found = compute.search_chunk(self.chunk_moments(index), self.n_max, self.q_max)
+                if workers is None:  # numba's threading layer is known after a search
+                    workers = table_workers(self.n_max, self.q_max, self.chunk)
+                    if workers:
+                        pool = ThreadPoolExecutor(workers, thread_name_prefix="orbits-chunk")
+                if not workers:  # kernels may not run side by side: one chunk at a time
+                    self._collect([_Done(self._finish_chunk(index, found))], progress)
+                    continue
+                while len(pending) >= workers:
+                    done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                    self._collect(done, progress)
+                pending.add(pool.submit(self._finish_chunk, index, found))
+            while pending:
+                done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                self._collect(done, progress)
         finally:
-            # at most one chunk is queued: it is computed, so finish it
-            writer.shutdown(wait=True)
+            # every chunk handed to the pool is searched: finish it
+            if pool is not None:
+                pool.shutdown(wait=True)
 
-    def _write_and_count(self, index, bodies, orbits):
+    def _finish_chunk(self, index, found):
+        bodies, orbits = compute.chunk_tables(found, index * self.chunk, self.columns)
         self.write_chunk(index, bodies, orbits)
         return len(bodies)
 
     @staticmethod
-    def _wait_for(future, progress):
-        """Wait for a queued write (re-raising its error); report its bodies."""
-        if future is None:
-            return
-        written = future.result()
-        if progress is not None:
-            progress(written)
+    def _collect(done, progress):
+        """Re-raise a finished chunk's error; report its bodies."""
+        for future in done:
+            written = future.result()
+            if progress is not None:
+                progress(written)
 
     @staticmethod
     def _connect(scheduler, status=None):
@@ -336,6 +358,7 @@ class Survey:
                 self.n_max,
                 self.q_max,
                 index * self.chunk,
+                self.columns,
                 pure=False,
             ): index
             for index in todo
@@ -349,6 +372,41 @@ class Survey:
     def report(self):
         """Summary of a complete survey from its verified parts; written to ``report.json``."""
         return survey_report(self.out_dir, self.n_max, self.q_max, len(self.skipped))
+
+
+class _Done:
+    """A finished result in the shape of a future (the serial path)."""
+
+    def __init__(self, value):
+        self.value = value
+
+    def result(self):
+        return self.value
+
+
+def table_workers(n_max, q_max, chunk):
+    """Threads that build and write chunks side by side (0: one chunk at a time).
+
+    One per numba thread (:func:`orbits.threads.get_num_threads`), fewer
+    when that many chunks in flight would exceed the memory budget; 0 when
+    numba's threading layer cannot run kernels from several threads at once
+    (``workqueue``).
+    """
+    import numba
+
+    from ..limits import memory_budget
+    from ..threads import get_num_threads
+
+    try:
+        layer = numba.threading_layer()
+    except ValueError:  # no parallel kernel has run yet
+        layer = numba.config.THREADING_LAYER
+    if layer not in ("omp", "tbb"):
+        return 0
+    # survey_estimate counts two chunks in flight
+    per_chunk = max(compute.survey_estimate(chunk, n_max, q_max, chunk)[0] / 2.0, 1.0)
+    fits = int(memory_budget() // per_chunk) - 1
+    return max(1, min(get_num_threads(), fits))
 
 
 def _check_scheduler(scheduler):

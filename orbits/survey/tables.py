@@ -16,7 +16,7 @@ from ..atomic import FLOAT_FORMAT, atomic_path, csv_float_options, read_bytes_no
 from ..cells import neutralize, unneutralize
 from ..errors import InputError
 from ..search import CATALOG_COLUMNS
-from .compute import BODY_COLUMNS
+from .compute import BODY_COLUMNS, UNIT_COLUMNS, derive_orbit_rows
 from .ledger import check_survey, entry_problem, load_manifest, one_line
 
 
@@ -59,7 +59,7 @@ def have_pyarrow():
 
 
 def _csv_dtypes():
-    types = {name: np.float64 for name in BODY_COLUMNS + CATALOG_COLUMNS}
+    types = {name: np.float64 for name in BODY_COLUMNS + CATALOG_COLUMNS + UNIT_COLUMNS}
     types.update(
         {
             name: np.int64
@@ -115,30 +115,54 @@ def read_table(out_dir, table, verify=True):
             "to recompute, or check it with 'orbits survey --check'"
         )
     ledger, parameters = document["parts"], document["parameters"]
+    compact = parameters.get("columns", "all") == "compact"  # format 2: all
     frames = []
     for key in sorted(ledger, key=int):
-        problem = entry_problem(key, ledger[key], parameters)
+        entry = ledger[key]
+        problem = entry_problem(key, entry, parameters)
         if problem:
             raise InputError(f"{out_dir}: chunk {key}: {problem}")
-        try:
-            frame = read_part(Path(out_dir) / ledger[key][table]["file"])
-            problem = _rows_problem(frame, table, ledger[key], parameters)
-            if problem:
-                raise InputError(f"{out_dir}: chunk {key} of {table}: {problem}")
-            frames.append(frame)
-        except InputError:
-            raise
-        except (OSError, ValueError, KeyError) as error:
-            raise InputError(
-                f"{out_dir}: cannot read chunk {key} of {table}: {one_line(error)}"
-            ) from None
-        except Exception as error:  # noqa: BLE001 - pyarrow's own errors
-            raise InputError(
-                f"{out_dir}: chunk {key} of {table} is damaged: {one_line(error)}"
-            ) from None
+        frame = _read_checked(out_dir, key, table, entry, parameters)
+        if compact and table == "bodies":
+            frame = frame.drop(columns=list(UNIT_COLUMNS))
+        elif compact:
+            bodies = _read_checked(out_dir, key, "bodies", entry, parameters)
+            try:
+                frame = derive_orbit_rows(
+                    frame,
+                    bodies[list(UNIT_COLUMNS)].to_numpy(dtype=float),
+                    entry["first_body"],
+                    parameters["n_max"],
+                    parameters["q_max"],
+                )
+            except (KeyError, ValueError, TypeError) as error:
+                raise InputError(f"{out_dir}: chunk {key} is damaged: {one_line(error)}") from None
+            except InputError as error:
+                raise InputError(f"{out_dir}: chunk {key} of orbits: {error}") from None
+        frames.append(frame)
     if not frames:
         raise InputError(f"no {table} table in {out_dir}")
     return pd.concat(frames, ignore_index=True)
+
+
+def _read_checked(out_dir, key, table, entry, parameters):
+    """One part, read and checked against its ledger entry (rows, body ids)."""
+    try:
+        frame = read_part(Path(out_dir) / entry[table]["file"])
+        problem = _rows_problem(frame, table, entry, parameters)
+        if problem:
+            raise InputError(f"{out_dir}: chunk {key} of {table}: {problem}")
+        return frame
+    except InputError:
+        raise
+    except (OSError, ValueError, KeyError) as error:
+        raise InputError(
+            f"{out_dir}: cannot read chunk {key} of {table}: {one_line(error)}"
+        ) from None
+    except Exception as error:  # noqa: BLE001 - pyarrow's own errors
+        raise InputError(
+            f"{out_dir}: chunk {key} of {table} is damaged: {one_line(error)}"
+        ) from None
 
 
 def _rows_problem(frame, table, entry, parameters):
