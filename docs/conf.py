@@ -44,6 +44,8 @@ extensions = [
     "sphinx.ext.mathjax",
     "numpydoc",
     "sphinx_gallery.gen_gallery",
+    # docs/_ext: the catalog schema from the code, the API reference check
+    "orbits_api",
 ]
 
 # MathJax from the package sphinx-mathjax-offline (part of the `docs` extra):
@@ -71,7 +73,7 @@ exclude_patterns = [
 ]
 
 # -- MyST -------------------------------------------------------------
-myst_enable_extensions = ["dollarmath", "colon_fence", "deflist"]
+myst_enable_extensions = ["dollarmath", "amsmath", "colon_fence", "deflist"]
 # anchors for the headings of the README sections included in the pages
 myst_heading_anchors = 3
 
@@ -91,7 +93,9 @@ numpydoc_validation_checks = set()
 sphinx_gallery_conf = {
     "examples_dirs": "examples",
     "gallery_dirs": "auto_examples",
-    "filename_pattern": r"/plot_",
+    # ORBITS_GALLERY_PATTERN (a regex) runs only some examples: for quick
+    # local builds while writing pages; CI and releases leave it unset
+    "filename_pattern": os.environ.get("ORBITS_GALLERY_PATTERN", r"/plot_"),
     "within_subsection_order": "FileNameSortKey",
     # embed matplotlib FuncAnimations (kept in a variable) as JS players
     "matplotlib_animations": True,
@@ -101,7 +105,9 @@ sphinx_gallery_conf = {
     "show_memory": False,
     "reference_url": {"orbits": None},
     "doc_module": ("orbits",),
-    "backreferences_dir": None,
+    # which examples use which name: each API entry lists them (the
+    # minigallery of docs/_templates/autosummary)
+    "backreferences_dir": "generated/backreferences",
     "min_reported_time": 1,
     # after sphinx-gallery's own reset of matplotlib (docs/_ext)
     "reset_modules": ("matplotlib", "gallery_setup.reset_matplotlib"),
@@ -121,8 +127,25 @@ html_theme_options = {
     "footer_end": ["sphinx-version"],
     "secondary_sidebar_items": ["page-toc"],
 }
-# no section navigation beside the gallery examples: their code needs the width
-html_sidebars = {"index": [], "changelog": [], "auto_examples/plot_*": []}
+# no (empty) section navigation beside the pages: their formulas, tables and
+# the gallery's code need the width
+html_sidebars = {
+    page: []
+    for page in (
+        "index",
+        "changelog",
+        "auto_examples/plot_*",
+        "cli",
+        "api",
+        "conventions",
+        "catalog",
+        "numerics",
+        "checks",
+        "errata",
+        "benchmarks",
+        "contributing",
+    )
+}
 html_show_sourcelink = False
 
 
@@ -142,24 +165,27 @@ def _escape_bars(text):
     return "".join(parts)
 
 
+_MATH_DIRECTIVE = re.compile(r"^(\s*)\.\. math::")
+
+
 def _absolute_values(app, what, name, obj, options, lines):
-    lines[:] = [_escape_bars(line) for line in lines]
-
-
-# -- completeness of the API reference ---------------------------------
-def _check_api_reference(app):
-    """Warn (an error under -W) for a name of orbits.__all__ missing from api.md."""
-    from sphinx.util import logging
-
-    text = (HERE / "api.md").read_text(encoding="utf-8")
-    listed = set(re.findall(r"^\s{3}(?:orbits\.)?([A-Za-z_][\w.]*)\s*$", text, re.M))
-    missing = sorted(n for n in orbits.__all__ if n not in listed and n != "__version__")
-    if missing:
-        logging.getLogger(__name__).warning(
-            "docs/api.md: names of orbits.__all__ not in the API reference: %s", ", ".join(missing)
-        )
+    """Escape bare bars, except in the LaTeX of ``.. math::`` blocks."""
+    out, math_indent = [], None
+    for line in lines:
+        if math_indent is not None:
+            indent = len(line) - len(line.lstrip())
+            if not line.strip() or indent > math_indent:
+                out.append(line)
+                continue
+            math_indent = None
+        match = _MATH_DIRECTIVE.match(line)
+        if match:
+            math_indent = len(match.group(1))
+            out.append(line)
+        else:
+            out.append(_escape_bars(line))
+    lines[:] = out
 
 
 def setup(app):
-    app.connect("builder-inited", _check_api_reference)
     app.connect("autodoc-process-docstring", _absolute_values)

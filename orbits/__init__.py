@@ -1,8 +1,8 @@
 """orbits: geometric phase, exact motion and closed orbits of the asymmetric top.
 
-Implements Mecholsky (2019), "Analytic formula for the Geometric Phase of
-an Asymmetric Top" (LaTeX source in ``shared/seed``), with the paper's
-errata corrected (see README, "Errata").
+Implements N. A. Mecholsky, "Analytic formula for the geometric phase of
+an asymmetric top", Am. J. Phys. 87, 245 (2019), with the paper's errata
+corrected (see the documentation's Errata page, docs/errata.md).
 
 The names below are loaded on first use (PEP 562 module ``__getattr__``):
 ``import orbits`` itself imports neither numba, SciPy nor pandas, so the
@@ -45,6 +45,7 @@ _LAZY = {
     "motion_phase": "checks",
     "rotation_by_integration": "checks",
     "verify": "checks",
+    "AxesWarning": "motion",
     "Motion": "motion",
     "MotionState": "motion",
     "TumblingPeriods": "motion",
@@ -105,6 +106,7 @@ def __dir__():
 __all__ = [
     "AngleError",
     "ArgumentTypeError",
+    "AxesWarning",
     "CATALOG_COLUMNS",
     "Body",
     "InertialDefectWarning",

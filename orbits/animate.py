@@ -34,20 +34,29 @@ Public API
     A spin near the intermediate axis (the Dzhanibekov / tennis-racket flip).
 :class:`PoinsotAnimation`
     The figure, the frames' drawn data and ``save``.
+
+The geometry drawn (solids, wire frame, contact point and traced curves
+per frame) is computed in :mod:`orbits.animation_scene`, without
+matplotlib; this module turns it into artists, frames and files.
 """
 
 import io
 import math
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from .animation_scene import (
+    FrameData,
+    PoinsotScene,
+    inertia_ellipsoid_lines,
+    solid_faces,
+    t_handle_boxes,
+)
 from .atomic import atomic_path, ensure_writable
-from .bodies import Body, cylinder_moments
+from .bodies import Body
 from .errors import InputError
 from .motion import Motion, as_body
-from .plotting import box_faces
 
 FORMATS = ("gif", "mp4")
 # colours of the drawing (one place, so that the two panels agree)
@@ -153,209 +162,6 @@ def flip_motion(body=None, *, offset=0.05, speed=1.0):
     return Motion.from_spin(body, angle, phi=angle, speed=speed)
 
 
-# ----------------------------------------------------------------- solids
-def solid_faces(body, solid="auto"):
-    """The faces of the solid to draw, in the principal frame, about the centre of mass.
-
-    Parameters
-    ----------
-    body : Body
-    solid : "auto", "ellipsoid", or a tuple
-        ``("t-handle", l1, l2, w)``, ``("box", a, b, c)`` (full side
-        lengths along the caller's x, y, z), ``("cylinder", a, length, b)``
-        (along z, section semi-axes a along x and b along y) or ``("mesh",
-        vertices, faces)`` (caller's axes, centred at the centre of mass).  ``"auto"``
-        uses ``body.shape`` when the body carries one (same tuples: set by
-        :meth:`Body.t_handle`, :meth:`Body.box`, :meth:`Body.cylinder` and
-        :meth:`Body.from_mesh`), the
-        T-handle when the moments are those of :meth:`Body.t_handle` (8, 4,
-        1) (the ``t-handle`` preset), and else the equivalent ellipsoid
-        (:meth:`Body.equivalent_ellipsoid`).
-
-    Returns
-    -------
-    kind : str
-    faces : list of ndarray, each (k, 3)
-        Polygons in the sorted principal frame (length units of the body).
-    """
-    body = as_body(body)
-    spec = solid
-    if isinstance(spec, str) and spec == "auto":
-        spec = getattr(body, "shape", None)
-        if spec is None and np.array_equal(body.moments, Body.t_handle(8.0, 4.0, 1.0).moments):
-            spec = ("t-handle", 8.0, 4.0, 1.0)
-        if spec is None:
-            spec = "ellipsoid"
-    if isinstance(spec, dict):
-        spec = (spec.get("kind"),) + tuple(v for k, v in spec.items() if k != "kind")
-    if isinstance(spec, str):
-        spec = (spec,)
-    kind = spec[0] if spec else None
-    if kind == "ellipsoid":
-        semi = np.array(body.equivalent_ellipsoid())
-        # semi-axes (a, b, c) lie along the principal axes I1, I2, I3
-        return "ellipsoid", _ellipsoid_faces(np.maximum(semi, 1e-3 * semi.max()))
-    if kind == "t-handle":
-        l1, l2, w = (float(v) for v in spec[1:4])
-        faces = _t_handle_faces(l1, l2, w)
-        frame = Body.t_handle(l1, l2, w).frame
-    elif kind == "box":
-        a, b, c = (float(v) for v in spec[1:4])
-        faces = box_faces((-a / 2, -b / 2, -c / 2), (a / 2, b / 2, c / 2))
-        frame = Body((b * b + c * c, a * a + c * c, a * a + b * b)).frame
-    elif kind == "cylinder":
-        a, length, b = (float(v) for v in spec[1:4])
-        faces = _cylinder_faces(a, b, length)
-        frame = Body(cylinder_moments(a, length, radius_y=b)).frame
-    elif kind == "mesh":
-        vertices = np.asarray(spec[1], dtype=float)
-        faces = [vertices[np.asarray(f)] for f in spec[2]]
-        frame = body.frame
-    else:
-        raise InputError(
-            f"unknown solid {solid!r}; use 'auto', 'ellipsoid', "
-            "('t-handle', l1, l2, w), ('box', a, b, c), "
-            "('cylinder', a, length, b) or ('mesh', vertices, faces)"
-        )
-    # caller's axes -> sorted principal axes: v_principal = frame @ v
-    return kind, [face @ frame.T for face in faces]
-
-
-def t_handle_boxes(l1, l2, w):
-    """The T-handle's two bars as (lo, hi) corners about its centre of mass.
-
-    Cross piece along x, shaft along y from the cross piece's edge, square
-    section w (the geometry of eqn:IsforT).
-    """
-    com_y = (l2 / (l1 + l2)) * 0.5 * (w + l2)
-    return [
-        ((-l1 / 2, -w / 2 - com_y, -w / 2), (l1 / 2, w / 2 - com_y, w / 2)),
-        ((-w / 2, w / 2 - com_y, -w / 2), (w / 2, w / 2 + l2 - com_y, w / 2)),
-    ]
-
-
-def _same_vertex_count(faces):
-    """Faces padded to one vertex count by repeating each face's last vertex.
-
-    matplotlib 3.11 stores polygons of different lengths in an ``np.empty``
-    array and projects and autoscales its unused padding too
-    (matplotlib/matplotlib#32272): a cylinder (24-gon caps, quadrilateral
-    walls) got axis limits of 1.8e308 in one CI run.  A repeated vertex adds
-    a zero-length edge: the drawing is the same.
-    """
-    count = max(len(face) for face in faces)
-    return [
-        face
-        if len(face) == count
-        else np.concatenate([face, np.repeat(face[-1:], count - len(face), axis=0)])
-        for face in faces
-    ]
-
-
-def _cylinder_faces(a, b, length, sides=24):
-    """An elliptic cylinder along z (semi-axes a along x, b along y) as a prism."""
-    u = np.linspace(0.0, 2.0 * np.pi, sides + 1)[:-1]
-    rim = np.stack([a * np.cos(u), b * np.sin(u)], axis=-1)
-    bottom = np.column_stack([rim, np.full(sides, -0.5 * length)])
-    top = np.column_stack([rim, np.full(sides, 0.5 * length)])
-    walls = [np.array([bottom[i], bottom[i - 1], top[i - 1], top[i]]) for i in range(sides)]
-    return [bottom, top] + walls
-
-
-def _t_handle_faces(l1, l2, w):
-    faces = []
-    for lo, hi in t_handle_boxes(l1, l2, w):
-        faces += box_faces(lo, hi)
-    return faces
-
-
-def _ellipsoid_faces(semi, longitudes=16, latitudes=8):
-    u = np.linspace(0.0, 2.0 * np.pi, longitudes + 1)
-    v = np.linspace(0.0, np.pi, latitudes + 1)
-    points = np.stack(
-        [
-            np.outer(np.cos(u), np.sin(v)) * semi[0],
-            np.outer(np.sin(u), np.sin(v)) * semi[1],
-            np.outer(np.ones_like(u), np.cos(v)) * semi[2],
-        ],
-        axis=-1,
-    )
-    return [
-        np.array([points[i, j], points[i + 1, j], points[i + 1, j + 1], points[i, j + 1]])
-        for i in range(longitudes)
-        for j in range(latitudes)
-    ]
-
-
-def inertia_ellipsoid_lines(moments, meridians=8, parallels=5, samples=49):
-    """Wire-frame curves of the inertia ellipsoid ``x.I.x = 1`` (body frame).
-
-    Returns a list of (samples, 3) arrays: meridians through the I3 poles
-    and parallels of constant x3 (every point satisfies ``x.I.x = 1``).
-    """
-    semi = 1.0 / np.sqrt(np.asarray(moments, dtype=float))
-    s = np.linspace(0.0, 2.0 * np.pi, samples)
-    curves = []
-    for k in range(meridians):
-        azimuth = np.pi * k / meridians
-        curves.append(
-            np.stack(
-                [
-                    semi[0] * np.cos(azimuth) * np.sin(s),
-                    semi[1] * np.sin(azimuth) * np.sin(s),
-                    semi[2] * np.cos(s),
-                ],
-                axis=-1,
-            )
-        )
-    for k in range(1, parallels + 1):
-        polar = np.pi * k / (parallels + 1)
-        curves.append(
-            np.stack(
-                [
-                    semi[0] * np.sin(polar) * np.cos(s),
-                    semi[1] * np.sin(polar) * np.sin(s),
-                    np.full(samples, semi[2] * np.cos(polar)),
-                ],
-                axis=-1,
-            )
-        )
-    return curves
-
-
-# ----------------------------------------------------------------- the scene
-@dataclass
-class FrameData:
-    """What frame ``k`` draws, in the units of the module docstring.
-
-    Attributes
-    ----------
-    t : float
-        Time of the frame.
-    rotation : ndarray (3, 3)
-        The orientation drawn (body -> space): its columns are the drawn
-        body axes.
-    contact : ndarray (3,)
-        The contact point of ellipsoid and plane, space frame.
-    contact_body : ndarray (3,)
-        The same point in the body frame (end of the polhode drawn).
-    herpolhode : ndarray (k, 3)
-        The herpolhode traced up to ``t`` (space frame; ends at ``contact``).
-    polhode : ndarray (k, 3)
-        The polhode traced up to ``t`` (body frame).
-    plane_height : float
-        ``sqrt(2E)/M``: the plane is ``z = plane_height``.
-    """
-
-    t: float
-    rotation: np.ndarray
-    contact: np.ndarray
-    contact_body: np.ndarray
-    herpolhode: np.ndarray
-    polhode: np.ndarray
-    plane_height: float
-
-
 class PoinsotAnimation:
     """A Poinsot animation: a figure with a space-frame and a body-frame panel.
 
@@ -365,6 +171,8 @@ class PoinsotAnimation:
     Attributes
     ----------
     motion : Motion
+    scene : PoinsotScene
+        The geometry of every frame (:mod:`orbits.animation_scene`).
     times : ndarray (frames,)
         Frame times, from 0 to the animation's duration, both included (so
         the last frame of a closed orbit drawn over q periods is its first).
@@ -398,33 +206,13 @@ class PoinsotAnimation:
         subsamples=8,
     ):
         self.motion = motion
-        self.times = np.asarray(times, dtype=float)
         self.fps = int(fps)
         self.dpi = dpi
-        body = motion.body
-        moments = body.moments
-        self._energy = motion.energy
-        two_e = 2.0 * motion.energy
-        self.plane_height = math.sqrt(two_e) / motion.momentum
-        # a dense grid for the traced curves: `subsamples` steps per frame
-        count = max(1, (len(self.times) - 1) * subsamples)
-        self._dense = np.linspace(self.times[0], self.times[-1], count + 1)
-        self._subsamples = subsamples
-        state = motion.state(self._dense)
-        self._rho_space = state.omega_space / math.sqrt(two_e)
-        self._rho_body = state.omega / math.sqrt(two_e)
-        frame_state = motion.state(self.times)
-        self._rotations = frame_state.rotation
-        self._frame_rho_space = frame_state.omega_space / math.sqrt(two_e)
-        self._frame_rho_body = frame_state.omega / math.sqrt(two_e)
-        self._wire = inertia_ellipsoid_lines(moments)
-        self.solid_kind, faces = solid_faces(body, solid)
-        semi = 1.0 / np.sqrt(moments)
-        # the whole solid (every vertex) fits inside the inertia ellipsoid
-        vertices = np.concatenate(faces)
-        reach = float(np.max(np.sqrt(np.sum((vertices / semi) ** 2, axis=1))))
-        self.solid_scale = 0.95 / reach
-        self._faces = _same_vertex_count([face * self.solid_scale for face in faces])
+        self.scene = PoinsotScene(motion, times, solid=solid, subsamples=subsamples)
+        self.times = self.scene.times
+        self.plane_height = self.scene.plane_height
+        self.solid_kind = self.scene.solid_kind
+        self.solid_scale = self.scene.solid_scale
         self._build_figure(title, size, pyplot)
         self._animation = None
 
@@ -453,11 +241,10 @@ class PoinsotAnimation:
             (0.5, 0.0, 0.5, 0.84 - extra), projection="3d", computed_zorder=False
         )
         self.space_axes, self.body_axes = space, body_ax
+        scene = self.scene
         h = self.plane_height
-        semi = 1.0 / np.sqrt(self.motion.body.moments)
-        reach = 1.05 * float(semi.max())
-        radius = float(np.max(np.hypot(self._rho_space[:, 0], self._rho_space[:, 1])))
-        half = max(reach, 1.15 * radius)
+        semi = scene.semi_axes
+        half, reach = scene.extents()
         artists = {}
         plane = np.array([[-half, -half, h], [half, -half, h], [half, half, h], [-half, half, h]])
         artists["plane"] = Poly3DCollection(
@@ -471,7 +258,7 @@ class PoinsotAnimation:
         (artists["herpolhode"],) = space.plot(
             [], [], [], color=COLOURS["herpolhode"], linewidth=1.4, zorder=4
         )
-        start = self._rho_space[0]
+        start = scene.rho_space[0]
         space.plot(
             [start[0]],
             [start[1]],
@@ -485,10 +272,10 @@ class PoinsotAnimation:
             space.plot([], [], [], color=COLOURS["ellipsoid"], linewidth=0.5, alpha=0.6, zorder=2)[
                 0
             ]
-            for _ in self._wire
+            for _ in scene.wire
         ]
         # a fine mesh's edges would paint it solid dark: draw them faint
-        fine = len(self._faces) > 200
+        fine = len(scene.faces) > 200
         edge = dict(
             edgecolor=(0.0, 0.39, 0.0, 0.12) if fine else "darkgreen",
             linewidths=0.2 if fine else 0.4,
@@ -519,10 +306,10 @@ class PoinsotAnimation:
         _cube(space, half, (-1.08 * h, 1.4 * h), zoom=1.75)
         space.view_init(elev=24, azim=-60)
         # body panel: the fixed inertia ellipsoid, the solid, the polhode
-        for curve in self._wire:
+        for curve in scene.wire:
             body_ax.plot(*curve.T, color=COLOURS["ellipsoid"], linewidth=0.5, alpha=0.5)
         body_ax.add_collection3d(
-            Poly3DCollection(self._faces, facecolor=COLOURS["solid"], alpha=0.25, **edge)
+            Poly3DCollection(scene.faces, facecolor=COLOURS["solid"], alpha=0.25, **edge)
         )
         for k, colour in enumerate(COLOURS["axes"]):
             tip = np.zeros(3)
@@ -565,44 +352,25 @@ class PoinsotAnimation:
 
     def frame(self, k):
         """Draw frame ``k`` and return its :class:`FrameData`."""
-        k = int(k)
-        if not 0 <= k < len(self.times):
-            raise InputError(f"frame {k} out of range 0..{len(self.times) - 1}")
-        rotation = self._rotations[k]
+        data = self.scene.frame(k)
+        rotation = data.rotation
         artists = self.artists
-        for line, curve in zip(artists["ellipsoid"], self._wire):
-            points = curve @ rotation.T
+        for line, points in zip(artists["ellipsoid"], self.scene.ellipsoid_lines(rotation)):
             line.set_data_3d(points[:, 0], points[:, 1], points[:, 2])
-        artists["solid"].set_verts([face @ rotation.T for face in self._faces])
-        semi = 1.0 / np.sqrt(self.motion.body.moments)
-        for j, line in enumerate(artists["axes"]):
-            tip = 1.15 * semi[j] * rotation[:, j]
+        artists["solid"].set_verts(self.scene.solid_polygons(rotation))
+        for line, tip in zip(artists["axes"], self.scene.axis_tips(rotation)):
             line.set_data_3d([-tip[0], tip[0]], [-tip[1], tip[1]], [-tip[2], tip[2]])
-        contact = self._frame_rho_space[k]
-        contact_body = self._frame_rho_body[k]
+        contact, contact_body = data.contact, data.contact_body
         artists["omega"].set_data_3d([0.0, contact[0]], [0.0, contact[1]], [0.0, contact[2]])
         artists["contact"].set_data_3d([contact[0]], [contact[1]], [contact[2]])
-        end = k * self._subsamples + 1
-        # the dense grid holds the frame times exactly at multiples of subsamples;
-        # the traced curves end at the frame's own contact point
-        herpolhode = np.concatenate([self._rho_space[: end - 1], contact[None]])
-        polhode = np.concatenate([self._rho_body[: end - 1], contact_body[None]])
-        artists["herpolhode"].set_data_3d(*herpolhode.T)
-        artists["polhode"].set_data_3d(*polhode.T)
+        artists["herpolhode"].set_data_3d(*data.herpolhode.T)
+        artists["polhode"].set_data_3d(*data.polhode.T)
         artists["body_contact"].set_data_3d(
             [contact_body[0]], [contact_body[1]], [contact_body[2]]
         )
-        fraction = self.times[k] / self.motion.period
-        self._clock.set_text(f"t = {self.times[k]:.3f} = {fraction:.3f} T")
-        return FrameData(
-            float(self.times[k]),
-            rotation,
-            contact,
-            contact_body,
-            herpolhode,
-            polhode,
-            self.plane_height,
-        )
+        fraction = data.t / self.motion.period
+        self._clock.set_text(f"t = {data.t:.3f} = {fraction:.3f} T")
+        return data
 
     @property
     def animation(self):

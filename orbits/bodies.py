@@ -857,6 +857,20 @@ def critical_angle(body_or_moments, phi=0.0):
         Invalid moments.
     AngleError
         ``phi`` not finite.
+
+    Notes
+    -----
+    For :math:`\\boldsymbol\\omega_0 = (\\sin\\theta\\cos\\phi, \\sin\\theta\\sin\\phi,
+    \\cos\\theta)`, :math:`M^2 - 2EI_2 = I_3(I_3-I_2)\\cos^2\\theta
+    - I_1(I_2-I_1)\\cos^2\\phi\\,\\sin^2\\theta`, which vanishes at
+
+    .. math::
+
+        \\tan\\theta_c = \\sqrt{\\frac{I_3(I_3-I_2)}{I_1(I_2-I_1)\\cos^2\\phi}} .
+
+    For :math:`\\phi = 0` this is the paper's Eq. (27),
+    :math:`\\theta_\\text{crit} = \\cot^{-1}\\sqrt\\beta`, with Eq. (25)
+    corrected to :math:`\\beta = I_1(I_2-I_1)/(I_3(I_3-I_2))` (erratum 1).
     """
     from .core import phase as _kernels
 

@@ -39,6 +39,12 @@ from .limits import check_search_bounds
 from .search import CATALOG_COLUMNS, closed_orbits
 
 VERIFIED_COLUMN = "closure_error"
+#: unit and meaning of the ``--verify`` column, as in :data:`orbits.search.CATALOG_SCHEMA`
+VERIFIED_SCHEMA = (
+    "rad",
+    "(``--verify`` only) the angle by which the orientation after q periods differs "
+    "from the start, by an independent integration of Euler's equations",
+)
 CLOSURE_TOLERANCE = 1e-8
 READ_HINT = (
     'read with orbits.read_catalog(path), or pandas.read_csv(path, comment="#") '

@@ -259,12 +259,13 @@ def contact_sheet(body, orbits, columns=None):
     for ax in grid[:, 0]:
         ax.set_ylabel(r"$\omega_y$ (rad/s)", fontsize="x-small")
     figure.suptitle(
-        f"Closed herpolhodes of {body.name or 'the body'} in the invariable plane, "
+        f"Closed herpolhodes of {body.name or 'the body'} in the invariable plane\n"
         r"one scale ($|\omega_0|$ = 1 rad/s), left to right in $\theta$; "
         "odd n close after T/2",
         fontsize="medium",
     )
     _marks_legend(figure, fontsize="small")
+    figure.get_layout_engine().set(w_pad=0.15, h_pad=0.08)  # inches: clear of the edges
     figure.limit = limit
     return figure
 
@@ -324,6 +325,12 @@ def figure3():
     right = figure.add_subplot(1, 2, 2)
     body = Body.preset("t-handle")
     drawn = plotting.plot_binet(left, body, **T_HANDLE_SPIN)
+    # five ticks a side, small: the default seven overlap on the slanted M1 axis
+    for axis in (left.xaxis, left.yaxis, left.zaxis):
+        axis.set_major_locator(mpl.ticker.FixedLocator([-0.6, -0.3, 0.0, 0.3, 0.6]))
+    left.tick_params(labelsize="small")
+    for axis in (left.xaxis, left.yaxis, left.zaxis):
+        axis.labelpad = 8
     left.set_title(
         f"(a) $|M|$ = {drawn['momentum']:.6f} J s sphere and the Binet "
         f"ellipsoid, E = {drawn['energy']:.6f} J",
@@ -338,6 +345,7 @@ def figure3():
     figure.suptitle(
         "Fig. 3: T-handle, I = (0.286827, 0.533256, 0.795844) J s$^2$", fontsize="medium"
     )
+    figure.get_layout_engine().set(w_pad=0.25, h_pad=0.1)  # inches: clear of the edges
     return figure
 
 

@@ -200,6 +200,23 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0):
         ``theta_c + dtheta`` outside [0, pi/2].
     SeparatrixError
         ``theta`` exactly on the separatrix (``dtheta == 0``).
+
+    Notes
+    -----
+    Mecholsky's Eq. (20) (eqn:GeometricPhase): on SAM (:math:`M^2 > 2EI_2`)
+
+    .. math::
+
+        \\Delta\\alpha = \\frac{MT}{I_3} + \\frac{4M(I_3-I_1)}{I_1 I_3}\\,
+        \\frac{\\Pi\\left(-\\frac{I_3(I_2-I_1)}{I_1(I_3-I_2)} \\,\\middle|\\, k^2\\right)}
+        {\\sqrt{(I_3-I_2)(M^2-2EI_1)/(I_1I_2I_3)}} - 2\\pi ,
+
+    with :math:`T` and :math:`k` of Eqs. (16a, b) (eqn:TK), and on LAM its
+    image under :math:`1 \\leftrightarrow 3` without the :math:`-2\\pi`.
+    :math:`I_1K + (I_3-I_1)\\Pi` is evaluated as one Bulirsch
+    :math:`\\operatorname{cel}(k_c, p, a, b)` with :math:`k_c = \\sqrt{1-k^2}`
+    formed from the factored separatrix distance, never as :math:`1 - m`
+    (docs: Numerical methods).
     """
     moments, _ = unit_moments(body_or_moments)
     from_offset, angle, phi, shape = _spin_inputs(moments, theta, dtheta, phi)
@@ -358,6 +375,19 @@ def phase_limits(body_or_moments):
         ``(theta_zero, theta_half_pi)``, each broadcast over bodies.
         Both exceed 2 pi for every physical body: the triangle
         inequalities give ``I3 - I2 <= I1`` and ``I3 - I1 <= I2``.
+
+    Notes
+    -----
+    Mecholsky's Eqs. (28) and (29) (eqn:alphamin1, eqn:alphamin2):
+
+    .. math::
+
+        \\lim_{\\theta\\to0}\\Delta\\alpha = 2\\pi\\sqrt{\\frac{I_1I_2}{(I_3-I_2)(I_3-I_1)}},
+        \\qquad
+        \\lim_{\\theta\\to\\pi/2}\\Delta\\alpha = 2\\pi\\sqrt{\\frac{I_3I_2}{(I_2-I_1)(I_3-I_1)}} .
+
+    The first equals :math:`2\\pi` exactly on the flat edge
+    :math:`I_3 = I_1 + I_2` (erratum 7).
     """
     moments, _ = unit_moments(body_or_moments)
     i1, i2, i3 = moments[..., 0], moments[..., 1], moments[..., 2]

@@ -21,28 +21,81 @@ from .errors import InputError
 from .limits import check_search_bounds
 from .phases import phases_of_unit_moments
 
-CATALOG_COLUMNS = (
-    "body",
-    "I1",
-    "I2",
-    "I3",
-    "theta_crit",
-    "branch",
-    "n",
-    "q",
-    "theta",
-    "dtheta",
-    "total_phase",
-    "dynamic_phase",
-    "geometric_phase",
-    "period",
-    "energy",
-    "momentum",
-    "D",
-    "m",
-    "residual",
-    "closes_after",
-)
+#: The catalog's columns, in order: name -> (unit, meaning).  The one
+#: definition of the schema: :data:`CATALOG_COLUMNS` is its keys, and the
+#: documentation's schema table is generated from it.  Units are those of
+#: the normalised body (``|I| = 1``, ``|omega0| = 1``); meanings are reST.
+CATALOG_SCHEMA = {
+    "body": ("", "the body's name (``fig6``, ``t-handle``, a ``--bodies`` name, or the moments)"),
+    "I1": ("J s²", r"smallest principal moment, normalised to :math:`|\mathbf I| = 1`"),
+    "I2": ("J s²", r"intermediate principal moment, normalised to :math:`|\mathbf I| = 1`"),
+    "I3": ("J s²", r"largest principal moment, normalised to :math:`|\mathbf I| = 1`"),
+    "theta_crit": ("rad", r"critical angle :math:`\theta_c`, where :math:`M^2 = 2EI_2` (Eq. 27)"),
+    "branch": (
+        "",
+        r"``SAM`` (:math:`\theta < \theta_c`, :math:`\mathbf M` circles the "
+        r":math:`I_3` axis) or ``LAM`` (:math:`\theta > \theta_c`, it circles :math:`I_1`)",
+    ),
+    "n": (
+        "",
+        r"the multiple: :math:`\Delta\alpha = 2\pi n/q` (for :math:`q > 1`, the numerator p)",
+    ),
+    "q": (
+        "",
+        "number of periods after which the body is back at its start (1 for integer orbits)",
+    ),
+    "theta": (
+        "rad",
+        r"polar angle of :math:`\boldsymbol\omega_0` from the :math:`I_3` axis "
+        r"(:math:`\phi = 0`): "
+        r":math:`\boldsymbol\omega_0 = (\sin\theta, 0, \cos\theta)` (Eq. 23)",
+    ),
+    "dtheta": (
+        "rad",
+        r":math:`\theta - \theta_c` to full relative precision (near :math:`\theta_c`, "
+        r"``theta`` rounds to :math:`\theta_c`; use this)",
+    ),
+    "total_phase": (
+        "rad",
+        r"total phase :math:`\Delta\alpha` (Eq. 20), :math:`\approx 2\pi n/q`",
+    ),
+    "dynamic_phase": ("rad", "dynamic phase :math:`2ET/M`"),
+    "geometric_phase": (
+        "rad",
+        r"geometric phase :math:`\Omega = 2ET/M - \Delta\alpha` (Eq. 1), the signed solid angle "
+        "of the polhode, from its own closed form (not the difference)",
+    ),
+    "period": (
+        "s",
+        r"period :math:`T` of :math:`\boldsymbol\omega` in the body (Eq. 16a), "
+        r"in units of :math:`1/|\boldsymbol\omega_0|`",
+    ),
+    "energy": (
+        "J",
+        r":math:`E = \tfrac12\boldsymbol\omega_0\cdot\mathbf I\boldsymbol\omega_0` (Eq. 11)",
+    ),
+    "momentum": ("J s", r":math:`M = |\mathbf I\boldsymbol\omega_0|` (Eq. 10)"),
+    "D": (
+        "J s²",
+        ":math:`M^2/(2E)`, the orbit's label independent of the spin rate: "
+        r":math:`I_1 \le D \le I_3`, :math:`D > I_2` on SAM, :math:`D < I_2` on LAM",
+    ),
+    "m": (
+        "",
+        r"elliptic parameter :math:`k^2` of Eq. (16b) "
+        r"(indices :math:`1 \leftrightarrow 3` on LAM)",
+    ),
+    "residual": (
+        "rad",
+        r":math:`\Delta\alpha - 2\pi n/q`, each within :math:`10^{-10}\cdot 2\pi n/q`",
+    ),
+    "closes_after": (
+        "",
+        "periods after which the herpolhode closes, a fraction: ``1/2`` for odd n "
+        "(q = 1), ``q/2`` when p and q are both odd, else ``q``",
+    ),
+}
+CATALOG_COLUMNS = tuple(CATALOG_SCHEMA)
 # every root must satisfy |Delta alpha - 2 pi p/q| <= RESIDUAL_TOLERANCE * 2 pi p/q
 RESIDUAL_TOLERANCE = 1e-10
 
@@ -150,8 +203,8 @@ def closed_orbits(body, n_max=10, q_max=1):
     -------
     pandas.DataFrame
         One row per closed orbit, sorted by ``theta`` (i.e. by ``dtheta``),
-        with the columns of :data:`CATALOG_COLUMNS` (see the README's
-        catalog schema).  ``n`` is ``p``; ``q`` is 1 for integer orbits.
+        with the columns of :data:`CATALOG_COLUMNS` (see :data:`CATALOG_SCHEMA`
+        and the documentation's catalog schema).  ``n`` is ``p``; ``q`` is 1 for integer orbits.
 
     Raises
     ------

@@ -53,7 +53,21 @@ def set_num_threads(count):
 
 
 def get_num_threads():
-    """Threads used for large inputs."""
+    """Threads used for large inputs.
+
+    Returns
+    -------
+    int
+        The count set by :func:`set_num_threads`, else numba's
+        ``NUMBA_NUM_THREADS``.  Calls on fewer than 20,000 elements run on
+        one thread whatever this says.
+
+    Examples
+    --------
+    >>> import orbits
+    >>> orbits.get_num_threads() >= 1
+    True
+    """
     return _requested if _requested is not None else _numba().config.NUMBA_NUM_THREADS
 
 

@@ -110,6 +110,21 @@ def spins_with_total_phase(body_or_moments, total_phase):
     -----
     UnresolvedOrbitsWarning
         Roots closer to the separatrix than the smallest normal double.
+
+    Notes
+    -----
+    On each branch :math:`\\Delta\\alpha` (Mecholsky's Eq. 20) grows like
+    :math:`a\\ln(1/|\\theta - \\theta_c|) + b` towards the separatrix and
+    tends to Eq. (28) or (29) at the axes, so a value above both limits has
+    one spin on each branch, and a value between them one spin on one
+    branch.
+
+    Examples
+    --------
+    >>> import numpy as np, orbits
+    >>> spins = orbits.spins_with_total_phase(orbits.Body.preset("fig6"), 2 * np.pi * 3)
+    >>> list(spins["branch"]), [round(t, 4) for t in spins["theta"]]
+    (['SAM', 'LAM'], [1.0043, 1.0611])
     """
     moments, _ = unit_moments(body_or_moments)
     if moments.shape != (3,):
@@ -136,6 +151,27 @@ def spins_with_period_ratio(body_or_moments, ratio):
     pandas.DataFrame
         As :func:`spins_with_total_phase`, with ``target`` the total phase
         solved for on each row's branch.
+
+    Notes
+    -----
+    With the precession period :math:`P_\\phi` and the rotation period
+    :math:`P_\\psi = T` of :meth:`orbits.Motion.tumbling_periods`,
+
+    .. math::
+
+        \\frac{P_\\psi}{P_\\phi} = \\frac{\\Delta\\alpha}{2\\pi} + 1 \\;\\text{(SAM)},
+        \\qquad
+        \\frac{P_\\psi}{P_\\phi} = \\frac{\\Delta\\alpha}{2\\pi} - 1 \\;\\text{(LAM)} .
+
+    Examples
+    --------
+    4179 Toutatis (Hudson & Ostro 1995: :math:`P_\\psi` = 5.41 d,
+    :math:`P_\\phi` = 7.35 d, a ratio below 1) can only be on LAM:
+
+    >>> import orbits
+    >>> toutatis = orbits.Body.from_semi_axes(2.30, 1.20, 0.96)
+    >>> list(orbits.spins_with_period_ratio(toutatis, 5.41 / 7.35)["branch"])
+    ['LAM']
     """
     moments, _ = unit_moments(body_or_moments)
     if moments.shape != (3,):

@@ -189,7 +189,7 @@ def test_real_bodies_are_drawn_as_their_solids(tmp_path):
     # the animation scales every solid to lie inside the inertia ellipsoid x.I.x = 1
     for body in (phone, rod, brick, T_HANDLE):
         anim = animate.poinsot_animation(animate.flip_motion(body), frames=2, dpi=20)
-        vertices = np.concatenate(anim._faces)
+        vertices = np.concatenate(anim.scene.faces)
         assert anim.solid_kind == body.shape[0]
         form = np.einsum("ni,i,ni->n", vertices, body.moments, vertices)
         assert form.max() == pytest.approx(0.95**2, rel=1e-12)
@@ -343,7 +343,26 @@ def test_solids_reach_matplotlib_with_one_vertex_count():
     anim = animate.poinsot_animation(animate.flip_motion(rod), frames=2, dpi=20)
     _, faces = animate.solid_faces(rod)
     assert len({len(face) for face in faces}) > 1  # the input is ragged
-    assert {len(face) for face in anim._faces} == {max(len(face) for face in faces)}
-    for original, drawn in zip(faces, anim._faces):
+    assert {len(face) for face in anim.scene.faces} == {max(len(face) for face in faces)}
+    for original, drawn in zip(faces, anim.scene.faces):
         np.testing.assert_array_equal(drawn[: len(original)], original * anim.solid_scale)
         assert (drawn[len(original) :] == drawn[len(original) - 1]).all()
+
+
+def test_the_drawing_shows_the_scene_geometry(orbit_anim):
+    """PoinsotAnimation draws what animation_scene computes: a scene built alone
+    (no figure) gives the same frame data bit for bit, and the artists hold it."""
+    from orbits.animation_scene import PoinsotScene
+
+    _, anim = orbit_anim
+    scene = PoinsotScene(anim.motion, anim.times)
+    assert scene.solid_scale == anim.solid_scale and scene.solid_kind == anim.solid_kind
+    for k in (0, 3, len(anim.times) - 1):
+        drawn, alone = anim.frame(k), scene.frame(k)
+        for name in ("rotation", "contact", "contact_body", "herpolhode", "polhode"):
+            np.testing.assert_array_equal(getattr(drawn, name), getattr(alone, name))
+        assert drawn.t == alone.t == anim.times[k]
+        line = np.stack([np.asarray(v) for v in anim.artists["herpolhode"].get_data_3d()], -1)
+        np.testing.assert_array_equal(line, alone.herpolhode)
+    with pytest.raises(InputError, match="out of range"):
+        scene.frame(len(anim.times))

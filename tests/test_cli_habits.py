@@ -261,7 +261,7 @@ def test_compile_note_only_on_a_terminal_with_an_empty_cache(tmp_path, monkeypat
     # a copy of the package layout with no cache: the note is printed
     core = tmp_path / "orbits" / "core"
     core.mkdir(parents=True)
-    monkeypatch.setattr(cli, "__file__", str(tmp_path / "orbits" / "cli.py"))
+    monkeypatch.setattr(cli, "__file__", str(tmp_path / "orbits" / "cli" / "__init__.py"))
     monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
     stream = _Terminal()
     assert announce_compilation(stream) is True
@@ -280,7 +280,7 @@ def test_compile_note_follows_numba_cache_dir(tmp_path, monkeypatch):
     core = tmp_path / "orbits" / "core"
     (core / "__pycache__").mkdir(parents=True)
     (core / "__pycache__" / "phase.cel-1.py311.nbi").write_bytes(b"")
-    monkeypatch.setattr(cli, "__file__", str(tmp_path / "orbits" / "cli.py"))
+    monkeypatch.setattr(cli, "__file__", str(tmp_path / "orbits" / "cli" / "__init__.py"))
     cache = tmp_path / "cache"
     cache.mkdir()
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(cache))

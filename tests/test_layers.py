@@ -24,6 +24,7 @@ LAYERS = [
     ["cli"],
     ["bench"],
     ["animate"],
+    ["animation_scene"],
     ["figures"],
     ["plotting"],
     ["survey"],
@@ -161,3 +162,31 @@ def test_pyproject_contract_names_the_same_layers():
         for row in contract["layers"]
     ]
     assert rows == [sorted(row) for row in LAYERS]
+
+
+def test_animation_geometry_needs_no_matplotlib():
+    """orbits.animation_scene computes every frame without importing matplotlib."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys\n"
+        "from orbits import Body\n"
+        "from orbits.animate import flip_motion\n"
+        "from orbits.animation_scene import PoinsotScene\n"
+        "import numpy as np\n"
+        "motion = flip_motion(Body.preset('fig6'))\n"
+        "scene = PoinsotScene(motion, np.linspace(0.0, motion.period, 5))\n"
+        "data = scene.frame(4)\n"
+        "assert data.herpolhode.shape == (33, 3)\n"
+        "assert not [m for m in sys.modules if m.split('.')[0] in ('matplotlib', 'mpl_toolkits')]\n"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        cwd=ROOT,
+        env={**__import__("os").environ, "PYTHONPATH": str(ROOT)},
+    )
+    assert result.returncode == 0, result.stderr

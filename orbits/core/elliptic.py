@@ -40,6 +40,8 @@ _CEL_GAP = 1.0e-9
 # truncated Taylor series of DLMF 19.36.1-2 has error below 1e-16.
 _CARLSON_R = 1.0e-16
 _AGM_GAP = 1.0e-17
+# below this |r| the Jacobi functions come from their Maclaurin series
+_SERIES_ARGUMENT = 2.0**-27
 _MAX_AGM = 40
 
 
@@ -311,6 +313,87 @@ def ellipf_kc(phi, kc):
     return value
 
 
+@njit(cache=True, nogil=True)
+def ellipf_sincos(s, c, kc):
+    """``F(am | m)`` for ``am = atan2(s, c)`` in ``[-pi/2, pi/2]`` (``c >= 0``).
+
+    ``(s, c)`` is any positive multiple of ``(sin am, cos am)``; it is
+    normalised here, and ``F = sin(am) R_F(cos^2 am, cos^2 am + kc^2
+    sin^2 am, 1)`` (DLMF 19.25.5 with ``1 - m sin^2 = cos^2 + kc^2 sin^2``).
+    Every argument is a product or a sum of non-negative terms, and ``R_F``
+    has relative condition number at most 1/2 in each argument, so ``F``
+    keeps a few ulps of relative accuracy for every ``kc`` and every ``am``,
+    with no amplitude ever formed by ``atan2`` (which rounds the angle
+    near ``pi/2``, where ``dF/d am = 1/dn`` can be ``1/kc``).
+    """
+    scale = math.hypot(s, c)
+    s = s / scale
+    c = c / scale
+    c2 = c * c
+    return s * carlson_rf(c2, c2 + (kc * s) * (kc * s), 1.0)
+
+
+@njit(cache=True, nogil=True)
+def quarter_reduce(w, quarters, quarter):
+    """Reduce ``u = quarters K + w`` to a quarter period and to a half period.
+
+    Parameters
+    ----------
+    w : float
+        The argument's offset from ``quarters K``.
+    quarters : float
+        An integer (held in a double).
+    quarter : float
+        ``K``.
+
+    Returns
+    -------
+    total, rq, j, r : float
+        ``u = total K + rq`` with ``|rq| <= K/2`` (``rq = w`` exactly when
+        ``|w| < K/2``), and ``u = 2 j K + r`` with ``|r| <= K``.
+    """
+    shift = math.floor(w / quarter + 0.5)
+    rq = w - shift * quarter if shift != 0.0 else w
+    total = quarters + shift
+    half = 0.5 * total
+    j = math.floor(half)
+    if j == half:
+        return total, rq, j, rq
+    if rq >= 0.0:
+        return total, rq, j + 1.0, rq - quarter
+    return total, rq, j, rq + quarter
+
+
+@njit(cache=True, nogil=True)
+def jacobi_quarters(w, quarters, kc, levels, means, geometric):
+    """``sn, cn, dn`` of ``u = quarters K + w`` with ``w`` kept at full precision.
+
+    Returns ``sn, cn, dn, j, r`` as :func:`jacobi_from_table` does (``u =
+    2 j K + r``, ``|r| <= K``).  The functions are evaluated at ``rq``,
+    ``|rq| <= K/2`` (:func:`quarter_reduce`), and carried to ``u`` by the
+    quarter-period shifts (DLMF 22.4.3): ``sn(v + K) = cd(v)``,
+    ``cn(v + K) = -kc sd(v)``, ``dn(v + K) = kc nd(v)``, and ``(sn, cn, dn)
+    (v + 2K) = (-sn, -cn, dn)(v)``.  Only products: where ``u`` lies near
+    an odd multiple of ``K`` (a spin near the unstable axis, ``cn`` and
+    ``dn`` tiny) each function keeps the relative accuracy of ``w``, which
+    ``jacobi_from_table(quarters K + w)`` would lose to the rounding of
+    ``u`` (an absolute ``eps K``).  ``dn(rq) >= sqrt(kc)`` here, so nothing
+    divides by a small number.
+    """
+    quarter = HALF_PI / means[levels]
+    total, rq, j, r = quarter_reduce(w, quarters, quarter)
+    s, c, d, _, _ = jacobi_from_table(rq, levels, means, geometric)
+    phase = total - 4.0 * math.floor(0.25 * total)
+    if phase == 0.0:
+        return s, c, d, j, r
+    if phase == 2.0:
+        return -s, -c, d, j, r
+    inv = 1.0 / d
+    if phase == 1.0:
+        return c * inv, -kc * s * inv, kc * inv, j, r
+    return -c * inv, kc * s * inv, kc * inv, j, r
+
+
 AGM_LEVELS = _MAX_AGM + 1
 
 
@@ -363,6 +446,21 @@ def jacobi_from_table(u, levels, means, geometric):
     quarter = HALF_PI / a_last  # K(m)
     j = math.floor(u / (2.0 * quarter) + 0.5)
     r = u - 2.0 * j * quarter
+    sign = 1.0 - 2.0 * (j % 2.0 != 0.0)
+    if abs(r) < _SERIES_ARGUMENT:
+        # Maclaurin series (DLMF 22.10.1-22.10.3); the next terms are
+        # O(r^4) relative.  The ratio cn/sn of the descent below would
+        # overflow for |r| below ~1e-154 (a start with sn ~ 1e-200).
+        kc = geometric[0]
+        m = (1.0 - kc) * (1.0 + kc)
+        r2 = r * r
+        return (
+            sign * r * (1.0 - (1.0 + m) * r2 / 6.0),
+            sign * (1.0 - 0.5 * r2),
+            1.0 - 0.5 * m * r2,
+            j,
+            r,
+        )
     v = a_last * r
     s = math.sin(v)
     c = math.cos(v)
@@ -378,7 +476,6 @@ def jacobi_from_table(u, levels, means, geometric):
             ratio = cot / mean
         s = math.copysign(1.0 / math.sqrt(cot * cot + 1.0), s)
         c = cot * s
-    sign = 1.0 - 2.0 * (j % 2.0 != 0.0)
     return sign * s, sign * c, dn, j, r
 
 

@@ -42,9 +42,9 @@ from .motion import (
     SLOT_LEVELS,
     SLOT_MEANS,
     SLOT_N,
-    SLOT_QUARTER,
     SLOT_RATE,
     SLOT_TAU0,
+    half_period_index,
     omega_space_at,
     omega_space_from_pieces,
     pi_of_u,
@@ -217,7 +217,6 @@ def block_pieces(orbit, times, delta, offsets, nodes, weights, b, pieces):
     kc = orbit[SLOT_KC]
     m = (1.0 - kc) * (1.0 + kc)
     n = orbit[SLOT_N]
-    per_half_period = 0.5 / orbit[SLOT_QUARTER]  # 1 / (2K)
     u_anchor = tau0 + rate * times[lo]
     p = _exact_piece(orbit, u_anchor, pieces, 0)
     sa = pieces[PIECE_SN, 0]
@@ -235,7 +234,7 @@ def block_pieces(orbit, times, delta, offsets, nodes, weights, b, pieces):
             pieces[PIECE_SN, j] = s
             pieces[PIECE_CN, j] = c
             pieces[PIECE_DN, j] = d
-            pieces[PIECE_J, j] = math.floor((u_anchor + j * delta) * per_half_period + 0.5)
+            pieces[PIECE_J, j] = half_period_index(orbit, u_anchor + j * delta)
     if end == lo:
         return True
     u_end = tau0 + rate * times[end]

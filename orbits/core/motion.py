@@ -38,9 +38,10 @@ from .elliptic import (
     AGM_LEVELS,
     agm_table,
     carlson_rj,
-    ellipf_kc,
+    ellipf_sincos,
     ellippi_complete_carlson,
-    jacobi_from_table,
+    jacobi_quarters,
+    quarter_reduce,
 )
 from .phase import BRANCH_SAM, BRANCH_SEPARATRIX, elliptic_parameter, orbit_constants
 from .trig import sincos
@@ -72,22 +73,29 @@ TWO_PI = 2.0 * math.pi
     SLOT_STILL,
     SLOT_LEVELS,
     SLOT_GAP_3M,
-) = range(23)
-SLOT_MEANS = 23
+    SLOT_START_QUARTERS,
+) = range(24)
+SLOT_MEANS = 24
 SLOT_GEOMETRIC = SLOT_MEANS + AGM_LEVELS
 ORBIT_SIZE = SLOT_GEOMETRIC + AGM_LEVELS
 
 
 @njit(cache=True, nogil=True)
-def pi_of_u(orbit, u):
+def pi_of_u(orbit, w):
     """``Pi(n; am(u) | m)`` continued through every half period, with sn, cn, dn.
 
-    Also returns the half-period index ``j`` of ``am(u) = j pi + am(r)``.
+    ``u = q K + w``: ``w`` is the argument's offset from the start's whole
+    number ``q`` of quarter periods (``SLOT_START_QUARTERS``), so that the
+    start itself, ``w = tau0``, is represented at full relative precision
+    (see :func:`start_offset`).  Also returns the half-period index ``j``
+    of ``am(u) = j pi + am(r)``.
     """
     levels = int(orbit[SLOT_LEVELS])
     means = orbit[SLOT_MEANS : SLOT_MEANS + AGM_LEVELS]
     geometric = orbit[SLOT_GEOMETRIC : SLOT_GEOMETRIC + AGM_LEVELS]
-    sn, cn, dn, j, r = jacobi_from_table(u, levels, means, geometric)
+    sn, cn, dn, j, r = jacobi_quarters(
+        w, orbit[SLOT_START_QUARTERS], orbit[SLOT_KC], levels, means, geometric
+    )
     parity = 1.0 - 2.0 * (j % 2.0 != 0.0)
     s = parity * sn  # sin and cos of am(r), |am(r)| <= pi/2
     c = parity * cn
@@ -102,24 +110,51 @@ def pi_of_u(orbit, u):
 
 
 @njit(cache=True, nogil=True)
-def start_argument(sin0, cos0, kc, quarter):
-    """``u0`` with ``(sn u0, cn u0)`` along ``(sin0, cos0)``, ``|u0| <= 2K``.
+def half_period_index(orbit, w):
+    """The half-period index ``j`` of ``u = q K + w`` (as :func:`pi_of_u` gives it)."""
+    return quarter_reduce(w, orbit[SLOT_START_QUARTERS], orbit[SLOT_QUARTER])[2]
 
-    ``u0 = F(atan2(sin0, cos0) | m)`` in factored form.  Near ``am = +-pi/2``
-    (a spin near the unstable I2 axis, where ``cos0`` may be 1e-17 and the
-    amplitude itself rounds to ``pi/2``) the complementary amplitude
-    ``psi`` with ``tan(am) tan(psi) = 1/kc`` carries the small part:
-    ``F(am) = K - F(psi)`` (``cn(K - x) = kc sd(x)``, DLMF 22.4.iii),
-    so ``u0 = +-(K + F(atan2(-cos0, kc |sin0|)))``.  Near ``am = pi``,
-    ``F(pi - x) = 2K - F(x)``.  ``quarter`` is ``K``.
+
+@njit(cache=True, nogil=True)
+def start_offset(sin0, cos0, kc):
+    """The start ``u0 = q K + x`` with ``(sn u0, cn u0)`` along ``(sin0, cos0)``.
+
+    Returns ``q`` (an integer in ``-2..2``, as a float) and ``x``, ``|x| <=
+    K/2``, with ``u0 = F(am0 | m)`` for the amplitude ``am0 = atan2(sin0,
+    cos0)`` in ``[-pi, pi]``.  ``x`` is formed without any subtraction of
+    nearly equal numbers and without forming ``am0`` itself, from the
+    normalised ``(sin, cos)`` through Carlson's ``R_F``
+    (:func:`orbits.core.elliptic.ellipf_sincos`):
+
+    * ``F(am0) <= K/2`` (``|cos am0| >= sqrt(kc) |sin am0|``, ``cos >= 0``):
+      ``q = 0``, ``x = F(am0)``;
+    * near ``+-pi`` likewise with ``F(pi - y) = 2K - F(y)``: ``q = +-2``,
+      ``x = -sin(am0) R_F(cos^2, cos^2 + kc^2 sin^2, 1)``;
+    * near ``+-pi/2`` (a spin near the unstable I2 axis, or any start once
+      ``kc`` is small) the complementary amplitude ``psi`` with ``tan(am0)
+      tan(psi) = 1/kc``, i.e. ``(sin psi, cos psi)`` along ``(cos am0, kc
+      |sin am0|)``: ``F(am0) = +-(K - F(psi))`` (``cn(K - v) = kc sd(v)``,
+      DLMF 22.4.iii), so ``q = +-1``, ``x = -+F(psi)``.
+
+    The split is where ``F(am0) = F(psi)``, i.e. ``tan^2 am0 = 1/kc``, so
+    ``|x| <= K/2`` in every case.  The motion is evaluated at ``q K + (x +
+    D t)`` with the quarter-period shifts of
+    :func:`orbits.core.elliptic.jacobi_quarters`, so at ``t = 0`` each
+    component of omega is recovered to a few ulps, even where it is far
+    below the others (before, ``u0`` was one double near ``K`` and its
+    rounding, ``eps K``, was amplified by up to ``1/kc``).
     """
-    if abs(cos0) >= abs(sin0):
-        if cos0 > 0.0:
-            return ellipf_kc(math.atan2(sin0, cos0), kc)
-        sign = 1.0 if sin0 >= 0.0 else -1.0
-        return sign * 2.0 * quarter - ellipf_kc(math.atan2(sin0, -cos0), kc)
-    sign = 1.0 if sin0 > 0.0 else -1.0
-    return sign * (quarter + ellipf_kc(math.atan2(-cos0, kc * abs(sin0)), kc))
+    scale = math.hypot(sin0, cos0)
+    s = sin0 / scale
+    c = cos0 / scale
+    edge = abs(s) * math.sqrt(kc)
+    if c > 0.0 and c >= edge:
+        return 0.0, ellipf_sincos(s, c, kc)
+    if c < 0.0 and -c >= edge:
+        return (2.0 if s >= 0.0 else -2.0), -ellipf_sincos(s, -c, kc)
+    if s > 0.0:
+        return 1.0, -ellipf_sincos(c, kc * s, kc)
+    return -1.0, ellipf_sincos(c, -kc * s, kc)
 
 
 @njit(cache=True, nogil=True)
@@ -196,7 +231,8 @@ def orbit_setup(i1, i2, i3, w1, w2, w3, scale, offset, closing, orbit):
     # a steady spin about I3: the Euler angles phi and psi share one axis
     orbit[SLOT_STILL] = 1.0 if (branch == BRANCH_SAM and gap_3m == 0.0) else 0.0
     orbit[SLOT_LEVELS] = levels
-    tau0 = start_argument(sin0, cos0, kc, quarter)
+    quarters, tau0 = start_offset(sin0, cos0, kc)
+    orbit[SLOT_START_QUARTERS] = quarters
     orbit[SLOT_TAU0] = tau0
     orbit[SLOT_PI_START] = pi_of_u(orbit, tau0)[0]
     return branch

@@ -1,0 +1,353 @@
+"""The geometry of a Poinsot animation, frame by frame: no drawing, no matplotlib.
+
+What :class:`orbits.animate.PoinsotAnimation` draws, computed here (the
+units and the construction are those of :mod:`orbits.animate`'s
+docstring): the solid's faces in the principal frame (:func:`solid_faces`:
+T-handle, box, cylinder, mesh or the equivalent ellipsoid), the inertia
+ellipsoid's wire frame (:func:`inertia_ellipsoid_lines`), and per frame
+(:class:`PoinsotScene`) the orientation, the contact point of ellipsoid and
+invariable plane, and the herpolhode and polhode traced so far
+(:class:`FrameData`).  :mod:`orbits.animate` turns these into matplotlib
+artists and files.
+"""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .bodies import Body, cylinder_moments
+from .errors import InputError
+from .motion import as_body
+from .plotting import box_faces
+
+
+# ----------------------------------------------------------------- solids
+def solid_faces(body, solid="auto"):
+    """The faces of the solid to draw, in the principal frame, about the centre of mass.
+
+    Parameters
+    ----------
+    body : Body
+    solid : "auto", "ellipsoid", or a tuple
+        ``("t-handle", l1, l2, w)``, ``("box", a, b, c)`` (full side
+        lengths along the caller's x, y, z), ``("cylinder", a, length, b)``
+        (along z, section semi-axes a along x and b along y) or ``("mesh",
+        vertices, faces)`` (caller's axes, centred at the centre of mass).  ``"auto"``
+        uses ``body.shape`` when the body carries one (same tuples: set by
+        :meth:`Body.t_handle`, :meth:`Body.box`, :meth:`Body.cylinder` and
+        :meth:`Body.from_mesh`), the
+        T-handle when the moments are those of :meth:`Body.t_handle` (8, 4,
+        1) (the ``t-handle`` preset), and else the equivalent ellipsoid
+        (:meth:`Body.equivalent_ellipsoid`).
+
+    Returns
+    -------
+    kind : str
+    faces : list of ndarray, each (k, 3)
+        Polygons in the sorted principal frame (length units of the body).
+    """
+    body = as_body(body)
+    spec = solid
+    if isinstance(spec, str) and spec == "auto":
+        spec = getattr(body, "shape", None)
+        if spec is None and np.array_equal(body.moments, Body.t_handle(8.0, 4.0, 1.0).moments):
+            spec = ("t-handle", 8.0, 4.0, 1.0)
+        if spec is None:
+            spec = "ellipsoid"
+    if isinstance(spec, dict):
+        spec = (spec.get("kind"),) + tuple(v for k, v in spec.items() if k != "kind")
+    if isinstance(spec, str):
+        spec = (spec,)
+    kind = spec[0] if spec else None
+    if kind == "ellipsoid":
+        semi = np.array(body.equivalent_ellipsoid())
+        # semi-axes (a, b, c) lie along the principal axes I1, I2, I3
+        return "ellipsoid", _ellipsoid_faces(np.maximum(semi, 1e-3 * semi.max()))
+    if kind == "t-handle":
+        l1, l2, w = (float(v) for v in spec[1:4])
+        faces = _t_handle_faces(l1, l2, w)
+        frame = Body.t_handle(l1, l2, w).frame
+    elif kind == "box":
+        a, b, c = (float(v) for v in spec[1:4])
+        faces = box_faces((-a / 2, -b / 2, -c / 2), (a / 2, b / 2, c / 2))
+        frame = Body((b * b + c * c, a * a + c * c, a * a + b * b)).frame
+    elif kind == "cylinder":
+        a, length, b = (float(v) for v in spec[1:4])
+        faces = _cylinder_faces(a, b, length)
+        frame = Body(cylinder_moments(a, length, radius_y=b)).frame
+    elif kind == "mesh":
+        vertices = np.asarray(spec[1], dtype=float)
+        faces = [vertices[np.asarray(f)] for f in spec[2]]
+        frame = body.frame
+    else:
+        raise InputError(
+            f"unknown solid {solid!r}; use 'auto', 'ellipsoid', "
+            "('t-handle', l1, l2, w), ('box', a, b, c), "
+            "('cylinder', a, length, b) or ('mesh', vertices, faces)"
+        )
+    # caller's axes -> sorted principal axes: v_principal = frame @ v
+    return kind, [face @ frame.T for face in faces]
+
+
+def t_handle_boxes(l1, l2, w):
+    """The T-handle's two bars as (lo, hi) corners about its centre of mass.
+
+    Cross piece along x, shaft along y from the cross piece's edge, square
+    section w (the geometry of eqn:IsforT).
+    """
+    com_y = (l2 / (l1 + l2)) * 0.5 * (w + l2)
+    return [
+        ((-l1 / 2, -w / 2 - com_y, -w / 2), (l1 / 2, w / 2 - com_y, w / 2)),
+        ((-w / 2, w / 2 - com_y, -w / 2), (w / 2, w / 2 + l2 - com_y, w / 2)),
+    ]
+
+
+def _same_vertex_count(faces):
+    """Faces padded to one vertex count by repeating each face's last vertex.
+
+    matplotlib 3.11 stores polygons of different lengths in an ``np.empty``
+    array and projects and autoscales its unused padding too
+    (matplotlib/matplotlib#32272): a cylinder (24-gon caps, quadrilateral
+    walls) got axis limits of 1.8e308 in one CI run.  A repeated vertex adds
+    a zero-length edge: the drawing is the same.
+    """
+    count = max(len(face) for face in faces)
+    return [
+        face
+        if len(face) == count
+        else np.concatenate([face, np.repeat(face[-1:], count - len(face), axis=0)])
+        for face in faces
+    ]
+
+
+def _cylinder_faces(a, b, length, sides=24):
+    """An elliptic cylinder along z (semi-axes a along x, b along y) as a prism."""
+    u = np.linspace(0.0, 2.0 * np.pi, sides + 1)[:-1]
+    rim = np.stack([a * np.cos(u), b * np.sin(u)], axis=-1)
+    bottom = np.column_stack([rim, np.full(sides, -0.5 * length)])
+    top = np.column_stack([rim, np.full(sides, 0.5 * length)])
+    walls = [np.array([bottom[i], bottom[i - 1], top[i - 1], top[i]]) for i in range(sides)]
+    return [bottom, top] + walls
+
+
+def _t_handle_faces(l1, l2, w):
+    faces = []
+    for lo, hi in t_handle_boxes(l1, l2, w):
+        faces += box_faces(lo, hi)
+    return faces
+
+
+def _ellipsoid_faces(semi, longitudes=16, latitudes=8):
+    u = np.linspace(0.0, 2.0 * np.pi, longitudes + 1)
+    v = np.linspace(0.0, np.pi, latitudes + 1)
+    points = np.stack(
+        [
+            np.outer(np.cos(u), np.sin(v)) * semi[0],
+            np.outer(np.sin(u), np.sin(v)) * semi[1],
+            np.outer(np.ones_like(u), np.cos(v)) * semi[2],
+        ],
+        axis=-1,
+    )
+    return [
+        np.array([points[i, j], points[i + 1, j], points[i + 1, j + 1], points[i, j + 1]])
+        for i in range(longitudes)
+        for j in range(latitudes)
+    ]
+
+
+def inertia_ellipsoid_lines(moments, meridians=8, parallels=5, samples=49):
+    """Wire-frame curves of the inertia ellipsoid ``x.I.x = 1`` (body frame).
+
+    Returns a list of (samples, 3) arrays: meridians through the I3 poles
+    and parallels of constant x3 (every point satisfies ``x.I.x = 1``).
+    """
+    semi = 1.0 / np.sqrt(np.asarray(moments, dtype=float))
+    s = np.linspace(0.0, 2.0 * np.pi, samples)
+    curves = []
+    for k in range(meridians):
+        azimuth = np.pi * k / meridians
+        curves.append(
+            np.stack(
+                [
+                    semi[0] * np.cos(azimuth) * np.sin(s),
+                    semi[1] * np.sin(azimuth) * np.sin(s),
+                    semi[2] * np.cos(s),
+                ],
+                axis=-1,
+            )
+        )
+    for k in range(1, parallels + 1):
+        polar = np.pi * k / (parallels + 1)
+        curves.append(
+            np.stack(
+                [
+                    semi[0] * np.sin(polar) * np.cos(s),
+                    semi[1] * np.sin(polar) * np.sin(s),
+                    np.full(samples, semi[2] * np.cos(polar)),
+                ],
+                axis=-1,
+            )
+        )
+    return curves
+
+
+# ----------------------------------------------------------------- per frame
+@dataclass
+class FrameData:
+    """What frame ``k`` draws, in the units of the module docstring.
+
+    Attributes
+    ----------
+    t : float
+        Time of the frame.
+    rotation : ndarray (3, 3)
+        The orientation drawn (body -> space): its columns are the drawn
+        body axes.
+    contact : ndarray (3,)
+        The contact point of ellipsoid and plane, space frame.
+    contact_body : ndarray (3,)
+        The same point in the body frame (end of the polhode drawn).
+    herpolhode : ndarray (k, 3)
+        The herpolhode traced up to ``t`` (space frame; ends at ``contact``).
+    polhode : ndarray (k, 3)
+        The polhode traced up to ``t`` (body frame).
+    plane_height : float
+        ``sqrt(2E)/M``: the plane is ``z = plane_height``.
+    """
+
+    t: float
+    rotation: np.ndarray
+    contact: np.ndarray
+    contact_body: np.ndarray
+    herpolhode: np.ndarray
+    polhode: np.ndarray
+    plane_height: float
+
+
+class PoinsotScene:
+    """The geometry of every frame of a Poinsot animation (nothing drawn).
+
+    Parameters
+    ----------
+    motion : Motion
+    times : array_like (frames,)
+        Frame times, increasing from the first to the last.
+    solid : "auto", "ellipsoid" or tuple
+        The solid; see :func:`solid_faces`.
+    subsamples : int
+        Steps of the traced curves per frame interval.
+
+    Attributes
+    ----------
+    motion : Motion
+    times : ndarray (frames,)
+    plane_height : float
+        ``sqrt(2E)/M``: the invariable plane is ``z = plane_height``.
+    semi_axes : ndarray (3,)
+        ``1/sqrt(I_k)``: the inertia ellipsoid's semi-axes (body frame).
+    dense_times : ndarray
+        The traced curves' times: ``subsamples`` steps per frame interval,
+        holding the frame times exactly at multiples of ``subsamples``.
+    rho_space, rho_body : ndarray (len(dense_times), 3)
+        ``omega / sqrt(2E)`` at ``dense_times``: the herpolhode (space
+        frame) and the polhode (body frame).
+    rotations : ndarray (frames, 3, 3)
+        Body -> space at each frame.
+    frame_rho_space, frame_rho_body : ndarray (frames, 3)
+        The contact point at each frame, space and body frame.
+    wire : list of ndarray (samples, 3)
+        The inertia ellipsoid's wire frame, body frame.
+    solid_kind : str
+    solid_scale : float
+        Length units of the solid -> ellipsoid units (display only): the
+        whole solid fits inside the inertia ellipsoid.
+    faces : list of ndarray (k, 3)
+        The solid's faces, scaled, body frame, padded to one vertex count.
+    """
+
+    def __init__(self, motion, times, *, solid="auto", subsamples=8):
+        self.motion = motion
+        self.times = np.asarray(times, dtype=float)
+        body = motion.body
+        moments = body.moments
+        two_e = 2.0 * motion.energy
+        self.plane_height = math.sqrt(two_e) / motion.momentum
+        self.semi_axes = 1.0 / np.sqrt(moments)
+        # a dense grid for the traced curves: `subsamples` steps per frame
+        count = max(1, (len(self.times) - 1) * subsamples)
+        self.dense_times = np.linspace(self.times[0], self.times[-1], count + 1)
+        self.subsamples = subsamples
+        state = motion.state(self.dense_times)
+        self.rho_space = state.omega_space / math.sqrt(two_e)
+        self.rho_body = state.omega / math.sqrt(two_e)
+        frame_state = motion.state(self.times)
+        self.rotations = frame_state.rotation
+        self.frame_rho_space = frame_state.omega_space / math.sqrt(two_e)
+        self.frame_rho_body = frame_state.omega / math.sqrt(two_e)
+        self.wire = inertia_ellipsoid_lines(moments)
+        self.solid_kind, faces = solid_faces(body, solid)
+        # the whole solid (every vertex) fits inside the inertia ellipsoid
+        vertices = np.concatenate(faces)
+        reach = float(np.max(np.sqrt(np.sum((vertices / self.semi_axes) ** 2, axis=1))))
+        self.solid_scale = 0.95 / reach
+        self.faces = _same_vertex_count([face * self.solid_scale for face in faces])
+
+    def extents(self):
+        """``(half, reach)``: half-widths of the space and body panels' boxes.
+
+        ``reach`` is 1.05 times the ellipsoid's longest semi-axis; ``half``
+        also holds the herpolhode with a 15 % margin.
+        """
+        reach = 1.05 * float(self.semi_axes.max())
+        radius = float(np.max(np.hypot(self.rho_space[:, 0], self.rho_space[:, 1])))
+        return max(reach, 1.15 * radius), reach
+
+    def frame(self, k):
+        """The :class:`FrameData` of frame ``k``.
+
+        Raises
+        ------
+        InputError
+            ``k`` outside ``0 .. frames - 1``.
+        """
+        k = int(k)
+        if not 0 <= k < len(self.times):
+            raise InputError(f"frame {k} out of range 0..{len(self.times) - 1}")
+        contact = self.frame_rho_space[k]
+        contact_body = self.frame_rho_body[k]
+        end = k * self.subsamples + 1
+        # the dense grid holds the frame times exactly at multiples of subsamples;
+        # the traced curves end at the frame's own contact point
+        herpolhode = np.concatenate([self.rho_space[: end - 1], contact[None]])
+        polhode = np.concatenate([self.rho_body[: end - 1], contact_body[None]])
+        return FrameData(
+            float(self.times[k]),
+            self.rotations[k],
+            contact,
+            contact_body,
+            herpolhode,
+            polhode,
+            self.plane_height,
+        )
+
+    def ellipsoid_lines(self, rotation):
+        """The wire frame turned by ``rotation`` (body -> space)."""
+        return [curve @ rotation.T for curve in self.wire]
+
+    def solid_polygons(self, rotation):
+        """The solid's faces turned by ``rotation`` (body -> space)."""
+        return [face @ rotation.T for face in self.faces]
+
+    def axis_tips(self, rotation):
+        """The ends of the three drawn body axes (1.15 semi-axes), space frame."""
+        return [1.15 * self.semi_axes[j] * rotation[:, j] for j in range(3)]
+
+
+__all__ = [
+    "FrameData",
+    "PoinsotScene",
+    "inertia_ellipsoid_lines",
+    "solid_faces",
+    "t_handle_boxes",
+]

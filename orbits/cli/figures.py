@@ -1,0 +1,123 @@
+"""``orbits figures``: closed herpolhodes of a body, the paper's figures, Fig. 2 of a survey."""
+
+import sys
+
+from ..errors import InputError
+from ..limits import check_search_bounds
+from .shared import BODY_SELECTORS, add_body_options, body_from_args, positive_int, progress_bar
+
+
+def _output_directory(path):
+    from pathlib import Path
+
+    directory = Path(path)
+    if directory.exists() and not directory.is_dir():
+        raise InputError(f"output path {directory} exists and is not a directory")
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise InputError(f"cannot create output directory {directory}: {error.strerror}") from None
+    if not directory.is_dir():
+        raise InputError(f"output path {directory} is not a directory")
+    from ..atomic import ensure_writable
+
+    ensure_writable(directory / "probe")
+    return directory
+
+
+def _cmd_figures(args):
+    import time
+
+    from .. import figures
+
+    selectors = [
+        args.paper,
+        bool(args.survey),
+        any(getattr(args, name) is not None for name in BODY_SELECTORS),
+    ]
+    if sum(selectors) != 1:
+        raise InputError(
+            "orbits figures: give exactly one of a body (--moments, "
+            "--t-handle, --ellipsoid, --preset), --paper or --survey DIR"
+        )
+    # every input is checked before the output directory is created
+    start = time.perf_counter()
+    if args.paper or args.survey:
+        grid = None
+        if args.survey:
+            from ..survey import survey_grid
+
+            grid = survey_grid(args.survey)
+        out = _output_directory(args.out)
+        names = ["fig2"] if args.survey else list(figures.PAPER_FIGURES)
+        with progress_bar(len(names), "figures", unit="figure") as bar:
+            written = figures.paper_figures(
+                out, formats=args.formats, survey_grid=grid, progress=bar.update, names=names
+            )
+    else:
+        if args.n_max is None:
+            raise InputError("orbits figures: --n-max is required with a body")
+        body = body_from_args(args)
+        from ..search import closed_orbits
+
+        check_search_bounds(args.n_max, args.q_max, 1, "the figures' search")
+        orbits_table = closed_orbits(body, n_max=args.n_max, q_max=args.q_max)
+        out = _output_directory(args.out)
+        with progress_bar(len(orbits_table) + 1, "figures", unit="figure") as bar:
+            written = figures.herpolhode_set(
+                body,
+                args.n_max,
+                out,
+                q_max=args.q_max,
+                formats=args.formats,
+                progress=bar.update,
+                orbits=orbits_table,
+            )
+    print(
+        f"orbits figures: {len(written)} files written to {out} in "
+        f"{time.perf_counter() - start:.1f} s",
+        file=sys.stderr,
+    )
+    return 0
+
+
+def add_parser(subparsers):
+    parser = subparsers.add_parser(
+        "figures",
+        help="draw closed herpolhodes, or the paper's six figures",
+        description="With a body: one figure per closed orbit (each n, both "
+        "branches, p/q orbits with --q-max; a p/q orbit is drawn "
+        "over q periods) in the invariable plane, plus a contact "
+        "sheet of them all in the paper's Fig. 6 order.  With "
+        "--paper: Figs. 1-6 of the paper.  With --survey DIR: "
+        "Fig. 2 from a survey directory.  Files are written "
+        "atomically and deterministically (headless).",
+    )
+    group = add_body_options(parser)
+    for action in group._group_actions:
+        action.required = False
+    parser._mutually_exclusive_groups[-1].required = False
+    parser.add_argument("--paper", action="store_true", help="draw the paper's six figures")
+    parser.add_argument(
+        "--survey", metavar="DIR", help="draw Fig. 2 from the survey in DIR (orbits survey)"
+    )
+    parser.add_argument(
+        "--n-max", type=positive_int, help="with a body: largest multiple n (or p/q) of 2 pi"
+    )
+    parser.add_argument(
+        "--q-max",
+        type=positive_int,
+        default=1,
+        help="with a body: also p/q orbits closing after up to Q periods (default 1)",
+    )
+    parser.add_argument(
+        "--formats",
+        nargs="+",
+        default=["png", "svg"],
+        choices=["png", "svg", "pdf"],
+        help="file formats (default: png svg)",
+    )
+    parser.add_argument(
+        "--out", required=True, metavar="DIR", help="output directory (created if missing)"
+    )
+    parser.set_defaults(run=_cmd_figures)

@@ -1,0 +1,208 @@
+"""``orbits phase``: closed-form phases of one body at given spins.
+
+Spins by polar angle (``--theta``/``--dtheta`` with ``--phi``), as an
+angular-velocity vector (``--omega``, physical units) or found from a
+total phase or a tumbling period ratio; printed as a table or CSV.
+"""
+
+import math
+import sys
+
+from ..errors import InputError
+from .shared import add_body_options, body_from_args, finite
+
+
+def _cmd_phase(args):
+    import numpy as np
+
+    # numpy's overflow warnings would add lines to stderr; a non-finite result
+    # is refused by _print_table instead (never a silent inf or nan)
+    with np.errstate(all="ignore"):
+        return _phase_table(args)
+
+
+def _phase_table(args):
+    body = body_from_args(args)
+    if args.omega is not None:
+        return _print_table(_omega_table(body, args), args.csv)
+    if args.total_phase is not None or args.period_ratio is not None:
+        from .. import tumbling
+
+        if args.total_phase is not None:
+            table = tumbling.spins_with_total_phase(body, _angle(args.total_phase, args))
+        else:
+            table = tumbling.spins_with_period_ratio(body, args.period_ratio)
+        return _print_table(table, args.csv)
+    from ..phases import phases
+
+    theta = None if args.theta is None else [_angle(v, args) for v in args.theta]
+    dtheta = None if args.dtheta is None else [_angle(v, args) for v in args.dtheta]
+    table = phases(body, theta, _angle(args.phi, args), dtheta=dtheta)
+    return _print_table(table, args.csv)
+
+
+# angular-velocity units -> rad/s
+OMEGA_UNITS = {
+    "rad/s": 1.0,
+    "deg/s": math.pi / 180.0,
+    "rpm": 2.0 * math.pi / 60.0,
+    "Hz": 2.0 * math.pi,
+}
+
+
+def _angle(value, args):
+    """An angle of the command line in radians (``--degrees`` converts)."""
+    return math.radians(value) if getattr(args, "degrees", False) else value
+
+
+def _omega_table(body, args):
+    """One row for a spin given as a vector: physical outputs and D = M^2/(2E).
+
+    omega is given along the caller's axes (the order of --moments, x y z of
+    --box, ...) in --units, turned to the principal frame with Body.frame.
+    With moments in kg m^2 the energy is in J, |L| in J s and the periods
+    in s; ``D_normalised = D/|I|`` is the ``D`` of the orbit's catalog row.
+    """
+    import numpy as np
+    import pandas as pd
+
+    from ..motion import Motion
+    from ..phases import spin_phases
+
+    omega = np.array(args.omega) * OMEGA_UNITS[args.units]
+    motion = Motion.from_omega(body, omega, axes="body")
+    principal = motion.omega0
+    periods = motion.tumbling_periods()
+    total = motion.total_phase()
+    dynamic = 2.0 * motion.energy * motion.period / motion.momentum
+    # Omega in its closed form: dynamic - total cancels near the sphere
+    geometric = float(spin_phases(body, principal)["geometric_phase"].iloc[0])
+    i1, i2, i3 = body.moments
+    return pd.DataFrame(
+        {
+            "I1": [i1],
+            "I2": [i2],
+            "I3": [i3],
+            "w1": [principal[0]],
+            "w2": [principal[1]],
+            "w3": [principal[2]],
+            "branch": [motion.branch],
+            "D": [motion.D],
+            # the catalog's D (|I| = 1): the row of this orbit in a catalog
+            "D_normalised": [motion.D / float(np.linalg.norm(body.moments))],
+            "energy": [motion.energy],
+            "momentum": [motion.momentum],
+            "m": [motion.m],
+            "period": [motion.period],
+            "precession_period": [periods.precession],
+            "rotation_period": [periods.rotation],
+            "period_ratio": [periods.ratio],
+            "dynamic_phase": [dynamic],
+            "total_phase": [total],
+            "geometric_phase": [geometric],
+        }
+    )
+
+
+def format_value(value):
+    """A table cell: floats at full precision, shortest round-trip form.
+
+    ``repr`` of a float is the shortest string that reads back to the same
+    double, in scientific notation for small and large magnitudes, so
+    ``1e-300`` prints as ``1e-300`` (not ``0.0``).
+    """
+    if isinstance(value, float) or type(value).__name__ in ("float64", "float32"):
+        return repr(float(value))
+    return str(value)
+
+
+def _print_table(table, csv):
+    import numpy as np
+
+    numbers = table.select_dtypes("number")
+    bad = [
+        name
+        for name in numbers.columns
+        if not np.all(np.isfinite(numbers[name].to_numpy(dtype=float)))
+    ]
+    if bad:
+        raise InputError(
+            f"the result is not finite ({', '.join(bad[:4])}): the inputs "
+            "are beyond the range of double precision (e.g. moments below "
+            "1e-150 or above 1e150, or a huge --omega); rescale them"
+        )
+    if csv:
+        table.to_csv(sys.stdout, index=False, float_format="%.17g")
+        return 0
+    rows = table.T
+    width = max(len(str(name)) for name in rows.index)
+    for name, values in rows.iterrows():
+        cells = "  ".join(f"{format_value(v):>24}" for v in values)
+        print(f"{str(name):<{width}}  {cells}")
+    return 0
+
+
+def add_parser(subparsers):
+    parser = subparsers.add_parser(
+        "phase",
+        help="closed-form phases of one body at given spins",
+        description="Energy, momentum, period and the dynamic, geometric and "
+        "total phase (eqn:GeometricPhase) for |I| = 1 and a unit "
+        "initial spin omega0 = (sin t cos p, sin t sin p, cos t) in "
+        "the principal frame.  Angles in radians.",
+    )
+    add_body_options(parser)
+    angle = parser.add_mutually_exclusive_group(required=True)
+    angle.add_argument(
+        "--theta",
+        nargs="+",
+        type=finite,
+        help="polar angle(s) of omega0 from the I3 axis (any value: folded "
+        "into [0, pi/2] by the top's symmetries)",
+    )
+    angle.add_argument(
+        "--dtheta",
+        nargs="+",
+        type=finite,
+        help="offset(s) theta - theta_crit from the separatrix (well conditioned down to 1e-300)",
+    )
+    angle.add_argument(
+        "--omega",
+        nargs=3,
+        type=finite,
+        metavar=("W1", "W2", "W3"),
+        help="the initial angular velocity as a vector along the "
+        "body's own axes (the order of --moments, x y z of "
+        "--box ...), in --units; prints physical E, |L|, "
+        "periods and D = M^2/(2E)",
+    )
+    angle.add_argument(
+        "--total-phase",
+        type=finite,
+        metavar="X",
+        help="find every spin (phi = 0, both branches) whose total "
+        "phase is X (radians, or degrees with --degrees)",
+    )
+    angle.add_argument(
+        "--period-ratio",
+        type=finite,
+        metavar="R",
+        help="find every spin whose tumbling period ratio "
+        "P_psi/P_phi is R (Pravec et al. 2005 convention)",
+    )
+    parser.add_argument(
+        "--phi", type=finite, default=0.0, help="azimuth of omega0 from the I1 axis (default 0)"
+    )
+    parser.add_argument(
+        "--units",
+        choices=list(OMEGA_UNITS),
+        default="rad/s",
+        help="unit of --omega (default rad/s)",
+    )
+    parser.add_argument(
+        "--degrees",
+        action="store_true",
+        help="--theta, --dtheta, --phi and --total-phase in degrees",
+    )
+    parser.add_argument("--csv", action="store_true", help="print CSV rows instead of a table")
+    parser.set_defaults(run=_cmd_phase)

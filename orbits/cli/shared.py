@@ -1,0 +1,378 @@
+"""What the subcommands share: the parser, number types, body options, progress.
+
+:class:`Parser` (argparse with one-line errors and exponent-aware negative
+numbers), the argument types :func:`finite`, :func:`moment` and
+:func:`positive_int`, the body selectors (:func:`add_body_options`,
+:func:`body_from_args`, :func:`bodies_from_args` for ``--bodies`` files),
+the provenance line :func:`command_line`, the estimate line
+:func:`announce`, the :func:`progress_bar` and the exit codes.
+"""
+
+import argparse
+import math
+import re
+import sys
+
+from ..bodies import PRESETS, Body
+from ..errors import InputError
+from ..limits import format_bytes, format_duration
+
+# exit codes (besides 0, and 128 + N for signal N)
+EXIT_CHECK_FAILED = 1
+EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse with a one-line error message (no usage dump).
+
+    It also reads ``-1e-300`` (and ``-inf``) as a number: argparse's own
+    pattern for negative numbers has no exponent, so ``--dtheta -1e-300``
+    would fail, and ``-inf`` must reach the finiteness check.
+    """
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(
+            r"^-((\d+\.?\d*|\.\d+)([eE][-+]?\d+)?|inf|infinity|nan)$", re.IGNORECASE
+        )
+
+    def error(self, message):
+        raise InputError(f"{self.prog}: {message}")
+
+
+def finite(text):
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"not a finite number: {text!r}")
+    return value
+
+
+def moment(text):
+    """A moment typed in decimal: refused where the double would not be it.
+
+    Below the smallest normal double (2.2e-308) a decimal is stored with
+    fewer than 53 bits (``1e-320`` becomes ``9.99988671826831e-321``), so the
+    body computed would silently differ from the one typed.
+    """
+    value = finite(text)
+    if 0.0 < abs(value) < sys.float_info.min:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is below the smallest normal double (2.2e-308) and would be "
+            "stored with reduced precision; give the moments in larger units"
+        )
+    return value
+
+
+def positive_int(text):
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
+    return value
+
+
+def add_body_options(parser, many=False):
+    """The body selectors shared by the subcommands (exactly one is required)."""
+    group = parser.add_argument_group(
+        "body (exactly one)",
+        "Moments may be in any order and any scale; they are sorted so that "
+        "I1 < I2 < I3 (the paper's labels).",
+    )
+    exclusive = group.add_mutually_exclusive_group(required=True)
+    exclusive.add_argument(
+        "--moments",
+        nargs=3,
+        type=moment,
+        metavar=("I1", "I2", "I3"),
+        help="principal moments of inertia",
+    )
+    exclusive.add_argument(
+        "--t-handle",
+        nargs=3,
+        type=finite,
+        metavar=("L1", "L2", "W"),
+        help="the paper's T-handle of unit mass: cross piece "
+        "L1, shaft L2, square section W (eqn:IsforT)",
+    )
+    exclusive.add_argument(
+        "--ellipsoid",
+        nargs=2,
+        type=finite,
+        metavar=("B", "C"),
+        help="the paper's unit-norm body from ellipsoid semi-axes b, c (eqn:isforellipsoid)",
+    )
+    exclusive.add_argument(
+        "--preset",
+        choices=sorted(PRESETS),
+        help="t-handle: the paper's (8, 4, 1) handle; fig6: I = (0.26, 0.55, 0.793662)",
+    )
+    if many:
+        exclusive.add_argument(
+            "--bodies",
+            metavar="FILE.csv",
+            help="many bodies: a CSV with columns I1, I2, I3 and optionally name",
+        )
+        group.add_argument(
+            "--skip-invalid",
+            action="store_true",
+            help="with --bodies: skip invalid rows (listed on stderr "
+            "and in the output) instead of stopping",
+        )
+    group.add_argument(
+        "--name", help="name of the single body (catalog and figure labels); not with --bodies"
+    )
+    _add_real_body_options(group, exclusive)
+    return group
+
+
+# Body selectors of add_body_options (argparse dest names), for commands
+# whose body is optional.
+BODY_SELECTORS = (
+    "moments",
+    "t_handle",
+    "ellipsoid",
+    "preset",
+    "box",
+    "cylinder",
+    "point_masses",
+    "mesh",
+    "rotational_constants",
+)
+
+
+def _add_real_body_options(group, exclusive):
+    """Real bodies in real units (kg, m, kg m^2) and their modifiers."""
+    exclusive.add_argument(
+        "--box",
+        nargs=3,
+        type=finite,
+        metavar=("A", "B", "C"),
+        help="uniform solid box with edges A, B, C along x, y, z (with --mass; Body.box)",
+    )
+    exclusive.add_argument(
+        "--cylinder",
+        nargs="+",
+        type=finite,
+        metavar="R L [RY]",
+        help="uniform solid cylinder along z: radius R (along x), "
+        "length L, optional second semi-axis RY of an "
+        "elliptic section (a circular one is a symmetric "
+        "top); with --mass (Body.cylinder)",
+    )
+    exclusive.add_argument(
+        "--point-masses",
+        metavar="FILE.csv",
+        help="rigid point masses: a CSV with columns mass, x, y, "
+        "z, about the centre of mass (Body.from_point_masses)",
+    )
+    exclusive.add_argument(
+        "--mesh",
+        metavar="FILE",
+        help="uniform solid bounded by a closed STL/OBJ mesh, "
+        "with --density (Body.from_mesh; needs orbits[mesh])",
+    )
+    exclusive.add_argument(
+        "--rotational-constants",
+        nargs=3,
+        type=finite,
+        metavar=("A", "B", "C"),
+        help="a molecule from its rotational constants, in --unit "
+        "(Body.from_rotational_constants)",
+    )
+    group.add_argument(
+        "--mass", type=finite, default=1.0, help="mass for --box and --cylinder (default 1)"
+    )
+    group.add_argument(
+        "--density", type=finite, default=1.0, help="density for --mesh (default 1)"
+    )
+    group.add_argument(
+        "--unit",
+        choices=["cm-1", "MHz", "GHz"],
+        default="cm-1",
+        help="unit of --rotational-constants (default cm-1)",
+    )
+    group.add_argument(
+        "--defect",
+        choices=["error", "flatten"],
+        default="error",
+        help="a positive inertial defect of --rotational-constants: "
+        "refuse (default) or put the body on the flat edge",
+    )
+
+
+def _point_masses_from_csv(path):
+    import numpy as np
+    import pandas as pd
+
+    try:
+        from ..atomic import csv_float_options
+
+        table = pd.read_csv(path, comment="#", **csv_float_options())
+    except (OSError, ValueError) as error:
+        raise InputError(f"cannot read point masses from {path}: {error}") from None
+    missing = {"mass", "x", "y", "z"} - set(table.columns)
+    if missing:
+        raise InputError(
+            f"{path}: point-mass CSV needs columns mass, x, y, z; "
+            f"missing {', '.join(sorted(missing))}"
+        )
+    try:
+        values = table[["mass", "x", "y", "z"]].to_numpy(dtype=float)
+    except ValueError:
+        raise InputError(f"{path}: mass, x, y, z must be numbers") from None
+    return values[:, 0], np.ascontiguousarray(values[:, 1:])
+
+
+def _real_body_from_args(args):
+    """The body of a real-body option, or None if none was given."""
+    name = getattr(args, "name", None)
+    if getattr(args, "box", None) is not None:
+        return Body.box(
+            *args.box, args.mass, name=name or "box({:g}, {:g}, {:g})".format(*args.box)
+        )
+    if getattr(args, "cylinder", None) is not None:
+        if len(args.cylinder) not in (2, 3):
+            raise InputError("--cylinder takes R L or R L RY")
+        radius, length, *rest = args.cylinder
+        return Body.cylinder(
+            radius,
+            length,
+            args.mass,
+            radius_y=rest[0] if rest else None,
+            name=name or "cylinder(" + ", ".join(f"{v:g}" for v in args.cylinder) + ")",
+        )
+    if getattr(args, "point_masses", None) is not None:
+        masses, positions = _point_masses_from_csv(args.point_masses)
+        return Body.from_point_masses(masses, positions, name=name or args.point_masses)
+    if getattr(args, "mesh", None) is not None:
+        return Body.from_mesh(args.mesh, density=args.density, name=name or args.mesh)
+    if getattr(args, "rotational_constants", None) is not None:
+        import warnings
+
+        from ..bodies import InertialDefectWarning
+
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", InertialDefectWarning)
+            body = Body.from_rotational_constants(
+                *args.rotational_constants,
+                unit=args.unit,
+                defect=args.defect,
+                name=name
+                or "rotational-constants({:g}, {:g}, {:g})".format(*args.rotational_constants),
+            )
+        for warning in caught:
+            print(f"orbits: warning: {warning.message}", file=sys.stderr)
+        return body
+    return None
+
+
+def body_from_args(args):
+    """The :class:`Body` selected by :func:`add_body_options` options."""
+    try:
+        body = _real_body_from_args(args)
+        if body is None:
+            body = _named_body_from_args(args)
+    except (OverflowError, FloatingPointError, ZeroDivisionError):
+        raise InputError(
+            "the body's moments overflow a double: use smaller lengths or moments"
+        ) from None
+    name = getattr(args, "name", None)
+    if name is not None:
+        if not name.strip():
+            raise InputError("--name must not be empty")
+        body.name = name
+    return body
+
+
+def _named_body_from_args(args):
+    if args.moments is not None:
+        return Body(args.moments, name="moments({:g}, {:g}, {:g})".format(*args.moments))
+    if args.t_handle is not None:
+        return Body.t_handle(
+            *args.t_handle, name="t-handle({:g}, {:g}, {:g})".format(*args.t_handle)
+        )
+    if args.ellipsoid is not None:
+        return Body.ellipsoid(
+            *args.ellipsoid, name="ellipsoid({:g}, {:g})".format(*args.ellipsoid)
+        )
+    return Body.preset(args.preset)
+
+
+def command_line(argv):
+    """The command as typed, for the provenance header of output files."""
+    import shlex
+
+    words = sys.argv[1:] if argv is None else list(argv)
+    return "orbits " + " ".join(shlex.quote(word) for word in words)
+
+
+def bodies_file_from_args(args):
+    """The strictly read ``--bodies`` file; skipped rows reported on stderr."""
+    from ..catalog import read_bodies_csv
+
+    if getattr(args, "name", None) is not None:
+        raise InputError("--name names a single body; a --bodies file has a name column")
+    import os
+
+    try:
+        size = os.path.getsize(args.bodies)
+    except OSError:
+        size = 0
+    if size > 20 << 20 and sys.stderr.isatty():
+        print(
+            f"orbits: reading {args.bodies} ({size / 2**20:.0f} MiB)...",
+            file=sys.stderr,
+            flush=True,
+        )
+    table = read_bodies_csv(args.bodies, skip_invalid=args.skip_invalid)
+    for _, message in table.skipped[:20]:
+        print(f"orbits: warning: skipped {message}", file=sys.stderr)
+    if len(table.skipped) > 20:
+        print(
+            f"orbits: warning: skipped {len(table.skipped) - 20} more invalid rows",
+            file=sys.stderr,
+        )
+    return table
+
+
+def bodies_from_args(args):
+    """The bodies selected by the body options and header notes (skipped rows)."""
+    if getattr(args, "bodies", None) is not None:
+        table = bodies_file_from_args(args)
+        return table.bodies(), table.skipped_note()
+    if getattr(args, "skip_invalid", False):
+        raise InputError("--skip-invalid applies to a --bodies file")
+    return [body_from_args(args)], []
+
+
+def announce(command, seconds, memory):
+    """One stderr line before a step estimated to take more than 2 s."""
+    if seconds > 2:
+        print(
+            f"orbits {command}: estimated {format_duration(seconds)}, up to {format_bytes(memory)}"
+            " of memory; working...",
+            file=sys.stderr,
+            flush=True,
+        )
+
+
+def progress_bar(total, description, enabled=None, unit="orbit"):
+    """A tqdm bar on a terminal (stderr), a no-op otherwise."""
+    from tqdm import tqdm
+
+    if enabled is None:
+        enabled = sys.stderr.isatty()
+    return tqdm(
+        total=total,
+        desc=description,
+        unit=unit,
+        disable=not enabled,
+        file=sys.stderr,
+        dynamic_ncols=True,
+    )

@@ -1,0 +1,203 @@
+"""``orbits survey``: the closed-orbit search over many bodies, and ``--check`` of a survey."""
+
+import math
+import sys
+
+from ..errors import InputError
+from ..limits import check_resolution
+from .shared import EXIT_CHECK_FAILED, announce, bodies_file_from_args, positive_int, progress_bar
+
+
+def _cmd_survey(args):
+    import json
+    import time
+
+    from ..survey import Survey, check_survey
+
+    if args.check:
+        return _check_survey_directory(args, check_survey)
+    if args.out is None:
+        raise InputError("orbits survey: --out DIR is required (or --check DIR)")
+    if args.n_max is None:
+        raise InputError("orbits survey: the following arguments are required: --n-max")
+    if (args.resolution is None) == (args.bodies is None):
+        raise InputError("orbits survey: give exactly one of --resolution N and --bodies FILE")
+    if args.skip_invalid and args.bodies is None:
+        raise InputError("--skip-invalid applies to a --bodies file")
+    if args.scheduler is not None and not args.scheduler.strip():
+        raise InputError("--scheduler is empty; give tcp://HOST:PORT")
+    options = dict(q_max=args.q_max, fmt=args.format, chunk=args.chunk)
+    from ..survey import survey_estimate
+
+    announced = False
+    if args.resolution is not None:
+        # say it before building the grid, which itself takes seconds when large
+        from ..survey import GRID_INSIDE, check_survey_bounds
+
+        check_resolution(args.resolution)
+        count = max(1, int(GRID_INSIDE * args.resolution**2))
+        check_survey_bounds(count, args.n_max, args.q_max, args.chunk)
+        announce("survey", *reversed(survey_estimate(count, args.n_max, args.q_max, args.chunk)))
+        announced = True
+        survey = Survey.grid(args.out, args.resolution, args.n_max, **options)
+    else:
+        table = bodies_file_from_args(args)
+        survey = Survey(
+            args.out,
+            table.moments,
+            {"file": str(args.bodies)},
+            args.n_max,
+            names=table.names,
+            skipped=[message for _, message in table.skipped],
+            **options,
+        )
+    memory, seconds = survey_estimate(
+        survey.moments.shape[0], survey.n_max, survey.q_max, survey.chunk
+    )
+    total = survey.moments.shape[0]
+    start = time.perf_counter()
+    with progress_bar(total, "survey", unit="body") as bar:
+
+        def notify(message):
+            bar.write(f"orbits survey: {message}", file=sys.stderr)
+
+        def status(message):
+            if sys.stderr.isatty():
+                notify(message)
+
+        if not announced:
+            announce("survey", seconds, memory)
+        report = survey.run(
+            scheduler=args.scheduler, progress=bar.update, notify=notify, status=status
+        )
+    pending = sum(len(survey.chunk_moments(k)) for k in survey.last_todo)
+    elapsed = time.perf_counter() - start
+    if args.json:
+        print(json.dumps(report, indent=2))
+    else:
+        conjecture = report["conjecture_minimum_at_the_ends"]
+        rate = f", {pending / elapsed:.0f} bodies/s" if pending else ""
+        print(
+            f"orbits survey: {total} bodies ({pending} computed now in "
+            f"{elapsed:.1f} s{rate}), {report['orbits']} closed orbits with "
+            f"n <= {args.n_max}, in {args.out}"
+        )
+        low, high = report["min_total_phase_range"]
+        print(
+            f"minimum total phase: {low / (2 * math.pi):.6f} to "
+            f"{high / (2 * math.pi):.6f} x 2 pi; bodies with a 2 pi orbit: "
+            f"{report['bodies_with_a_two_pi_orbit']}"
+        )
+        if conjecture["held_on_every_body"]:
+            print("conjecture (the minimum lies at theta -> 0 or pi/2): held on every body")
+        else:
+            print(
+                f"conjecture (the minimum lies at theta -> 0 or pi/2): FAILED on "
+                f"{len(conjecture['counterexamples'])} bodies:"
+            )
+            for row in conjecture["counterexamples"]:
+                print(
+                    f"  body {row['body']}: I = ({row['I1']:.6f}, {row['I2']:.6f}, "
+                    f"{row['I3']:.6f}), minimum {row['min_total_phase']:.9f} at "
+                    f"theta = {row['min_theta']:.9f}"
+                )
+    return 0
+
+
+def _check_survey_directory(args, check_survey):
+    """``orbits survey --check DIR``: verify every part, compute nothing."""
+    import json
+
+    given = [
+        name
+        for name in ("resolution", "bodies", "n_max", "scheduler", "out")
+        if getattr(args, name) is not None
+    ]
+    if given:
+        raise InputError(
+            f"orbits survey --check takes only the directory (and --json), "
+            f"not --{given[0].replace('_', '-')}"
+        )
+    status = check_survey(args.check)
+    if args.json:
+        print(json.dumps(status, indent=2))
+    else:
+        verdict = "complete, every part verified" if status["complete"] else "NOT complete"
+        print(
+            f"orbits survey --check {args.check}: {status['verified']} of "
+            f"{status['chunks']} chunk(s) verified; {verdict}"
+        )
+        for line in status["damaged"]:
+            print(f"  damaged {line}")
+        if status["missing"]:
+            print(
+                f"  missing: {', '.join(status['missing'][:10])}"
+                + (" ..." if len(status["missing"]) > 10 else "")
+            )
+    return 0 if status["complete"] else EXIT_CHECK_FAILED
+
+
+def add_parser(subparsers):
+    parser = subparsers.add_parser(
+        "survey",
+        help="minimum phases and closed orbits over many bodies",
+        description="Runs the closed-orbit search over the region of physical "
+        "asymmetric bodies (the paper's I1-I2 plane, |I| = 1) or an "
+        "explicit list, and writes DIR with manifest.json, the "
+        "tables bodies/ and orbits/ (partitioned, one file per "
+        "chunk) and report.json (the minimum-at-the-ends "
+        "conjecture, bodies with a 2 pi orbit, ...).  Each chunk is "
+        "written atomically and recorded in the manifest's ledger "
+        "(SHA-256 per part); running the same command again checks "
+        "every part and computes only the missing or damaged ones; "
+        "other parameters in the same DIR are refused; one run at a "
+        "time holds DIR (a lock).",
+    )
+    source = parser.add_mutually_exclusive_group()
+    source.add_argument(
+        "--resolution",
+        type=positive_int,
+        metavar="N",
+        help="an N x N grid over the bounding box of the region, keeping the points inside it",
+    )
+    source.add_argument(
+        "--bodies", metavar="FILE.csv", help="a CSV with columns I1, I2, I3 (optionally name)"
+    )
+    source.add_argument(
+        "--check",
+        metavar="DIR",
+        help="verify the survey in DIR against its ledger (SHA-256 of "
+        "every part) without computing; exit 1 if it is damaged "
+        "or incomplete",
+    )
+    parser.add_argument(
+        "--skip-invalid",
+        action="store_true",
+        help="with --bodies: skip invalid rows (listed on stderr and "
+        "in the manifest) instead of stopping",
+    )
+    parser.add_argument(
+        "--n-max", type=positive_int, help="largest multiple n (or p/q) of 2 pi searched per body"
+    )
+    parser.add_argument(
+        "--q-max", type=positive_int, default=1, help="also p/q orbits with q up to Q (default 1)"
+    )
+    parser.add_argument(
+        "--format",
+        choices=["csv", "parquet"],
+        default="parquet",
+        help="table format (default parquet: typed, exact, compact; csv is exact too)",
+    )
+    parser.add_argument(
+        "--chunk", type=positive_int, default=20_000, help="bodies per chunk (default 20000)"
+    )
+    parser.add_argument(
+        "--scheduler",
+        metavar="tcp://HOST:PORT",
+        help="run the chunks on this dask.distributed scheduler "
+        "(needs orbits[distributed]); default: in-process on "
+        "all cores",
+    )
+    parser.add_argument("--json", action="store_true", help="print the report as JSON")
+    parser.add_argument("--out", metavar="DIR", help="survey directory")
+    parser.set_defaults(run=_cmd_survey)
