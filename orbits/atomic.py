@@ -10,7 +10,10 @@ directory, is flushed and fsync'ed, and then replaces the target with
 * A target that exists and is not a regular file (a device such as
   ``/dev/null``, a FIFO, a socket, or a symlink to one) is refused: it is
   never replaced by a regular file.  A symlink to a regular file has its
-  target replaced (the link stays).
+  target replaced (the link stays), unless the write is made with
+  ``follow_links=False`` (every write inside a survey directory): then a
+  symlink at the target is refused, and one planted after the check is
+  replaced itself (``os.replace`` never follows it), never written through.
 * Temporary names are ``.NAME.PID.RANDOM.part``.  A process killed with
   SIGKILL cannot clean up, so every later write to the same directory
   removes the leftovers of ``.NAME.*.part`` whose process is gone; the
@@ -183,8 +186,11 @@ def remove_stale_temporaries(directory, name, regex=False):
 
 
 @contextmanager
-def atomic_path(path):
+def atomic_path(path, follow_links=True):
     """Yield a temporary path; on success move it onto ``path``.
+
+    With ``follow_links=False`` a symbolic link at ``path`` is refused
+    instead of written through.
 
     Raises
     ------
@@ -193,9 +199,11 @@ def atomic_path(path):
         is not a regular file, or the write failed (the message names the
         path and the reason, e.g. no space left on device).
     """
+    if not follow_links:
+        refuse_link(path)
     ensure_writable(path)
     path = Path(path)
-    if path.is_symlink():
+    if follow_links and path.is_symlink():
         # replace the regular file the link points to, keep the link
         path = Path(os.path.realpath(path))
     directory = path.parent if str(path.parent) else Path(".")
@@ -243,16 +251,47 @@ _WRITE_ERRNOS = {
 }
 
 
-def write_text_atomic(path, text):
-    """Write ``text`` to ``path`` atomically."""
-    with atomic_path(path) as temporary:
+def write_text_atomic(path, text, follow_links=True):
+    """Write ``text`` to ``path`` atomically (see :func:`atomic_path`)."""
+    with atomic_path(path, follow_links) as temporary:
         temporary.write_text(text)
 
 
-def write_bytes_atomic(path, data):
-    """Write ``data`` (bytes) to ``path`` atomically."""
-    with atomic_path(path) as temporary:
+def write_bytes_atomic(path, data, follow_links=True):
+    """Write ``data`` (bytes) to ``path`` atomically (see :func:`atomic_path`)."""
+    with atomic_path(path, follow_links) as temporary:
         temporary.write_bytes(data)
+
+
+def refuse_link(path):
+    """Raise :class:`InputError` if ``path`` is a symbolic link (it is not followed)."""
+    if os.path.islink(path):
+        raise InputError(
+            f"{path} is a symbolic link; orbits never follows links inside "
+            "its output directories (remove it)"
+        )
+
+
+def read_bytes_nofollow(path):
+    """The bytes of a regular file, never through a symbolic link.
+
+    Raises
+    ------
+    InputError
+        ``path`` is a symbolic link or not a regular file.
+    FileNotFoundError, OSError
+        As ``open``.
+    """
+    try:
+        handle = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC | os.O_NONBLOCK)
+    except OSError as error:
+        if error.errno == errno.ELOOP:
+            refuse_link(path)
+        raise
+    with os.fdopen(handle, "rb") as stream:
+        if not stat.S_ISREG(os.fstat(stream.fileno()).st_mode):
+            raise InputError(f"{path} is not a regular file")
+        return stream.read()
 
 
 def write_csv_atomic(frame, path, header_lines=()):

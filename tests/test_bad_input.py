@@ -110,6 +110,27 @@ def _damage(directory, damage):
         shutil.copy(part, part.with_name(part.name + ".bak"))
         data = part.read_bytes()
         part.write_bytes(data[: len(data) - 20])
+    elif damage in _LEDGER_EDITS:
+        document = json.loads(manifest.read_text())
+        _LEDGER_EDITS[damage](document)
+        if damage.endswith("-forged"):  # edited by someone who knows the checksum
+            document["sha256"] = orbits.survey.manifest_checksum(document)
+        manifest.write_text(json.dumps(document))
+    elif damage in _LINKS:
+        # a symlink planted in the survey to a copy outside it (same bytes:
+        # the ledger's SHA-256 alone would accept it)
+        planted = directory / _LINKS[damage]
+        outside = directory.parent / "outside" / planted.name
+        outside.parent.mkdir(exist_ok=True)
+        if planted.is_dir():
+            shutil.copytree(planted, outside)
+            shutil.rmtree(planted)
+        else:
+            shutil.copy(planted, outside)
+            planted.unlink()
+        os.symlink(outside, planted)
+    elif damage == "no-bodies-folder":
+        shutil.rmtree(directory / "bodies")
     elif damage == "stale-temporary":
         # a SIGKILLed run's temporary (pid 2**22 + 1 does not exist) next to a missing part
         (part.parent / f".{part.name}.{2**22 + 1}.abc.part").write_bytes(b"x" * 100)
@@ -170,6 +191,36 @@ def device_state():
     info = os.stat("/dev/null")
     return stat.S_ISCHR(info.st_mode), info.st_rdev
 
+
+def _swap(document):
+    document["parts"]["0"]["bodies"] = document["parts"]["1"]["bodies"]
+
+
+def _extra(document):
+    document["parts"]["99"] = document["parts"]["0"]
+
+
+def _n_max_three(document):
+    document["parameters"]["n_max"] = 3
+
+
+_LEDGER_EDITS = {
+    "ledger-swapped": _swap,
+    "ledger-extra": _extra,
+    "parameters-edited": _n_max_three,
+    "ledger-swapped-forged": _swap,
+    "ledger-extra-forged": _extra,
+    "parameters-edited-forged": _n_max_three,
+}
+_LINKS = {
+    "link-lock": ".lock",
+    "link-part": "bodies/part-00001.csv",
+    "link-bodies": "bodies",
+    "link-orbits": "orbits",
+    "link-manifest": "manifest.json",
+    "link-report": "report.json",
+}
+_HAND_EDITS = ("ledger-swapped", "ledger-extra", "parameters-edited")
 
 # ------------------------------------------------------------------ the table
 P, C, V, F, S, A = "phase", "catalog", "verify", "figures", "survey", "animate"
@@ -578,7 +629,7 @@ CLI_CASES = [
         "survey-rerun-no-manifest",
         GRID + ["--out", "{d}/s"],
         {"s": survey("grid", "no-manifest")},
-        "not a survey directory",
+        "no manifest.json",
     ),
     ("survey-check-missing", [S, "--check", "{d}/none"], {}, "not a directory"),
     ("survey-check-not-survey", [S, "--check", "{d}"], {}, "not a survey directory"),
@@ -641,6 +692,41 @@ CLI_CASES = [
         "finite",
     ),
     ("animate-no-orbit", [A] + FIG6 + ["--n", "1", "--out", "{d}/a.gif"], {}, ""),
+    # --- issue 20: survey ledger and links ---
+    *[
+        (f"survey-{verb}-{damage}", argv, {"s": survey("grid", damage)}, "its own SHA-256")
+        for damage in _HAND_EDITS
+        for verb, argv in (
+            ("rerun", GRID + ["--out", "{d}/s"]),
+            ("check", [S, "--check", "{d}/s"]),
+        )
+    ],
+    (
+        "survey-rerun-parameters-edited-forged",
+        GRID + ["--out", "{d}/s"],
+        {"s": survey("grid", "parameters-edited-forged")},
+        "different parameters (n_max)",
+    ),
+    *[
+        (f"survey-{verb}-{damage}", argv, {"s": survey("grid", damage)}, "symbolic link")
+        for damage in _LINKS
+        for verb, argv in (
+            ("rerun", GRID + ["--out", "{d}/s"]),
+            ("check", [S, "--check", "{d}/s"]),
+        )
+    ],
+    (
+        "survey-rerun-no-manifest-with-report",
+        GRID + ["--out", "{d}/s"],
+        {"s": survey("grid", "no-manifest")},
+        "(deleted?)",
+    ),
+    (
+        "figures-survey-no-manifest",
+        [F, "--survey", "{d}/s", "--out", "{d}/o"],
+        {"s": survey("grid", "no-manifest")},
+        "no manifest.json",
+    ),
 ]
 
 
@@ -664,7 +750,7 @@ def test_cli(case, tmp_path, capsys, monkeypatch, surveys):
     directory.mkdir()
     keep = prepare(directory, files, surveys)
     monkeypatch.chdir(directory)
-    monkeypatch.setattr(orbits.survey, "CONNECT_TIMEOUT", 2)
+    monkeypatch.setattr(orbits.survey.runner, "CONNECT_TIMEOUT", 2)
     before, device = snapshot(directory), device_state()
     capsys.readouterr()
     code = main(_argv(argv, directory))
@@ -870,8 +956,26 @@ API_CASES = [
             "part-empty",
             "part-changed",
             "stray-bak-and-truncated",
+            # --- issue 20: survey ledger and links ---
+            # (parameters-edited-forged reads: a forger who recomputes the
+            # checksum is beyond a checksum; a rerun still refuses it)
+            *(damage for damage in _LEDGER_EDITS if damage != "parameters-edited-forged"),
+            *_LINKS,
+            "no-bodies-folder",
         )
     ],
+    *[
+        (f"check_survey-{damage}", on_survey("grid", damage, orbits.survey.check_survey))
+        for damage in (*_HAND_EDITS, *_LINKS)
+    ],
+    (
+        "Survey-rerun-link-lock",
+        on_survey(
+            "grid",
+            "link-lock",
+            lambda p: orbits.survey.Survey.grid(p, 4, 2, fmt="csv", chunk=2).run(),
+        ),
+    ),
     ("survey_grid-list", on_survey("list", None, orbits.survey.survey_grid)),
     ("check_survey-ledger", on_survey("grid", "ledger-damaged", orbits.survey.check_survey)),
     ("check_survey-not-json", on_survey("grid", "manifest-not-json", orbits.survey.check_survey)),
@@ -907,7 +1011,7 @@ def test_api(case, tmp_path, surveys, monkeypatch):
 def test_scheduler_without_workers(tmp_path, capsys, monkeypatch):
     """A scheduler with no worker: one line stating the timeout, nothing written."""
     distributed = pytest.importorskip("distributed")
-    monkeypatch.setattr(orbits.survey, "CONNECT_TIMEOUT", 1)
+    monkeypatch.setattr(orbits.survey.runner, "CONNECT_TIMEOUT", 1)
     with distributed.LocalCluster(
         n_workers=0, processes=False, dashboard_address=None, protocol="tcp", scheduler_port=0
     ) as cluster:

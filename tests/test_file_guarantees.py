@@ -229,3 +229,144 @@ def test_a_symlink_to_a_regular_file_keeps_the_link(tmp_path):
     )
     assert (tmp_path / "link.csv").is_symlink()
     assert len(orbits.read_catalog(real)) > 0
+
+
+# ------------------------------------------------- issue 20: survey ledger and links
+def _edit_manifest(target, edit, forge):
+    manifest = target / "manifest.json"
+    document = json.loads(manifest.read_text())
+    edit(document)
+    if forge:
+        document["sha256"] = orbits.survey.manifest_checksum(document)
+    manifest.write_text(json.dumps(document))
+
+
+def _same_survey(target, reference):
+    mine, theirs = files(target), files(reference)
+    assert json.loads(mine.pop("manifest.json")) == json.loads(theirs.pop("manifest.json"))
+    assert mine == theirs
+
+
+def test_the_manifest_carries_its_own_checksum(reference, tmp_path, capsys):
+    document = json.loads((reference / "manifest.json").read_text())
+    assert document["orbits_survey"] == 3
+    assert document["sha256"] == orbits.survey.manifest_checksum(document)
+    # indentation is not content: a re-indented manifest still verifies
+    target = copy(reference, tmp_path)
+    (target / "manifest.json").write_text(json.dumps(document, indent=4, sort_keys=True))
+    assert check_survey(target)["complete"]
+    # one changed value is damage, in one line
+    _edit_manifest(target, lambda d: d["parts"]["0"]["orbits"].update(rows=0), forge=False)
+    capsys.readouterr()
+    assert main(["survey", "--check", str(target)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "does not match its own SHA-256" in err[0]
+
+
+@pytest.mark.parametrize(
+    "edit, problem",
+    [
+        (
+            lambda d: d["parts"]["0"].update(bodies=d["parts"]["1"]["bodies"]),
+            "chunk 0: ledger names 'bodies/part-00001.csv', not the chunk's bodies/part-00000.csv",
+        ),
+        (
+            lambda d: d["parts"].update({"99": d["parts"]["0"]}),
+            "chunk 99: not a chunk of this survey",
+        ),
+        (lambda d: d["parts"]["1"].update(first_body=0), "chunk 1: body ids 0..5"),
+        (
+            lambda d: d["parts"]["2"]["bodies"].update(rows=2),
+            "chunk 2: bodies/part-00002.csv: 2 rows for 3 bodies",
+        ),
+    ],
+    ids=["another-chunks-file", "extra-entry", "body-range", "rows"],
+)
+def test_forged_ledger_entries_are_bound_to_their_chunk(
+    reference, tmp_path, capsys, edit, problem
+):
+    """Entries edited with the checksum recomputed: still caught, and a rerun repairs them."""
+    target = copy(reference, tmp_path)
+    _edit_manifest(target, edit, forge=True)
+    capsys.readouterr()
+    assert main(["survey", "--check", str(target)]) == 1
+    assert problem in capsys.readouterr().out
+    with pytest.raises(orbits.InputError, match="damaged or incomplete"):
+        read_survey(target)
+    assert main(GRID + ["--out", str(target)]) == 0
+    assert "recomputing" in capsys.readouterr().err
+    _same_survey(target, reference)
+
+
+def test_a_part_of_another_chunk_is_caught_on_read(reference, tmp_path):
+    """Chunk 0's bodies part replaced by chunk 1's and the ledger forged to match."""
+    target = copy(reference, tmp_path)
+    shutil.copy(target / "bodies" / "part-00001.csv", target / "bodies" / "part-00000.csv")
+
+    def edit(document):
+        document["parts"]["0"]["bodies"]["sha256"] = document["parts"]["1"]["bodies"]["sha256"]
+
+    _edit_manifest(target, edit, forge=True)
+    with pytest.raises(orbits.InputError, match="body ids are not the chunk's 0..2"):
+        read_survey(target, verify=False)
+
+
+def test_a_deleted_table_folder_is_recomputed(reference, tmp_path, capsys):
+    target = copy(reference, tmp_path)
+    shutil.rmtree(target / "bodies")
+    with pytest.raises(orbits.InputError, match="bodies/part-00000.csv is missing"):
+        read_survey(target)
+    capsys.readouterr()
+    assert main(GRID + ["--out", str(target)]) == 0
+    assert "missing or damaged, recomputing" in capsys.readouterr().err
+    _same_survey(target, reference)
+
+
+def test_a_deleted_manifest_is_named(reference, tmp_path):
+    target = copy(reference, tmp_path)
+    (target / "manifest.json").unlink()
+    before = files(target)
+    rerun = orbits.survey.Survey.grid(target, 6, 3, fmt="csv", chunk=3).run
+    for call in (lambda: check_survey(target), lambda: read_survey(target), rerun):
+        with pytest.raises(orbits.InputError, match=r"no manifest.json \(deleted\?\)"):
+            call()
+    assert files(target) == before
+
+
+@pytest.mark.parametrize(
+    "planted", [".lock", "manifest.json", "report.json", "bodies", "bodies/part-00001.csv"]
+)
+def test_no_link_inside_a_survey_is_followed(reference, tmp_path, capsys, planted):
+    """A link planted to a file outside (same bytes) is refused, and the file stays as it was."""
+    target = copy(reference, tmp_path)
+    outside = tmp_path / "outside"
+    shutil.move(target / planted, outside)
+    os.symlink(outside, target / planted)
+    before = files(tmp_path)
+    capsys.readouterr()
+    for argv in (GRID + ["--out", str(target)], ["survey", "--check", str(target)]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "is a symbolic link" in err[0], err
+    with pytest.raises(orbits.InputError, match="symbolic link"):
+        read_survey(target)
+    assert files(tmp_path) == before
+
+
+def test_atomic_writes_can_refuse_a_link(tmp_path):
+    real = tmp_path / "real.txt"
+    real.write_text("mine\n")
+    (tmp_path / "link.txt").symlink_to(real)
+    with pytest.raises(orbits.InputError, match="symbolic link"):
+        write_text_atomic(tmp_path / "link.txt", "new\n", follow_links=False)
+    assert real.read_text() == "mine\n" and (tmp_path / "link.txt").is_symlink()
+
+
+def test_name_lists_are_hashed_unambiguously(tmp_path):
+    moments = orbits.region_sample(2)
+    one = orbits.survey.Survey(tmp_path / "s", moments, {"file": "x"}, 2, names=["a\nb", "c"])
+    two = orbits.survey.Survey(tmp_path / "s", moments, {"file": "x"}, 2, names=["a", "b\nc"])
+    assert one.parameters["names_sha256"] != two.parameters["names_sha256"]
+    one.run()
+    with pytest.raises(orbits.InputError, match="different parameters.*names_sha256"):
+        two.run()

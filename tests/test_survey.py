@@ -17,12 +17,12 @@ from orbits.cli import main
 from orbits.survey import (
     BODY_COLUMNS,
     Survey,
-    _sha256,
-    _write_table,
     compute_chunk,
     load_manifest,
     read_survey,
+    sha256_file,
     survey_grid,
+    write_part,
 )
 
 
@@ -76,12 +76,12 @@ def test_report_lists_counterexamples(tmp_path):
     part = tmp_path / "s" / "bodies" / "part-00000.csv"
     frame = pd.read_csv(part, **csv_float_options())
     frame.loc[3, "min_at_end"] = False  # pretend one body's minimum is inside
-    _write_table(frame, part, "csv")
+    write_part(frame, part, "csv")
     with pytest.raises(InputError, match="damaged.*part-00000.csv does not match"):
         survey.report()  # the ledger notices the change
     # record the change in the ledger, as a run would have
-    survey._ledger["0"]["bodies"]["sha256"] = _sha256(part)
-    survey._write_manifest()
+    survey.ledger.parts["0"]["bodies"]["sha256"] = sha256_file(part)
+    survey.ledger.write_manifest()
     report = survey.report()
     assert not report["conjecture_minimum_at_the_ends"]["held_on_every_body"]
     assert [
@@ -92,10 +92,10 @@ def test_report_lists_counterexamples(tmp_path):
 def test_parquet_and_csv_engines_agree(tmp_path):
     bodies, table = compute_chunk(orbits.region_sample(30), 5)
     for engine in ("arrow", "pandas"):
-        _write_table(table, tmp_path / f"{engine}.csv", "csv", engine=engine)
+        write_part(table, tmp_path / f"{engine}.csv", "csv", engine=engine)
         again = pd.read_csv(tmp_path / f"{engine}.csv", **csv_float_options())
         pd.testing.assert_frame_equal(again, table, check_exact=True, check_dtype=False)
-    _write_table(table, tmp_path / "t.parquet", "parquet")
+    write_part(table, tmp_path / "t.parquet", "parquet")
     pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "t.parquet"), table, check_exact=True)
 
 
@@ -150,19 +150,19 @@ def test_resume_after_a_kill(tmp_path):
     assert 3 <= finished < total, "the kill came too late to test a resume"
     # a second run computes only the chunks missing from the ledger
     calls = []
-    import orbits.survey as module
+    import orbits.survey.compute as module
 
-    original = module.compute_chunk
+    original = module.search_chunk
 
     def counting(moments, *args, **kwargs):
         calls.append(len(moments))
         return original(moments, *args, **kwargs)
 
-    module.compute_chunk = counting
+    module.search_chunk = counting
     try:
         Survey.grid(target, 300, 6, chunk=400).run()
     finally:
-        module.compute_chunk = original
+        module.search_chunk = original
     assert len(calls) == total - finished
     assert read_bytes(target) == read_bytes(reference)  # nothing lost or doubled
     assert not list(target.rglob("*.part"))
@@ -225,7 +225,7 @@ def test_fig2_from_a_survey(tmp_path, capsys):
 
 
 def test_cli_survey_and_errors(tmp_path, capsys, monkeypatch):
-    import orbits.survey as module
+    import orbits.survey.runner as module
 
     monkeypatch.setattr(module, "CONNECT_TIMEOUT", 2)
     bodies = tmp_path / "bodies.csv"
@@ -284,20 +284,21 @@ def test_cli_survey_and_errors(tmp_path, capsys, monkeypatch):
 
 @pytest.mark.parametrize("failure", ["write", "interrupt"])
 def test_a_failure_mid_run_leaves_whole_chunks(tmp_path, monkeypatch, failure):
-    """Chunks are written by one thread while the next is computed.
+    """Chunks are made and written by a pool of threads while the next is searched.
 
     A failing write (the third chunk) or an interrupt while the fourth is
-    computed stops the run; every chunk in the ledger has both parts with
-    their SHA-256, no temporary is left, and a second run completes the
-    survey to the same bytes as an uninterrupted one.
+    searched stops the run; every chunk handed to the pool before is still
+    written, every chunk in the ledger has both parts with their SHA-256,
+    no temporary is left, and a second run completes the survey to the same
+    bytes as an uninterrupted one.
     """
-    import orbits.survey as module
+    import orbits.survey.compute as module
 
     reference = tmp_path / "reference"
     Survey.grid(reference, 40, 4, chunk=60).run()
     target = tmp_path / "target"
     original_write = Survey.write_chunk
-    original_compute = module.compute_chunk
+    original_compute = module.search_chunk
     computed = []
 
     def failing_write(self, index, bodies, orbits):
@@ -315,16 +316,19 @@ def test_a_failure_mid_run_leaves_whole_chunks(tmp_path, monkeypatch, failure):
         monkeypatch.setattr(Survey, "write_chunk", failing_write)
         expected = pytest.raises(InputError, match="simulated")
     else:
-        monkeypatch.setattr(module, "compute_chunk", interrupted_compute)
+        monkeypatch.setattr(module, "search_chunk", interrupted_compute)
         expected = pytest.raises(KeyboardInterrupt)
     with expected:
         Survey.grid(target, 40, 4, chunk=60).run()
     ledger = load_manifest(target)["parts"]
-    written = ["0", "1"] if failure == "write" else ["0", "1", "2"]
-    assert sorted(ledger, key=int) == written
+    if failure == "write":
+        # chunk 3 may have been in the pool beside the failing chunk 2
+        assert {"0", "1"} <= set(ledger) <= {"0", "1", "3"}
+    else:
+        assert sorted(ledger, key=int) == ["0", "1", "2"]
     for entry in ledger.values():
         for table in ("orbits", "bodies"):
-            assert _sha256(target / entry[table]["file"]) == entry[table]["sha256"]
+            assert sha256_file(target / entry[table]["file"]) == entry[table]["sha256"]
     assert not list(target.rglob("*.part"))
     monkeypatch.undo()
     Survey.grid(target, 40, 4, chunk=60).run()

@@ -11,7 +11,7 @@ import pandas as pd
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from orbits.survey import _read_part, _write_table
+from orbits.survey import read_part, write_part
 
 finite_doubles = st.floats(allow_nan=False, allow_infinity=False, width=64)
 special = st.sampled_from(
@@ -46,8 +46,8 @@ def test_csv_round_trip_is_bit_exact(tmp_path_factory, values):
             "orbits": np.arange(len(values), dtype=np.int64),
         }
     )
-    _write_table(frame, path, "csv")
-    again = _read_part(path)
+    write_part(frame, path, "csv")
+    again = read_part(path)
     np.testing.assert_array_equal(_bits(again["min_total_phase"]), _bits(frame["min_total_phase"]))
     np.testing.assert_array_equal(again["orbits"], frame["orbits"])
 
@@ -55,8 +55,8 @@ def test_csv_round_trip_is_bit_exact(tmp_path_factory, values):
 def test_csv_signed_zero_alone_stays_float(tmp_path):
     # the CI failure: a column holding only -0.0 was read back as integer 0
     frame = pd.DataFrame({"min_dtheta": [-0.0], "body": [7]})
-    _write_table(frame, tmp_path / "z.csv", "csv")
-    again = _read_part(tmp_path / "z.csv")
+    write_part(frame, tmp_path / "z.csv", "csv")
+    again = read_part(tmp_path / "z.csv")
     assert again["min_dtheta"].dtype == np.float64
     assert _bits(again["min_dtheta"])[0] == _bits([-0.0])[0]
 
@@ -66,7 +66,7 @@ def test_csv_signed_zero_alone_stays_float(tmp_path):
 def test_parquet_round_trip_is_bit_exact(tmp_path_factory, values):
     path = tmp_path_factory.mktemp("pq") / "part.parquet"
     frame = pd.DataFrame({"x": np.array(values, dtype=np.float64)})
-    _write_table(frame, path, "parquet")
+    write_part(frame, path, "parquet")
     np.testing.assert_array_equal(_bits(pd.read_parquet(path)["x"]), _bits(frame["x"]))
 
 
@@ -78,7 +78,7 @@ def test_csv_writer_bits_on_random_bit_patterns(tmp_path):
     values = bits.view(np.float64)
     values = values[np.isfinite(values)]
     frame = pd.DataFrame({"x": values})
-    _write_table(frame, tmp_path / "b.csv", "csv")
+    write_part(frame, tmp_path / "b.csv", "csv")
     from orbits.atomic import csv_float_options
 
     again = pd.read_csv(tmp_path / "b.csv", dtype={"x": np.float64}, **csv_float_options())

@@ -1,0 +1,90 @@
+"""Body-space survey: closed orbits and minimum phases over many bodies.
+
+A survey covers the region of physical asymmetric bodies in the paper's
+I1-I2 plane (``|I| = 1``), or an explicit list, and writes a directory::
+
+    DIR/manifest.json          parameters (a rerun must match them) and ledger
+    DIR/bodies/part-NNNNN.parquet  one row per body (or .csv)
+    DIR/orbits/part-NNNNN.parquet  the closed orbits, catalog schema
+    DIR/report.json            summary and the minimum-at-the-ends test
+
+The bodies are cut into chunks; each finished chunk is written atomically
+(orbits, then bodies), and then recorded in the manifest's ledger (file
+names, row counts, body-id range, SHA-256 of each part).  A chunk is done
+exactly when its ledger entry matches its files: a rerun checks every part,
+recomputes the missing or damaged ones and never reads a file that is not
+in the ledger.  One run at a time holds the directory (``fcntl`` lock).
+
+Chunks run in-process on all cores (numba), or on a ``dask.distributed``
+cluster (``scheduler="tcp://host:port"`` or a ``Client``): the same
+function computes each chunk there and the results come back to be written
+here, so both engines write identical files.
+
+The package's modules, bottom to top:
+
+* :mod:`orbits.survey.ledger`: the manifest, its ledger and checksum, the
+  lock, verification of a directory (:func:`check_survey`);
+* :mod:`orbits.survey.compute`: one chunk of bodies to its tables, and the
+  survey's cost (:func:`compute_chunk`, :func:`check_survey_bounds`);
+* :mod:`orbits.survey.tables`: the parts on disk (:func:`read_survey`);
+* :mod:`orbits.survey.report`: ``report.json``;
+* :mod:`orbits.survey.runner`: :class:`Survey`, which runs them.
+"""
+
+from .compute import (
+    BODY_COLUMNS,
+    GRID_INSIDE,
+    check_survey_bounds,
+    compute_chunk,
+    survey_estimate,
+)
+from .ledger import (
+    FORMATS,
+    LOCK,
+    MANIFEST,
+    REPORT,
+    SURVEY_FORMAT,
+    TABLES,
+    Ledger,
+    check_survey,
+    chunk_bounds,
+    load_manifest,
+    manifest_checksum,
+    part_name,
+    refuse_links,
+    sha256_file,
+)
+from .report import survey_report
+from .runner import CONNECT_TIMEOUT, DEFAULT_CHUNK, Survey
+from .tables import read_part, read_survey, read_table, survey_grid, write_part
+
+__all__ = [
+    "BODY_COLUMNS",
+    "CONNECT_TIMEOUT",
+    "DEFAULT_CHUNK",
+    "FORMATS",
+    "GRID_INSIDE",
+    "LOCK",
+    "MANIFEST",
+    "REPORT",
+    "SURVEY_FORMAT",
+    "TABLES",
+    "Ledger",
+    "Survey",
+    "check_survey",
+    "check_survey_bounds",
+    "chunk_bounds",
+    "compute_chunk",
+    "load_manifest",
+    "manifest_checksum",
+    "part_name",
+    "read_part",
+    "read_survey",
+    "read_table",
+    "refuse_links",
+    "sha256_file",
+    "survey_estimate",
+    "survey_grid",
+    "survey_report",
+    "write_part",
+]

@@ -1,0 +1,425 @@
+"""The survey: its parameters and bodies, and the run that fills its directory.
+
+:class:`Survey` computes the missing chunks (:mod:`orbits.survey.compute`)
+in-process or on a ``dask.distributed`` cluster, writes each chunk's parts
+(:mod:`orbits.survey.tables`) and records it in the ledger
+(:mod:`orbits.survey.ledger`), then writes the report
+(:mod:`orbits.survey.report`).
+"""
+
+import hashlib
+import json
+import threading
+from pathlib import Path
+
+import numpy as np
+
+from .._args import integer, path_argument, real_array
+from .._version import __version__
+from ..bodies import as_moments, region_grid
+from ..errors import ArgumentTypeError, InputError
+from ..limits import check_resolution
+from . import compute
+from .compute import LAYOUTS, check_survey_bounds
+from .ledger import FORMATS, Ledger, one_line, part_name, sha256_file
+from .report import survey_report
+from .tables import require_pyarrow, write_part
+
+DEFAULT_CHUNK = 20_000
+# seconds to wait for a dask scheduler before giving up
+CONNECT_TIMEOUT = 10
+
+
+class Survey:
+    """A survey's parameters, bodies and output directory.
+
+    Build with :meth:`grid` (``N x N`` over the region's bounding box) or
+    :meth:`from_bodies`; :meth:`run` computes the missing chunks.
+
+    The directory proves itself: ``manifest.json`` keeps, besides the
+    parameters, a ledger of every finished part (file, row count, body-id
+    range, SHA-256).  A part counts as done only when its ledger entry
+    matches the file; a rerun recomputes the others, and files not in the
+    ledger (e.g. ``part-00001.csv.bak``) are never read.  One run at a time
+    writes a directory (an exclusive ``fcntl`` lock on ``DIR/.lock``).
+    """
+
+    def __init__(
+        self,
+        out_dir,
+        moments,
+        source,
+        n_max,
+        q_max=1,
+        fmt="parquet",
+        chunk=DEFAULT_CHUNK,
+        names=None,
+        skipped=(),
+        columns="compact",
+    ):
+        if fmt not in FORMATS:
+            raise InputError(f"format must be one of {', '.join(FORMATS)}, got {fmt!r}")
+        if columns not in LAYOUTS:
+            raise InputError(f"columns must be one of {', '.join(LAYOUTS)}, got {columns!r}")
+        self.columns = columns
+        if fmt == "parquet":
+            require_pyarrow()
+        n_max, q_max, chunk = (
+            integer(name, value)
+            for name, value in (("n_max", n_max), ("q_max", q_max), ("chunk", chunk))
+        )
+        self.out_dir = Path(path_argument("out_dir", out_dir))
+        self.moments = np.ascontiguousarray(as_moments(moments), dtype=float).reshape(-1, 3)
+        if self.moments.shape[0] == 0:
+            raise InputError("a survey needs at least one body")
+        self.n_max, self.q_max, self.format, self.chunk = int(n_max), int(q_max), fmt, int(chunk)
+        check_survey_bounds(self.moments.shape[0], self.n_max, self.q_max, self.chunk)
+        if names is not None:
+            names = [str(name) for name in names]
+            if len(names) != self.moments.shape[0]:
+                raise InputError(f"{len(names)} names for {self.moments.shape[0]} bodies")
+        self.names = names
+        self.source = source
+        self.skipped = list(skipped)
+        # what the survey *means*: the bodies by content, not by path
+        self.parameters = {
+            "orbits_version": __version__,
+            "bodies": {"grid": int(source["grid"])} if "grid" in source else "list",
+            "body_count": int(self.moments.shape[0]),
+            "bodies_sha256": hashlib.sha256(self.moments.tobytes()).hexdigest(),
+            # JSON of the list: unambiguous (["a\nb", "c"] is not ["a", "b\nc"])
+            "names_sha256": None
+            if names is None
+            else hashlib.sha256(json.dumps(names).encode("ascii")).hexdigest(),
+            "n_max": self.n_max,
+            "q_max": self.q_max,
+            "format": fmt,
+            "chunk": self.chunk,
+            # the layout: "compact" keeps per orbit only what cannot be
+            # recomputed cheaply; read_survey derives the other columns
+            "columns": columns,
+        }
+        self.ledger = Ledger(self.out_dir, self.parameters, source, skipped)
+        self._record_lock = threading.Lock()
+
+    @classmethod
+    def grid(cls, out_dir, resolution, n_max, **kwargs):
+        """Bodies on an ``N x N`` grid over the region's bounding box."""
+        resolution = check_resolution(resolution)
+        moments = region_grid(resolution)
+        return cls(out_dir, moments, {"grid": resolution}, n_max, **kwargs)
+
+    @classmethod
+    def from_bodies(cls, out_dir, bodies, n_max, source="list", **kwargs):
+        """An explicit list of bodies (Body objects or moments).
+
+        Names of :class:`~orbits.Body` objects are kept (a ``name`` column
+        in the bodies table) unless ``names`` is given.
+        """
+        if isinstance(bodies, (str, bytes)) or not hasattr(bodies, "__iter__"):
+            raise ArgumentTypeError(
+                f"bodies must be an iterable of Body objects or "
+                f"moments, got {type(bodies).__name__}"
+            )
+        bodies = list(bodies)
+        if not bodies:
+            raise InputError("a survey needs at least one body")
+        moments = real_array("bodies", [getattr(b, "moments", b) for b in bodies], InputError)
+        if (
+            "names" not in kwargs
+            and bodies
+            and all(getattr(b, "name", None) is not None for b in bodies)
+        ):
+            kwargs["names"] = [b.name for b in bodies]
+        return cls(out_dir, moments, {"file": str(source)}, n_max, **kwargs)
+
+    @property
+    def chunks(self):
+        return -(-self.moments.shape[0] // self.chunk)
+
+    def prepare(self):
+        """Create the directory and manifest, or check an existing one (see :class:`Ledger`)."""
+        self.ledger.prepare()
+
+    def lock(self):
+        """The directory's exclusive lock (a context manager)."""
+        return self.ledger.lock()
+
+    def verify(self):
+        """Check every ledger entry; drop and return the bad ones (see :class:`Ledger`)."""
+        return self.ledger.verify()
+
+    def missing(self):
+        """Indices of the chunks not (verifiably) written."""
+        return self.ledger.missing()
+
+    def chunk_moments(self, index):
+        return self.moments[index * self.chunk : (index + 1) * self.chunk]
+
+    def write_chunk(self, index, bodies, orbits):
+        """Write one chunk (orbits, then bodies), then its ledger entry."""
+        if self.names is not None:
+            bodies.insert(
+                1, "name", self.names[index * self.chunk : index * self.chunk + len(bodies)]
+            )
+        entry = {
+            "first_body": int(index * self.chunk),
+            "last_body": int(index * self.chunk + len(bodies) - 1),
+        }
+        for table, frame in (("orbits", orbits), ("bodies", bodies)):
+            name = part_name(table, index, self.format)
+            write_part(frame, self.out_dir / name, self.format, follow_links=False)
+            entry[table] = {
+                "file": name,
+                "rows": int(len(frame)),
+                "sha256": sha256_file(self.out_dir / name),
+            }
+        with self._record_lock:  # chunks finish on several threads
+            self.ledger.record(index, entry)
+
+    def run(self, scheduler=None, progress=None, notify=None, status=None):
+        """Compute and write every missing chunk; then the report.
+
+        Parameters
+        ----------
+        scheduler : str or distributed.Client, optional
+            ``"tcp://host:port"`` of a running ``dask scheduler`` (or a
+            Client): chunks run on its workers.  Default: in-process.
+        progress : callable, optional
+            Called with the number of bodies of each finished chunk.
+        notify : callable, optional
+            Called with one-line messages (e.g. how many damaged parts are
+            recomputed).
+        status : callable, optional
+            Called with transient one-line messages (waiting for the
+            scheduler), for a terminal.
+
+        Returns
+        -------
+        dict
+            The report (also written to ``report.json``), built from the
+            verified parts only.
+
+        Raises
+        ------
+        InputError
+            Another run holds the directory, it holds another survey, or
+            the scheduler is unusable.
+        """
+        if scheduler is not None:
+            _check_scheduler(scheduler)
+        # refusals first, touching nothing: a foreign directory, another
+        # survey's parameters, then an unusable scheduler
+        self.ledger.refuse_foreign_directory()
+        self.ledger.refuse_other_parameters()
+        client = None
+        if scheduler is not None:
+            client = self._connect(scheduler, status)
+        try:
+            return self._run_locked(client, progress, notify)
+        finally:
+            if client is not None and client is not scheduler:
+                client.close()
+
+    def _run_locked(self, client, progress, notify):
+        try:
+            self.out_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as error:
+            raise InputError(f"cannot create {self.out_dir}: {error.strerror}") from None
+        with self.lock():
+            self.prepare()
+            self.ledger.clean_partial()
+            damaged = self.verify()
+            if damaged:
+                self.ledger.write_manifest()
+                if notify is not None:
+                    notify(
+                        f"{len(damaged)} part(s) missing or damaged, recomputing: "
+                        + "; ".join(damaged[:3])
+                        + (" ..." if len(damaged) > 3 else "")
+                    )
+            todo = self.missing()
+            self.last_todo = todo
+            if client is None:
+                self._run_local(todo, progress)
+            else:
+                self._run_distributed(client, todo, progress)
+            # every ledger entry was verified or written (and hashed) under
+            # this lock: no need to hash all parts again
+            if self.missing():
+                raise InputError(f"{self.out_dir} is incomplete ({len(self.missing())} chunks)")
+            return survey_report(
+                self.out_dir, self.n_max, self.q_max, len(self.skipped), verify=False
+            )
+
+    def _run_local(self, todo, progress):
+        """Search the chunks in order; make, write and record their tables side by side.
+
+        This thread runs the search of one chunk after another (the parallel
+        kernel, on all cores).  Each searched chunk goes to a pool of
+        :func:`table_workers` threads that build its tables (compiled
+        kernels that release the GIL), write both parts, hash them and then
+        record the chunk in the ledger (one at a time, under a lock).  At
+        most that many searched chunks wait; on an error or an interrupt
+        the ones already searched are still written before the lock on the
+        directory is released: a chunk is in the ledger with both its
+        parts, or not at all.
+        """
+        from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+
+        workers, pool, pending = None, None, set()
+        try:
+            for index in todo:
+                found = compute.search_chunk(self.chunk_moments(index), self.n_max, self.q_max)
+                if workers is None:  # numba's threading layer is known after a search
+                    workers = table_workers(self.n_max, self.q_max, self.chunk)
+                    if workers:
+                        pool = ThreadPoolExecutor(workers, thread_name_prefix="orbits-chunk")
+                if not workers:  # kernels may not run side by side: one chunk at a time
+                    self._collect([_Done(self._finish_chunk(index, found))], progress)
+                    continue
+                while len(pending) >= workers:
+                    done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                    self._collect(done, progress)
+                pending.add(pool.submit(self._finish_chunk, index, found))
+            while pending:
+                done, pending = wait(pending, return_when=FIRST_COMPLETED)
+                self._collect(done, progress)
+        finally:
+            # every chunk handed to the pool is searched: finish it
+            if pool is not None:
+                pool.shutdown(wait=True)
+
+    def _finish_chunk(self, index, found):
+        bodies, orbits = compute.chunk_tables(found, index * self.chunk, self.columns)
+        self.write_chunk(index, bodies, orbits)
+        return len(bodies)
+
+    @staticmethod
+    def _collect(done, progress):
+        """Re-raise a finished chunk's error; report its bodies."""
+        for future in done:
+            written = future.result()
+            if progress is not None:
+                progress(written)
+
+    @staticmethod
+    def _connect(scheduler, status=None):
+        """A Client with at least one worker, within :data:`CONNECT_TIMEOUT` s each.
+
+        Raises
+        ------
+        InputError
+            No dask.distributed, no scheduler at the address, or no worker
+            joined within the timeout (the message states it).
+        """
+        try:
+            from distributed import Client
+        except ImportError:
+            raise InputError(
+                "--scheduler needs dask.distributed: pip install 'orbits[distributed]'"
+            ) from None
+        if isinstance(scheduler, Client):
+            client, own = scheduler, False
+        else:
+            if status is not None:
+                status(
+                    f"connecting to the dask scheduler at {scheduler} "
+                    f"(timeout {CONNECT_TIMEOUT} s)..."
+                )
+            try:
+                client, own = Client(scheduler, timeout=CONNECT_TIMEOUT), True
+            except Exception as error:  # noqa: BLE001 - any failure to connect
+                raise InputError(
+                    f"cannot reach the dask scheduler at {scheduler} "
+                    f"within {CONNECT_TIMEOUT} s: {one_line(error)}"
+                ) from None
+        try:
+            if status is not None and not client.scheduler_info().get("workers"):
+                status(f"waiting up to {CONNECT_TIMEOUT} s for a dask worker...")
+            client.wait_for_workers(1, timeout=CONNECT_TIMEOUT)
+        except Exception:  # noqa: BLE001 - dask raises TimeoutError
+            if own:
+                client.close()
+            raise InputError(
+                f"the dask scheduler at {scheduler} has no workers "
+                f"(waited {CONNECT_TIMEOUT} s); start one with "
+                f"'dask worker ADDRESS'"
+            ) from None
+        return client
+
+    def _run_distributed(self, client, todo, progress):
+        from distributed import as_completed
+
+        futures = {
+            client.submit(
+                compute.compute_chunk,
+                self.chunk_moments(index),
+                self.n_max,
+                self.q_max,
+                index * self.chunk,
+                self.columns,
+                pure=False,
+            ): index
+            for index in todo
+        }
+        for future in as_completed(futures):
+            bodies, orbits = future.result()
+            self.write_chunk(futures[future], bodies, orbits)
+            if progress is not None:
+                progress(len(bodies))
+
+    def report(self):
+        """Summary of a complete survey from its verified parts; written to ``report.json``."""
+        return survey_report(self.out_dir, self.n_max, self.q_max, len(self.skipped))
+
+
+class _Done:
+    """A finished result in the shape of a future (the serial path)."""
+
+    def __init__(self, value):
+        self.value = value
+
+    def result(self):
+        return self.value
+
+
+def table_workers(n_max, q_max, chunk):
+    """Threads that build and write chunks side by side (0: one chunk at a time).
+
+    One per numba thread (:func:`orbits.threads.get_num_threads`), fewer
+    when that many chunks in flight would exceed the memory budget; 0 when
+    numba's threading layer cannot run kernels from several threads at once
+    (``workqueue``).
+    """
+    import numba
+
+    from ..limits import memory_budget
+    from ..threads import get_num_threads
+
+    try:
+        layer = numba.threading_layer()
+    except ValueError:  # no parallel kernel has run yet
+        layer = numba.config.THREADING_LAYER
+    if layer not in ("omp", "tbb"):
+        return 0
+    # survey_estimate counts two chunks in flight
+    per_chunk = max(compute.survey_estimate(chunk, n_max, q_max, chunk)[0] / 2.0, 1.0)
+    fits = int(memory_budget() // per_chunk) - 1
+    return max(1, min(get_num_threads(), fits))
+
+
+def _check_scheduler(scheduler):
+    """Refuse an address that cannot be a dask scheduler before connecting."""
+    import re
+
+    if not isinstance(scheduler, str):
+        return
+    match = re.fullmatch(
+        r"(?:(?:tcp|tls|ucx|inproc|ws|wss)://)?[\w.\-\[\]:]+:(\d{1,5})", scheduler
+    )
+    if not match or not 0 < int(match.group(1)) < 65536:
+        raise InputError(
+            f"--scheduler {scheduler!r} is not a dask scheduler address "
+            "(expected tcp://HOST:PORT, port 1-65535)"
+        )

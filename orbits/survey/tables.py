@@ -1,0 +1,232 @@
+"""Survey tables on disk: writing and reading the parts, and the tables they make.
+
+Each chunk has two parts, ``DIR/bodies/part-NNNNN.FMT`` and
+``DIR/orbits/part-NNNNN.FMT`` (Parquet or CSV), written atomically and never
+through a symbolic link.  :func:`read_table` reads only the parts in the
+ledger (:mod:`orbits.survey.ledger`), checks each against its entry, and
+joins them.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..atomic import FLOAT_FORMAT, atomic_path, csv_float_options, read_bytes_nofollow
+from ..cells import neutralize, unneutralize
+from ..errors import InputError
+from ..search import CATALOG_COLUMNS
+from .compute import BODY_COLUMNS, UNIT_COLUMNS, derive_orbit_rows
+from .ledger import check_survey, entry_problem, load_manifest, one_line
+
+
+def require_pyarrow():
+    if not have_pyarrow():
+        raise InputError("--format parquet needs pyarrow: pip install 'orbits[parquet]'")
+
+
+def write_part(frame, path, fmt, engine=None, follow_links=True):
+    """Write one table part atomically.
+
+    CSV goes through pyarrow's writer when it is installed (ten times
+    faster than pandas here, and like it writes the shortest decimal that
+    reads back to the same double); otherwise through pandas.  Names are
+    neutralised against spreadsheet formulas (:func:`orbits.cells.neutralize`).
+    """
+    if engine is None:
+        engine = "arrow" if have_pyarrow() else "pandas"
+    if fmt == "csv" and "name" in frame.columns:
+        frame = frame.assign(name=[neutralize(str(v)) for v in frame["name"]])
+    with atomic_path(path, follow_links) as temporary:
+        if fmt == "parquet":
+            # dictionary pages only for text columns: on doubles they never
+            # pay off and cost pyarrow ~4x the write time
+            text = [name for name in frame.columns if frame[name].dtype.kind not in "biuf"]
+            frame.to_parquet(temporary, index=False, use_dictionary=text)
+        elif engine == "arrow":
+            from pyarrow import Table
+            from pyarrow.csv import write_csv
+
+            write_csv(Table.from_pandas(frame, preserve_index=False), temporary)
+        else:
+            frame.to_csv(temporary, index=False, float_format=FLOAT_FORMAT)
+
+
+def have_pyarrow():
+    from importlib.util import find_spec
+
+    return find_spec("pyarrow") is not None
+
+
+def _csv_dtypes():
+    types = {name: np.float64 for name in BODY_COLUMNS + CATALOG_COLUMNS + UNIT_COLUMNS}
+    types.update(
+        {
+            name: np.int64
+            for name in ("body", "orbits", "n_smallest", "n_largest", "unresolved", "n", "q")
+        }
+    )
+    types.update(name=str, branch=str, closes_after=str, min_at_end=object)
+    return types
+
+
+_CSV_DTYPES = _csv_dtypes()
+
+
+def read_part(path):
+    import io
+
+    data = io.BytesIO(read_bytes_nofollow(path))  # never through a link
+    if path.suffix == ".parquet":
+        return pd.read_parquet(data)
+    # Types by schema, not by inference: a part whose float column holds only
+    # "-0" or "0" would otherwise come back as integers (losing the sign).
+    frame = pd.read_csv(data, dtype=_CSV_DTYPES, keep_default_na=False, **csv_float_options())
+    if "name" in frame.columns:
+        frame["name"] = frame["name"].map(unneutralize).astype(frame["name"].dtype)
+    if "min_at_end" in frame.columns and frame["min_at_end"].dtype == object:
+        frame["min_at_end"] = frame["min_at_end"].map(
+            {"true": True, "false": False, "True": True, "False": False}
+        )
+    return frame
+
+
+def read_table(out_dir, table, verify=True):
+    """One table of a survey directory (``"bodies"`` or ``"orbits"``), all parts.
+
+    Only the parts in the manifest's ledger are read, in order; other files
+    in the directory are ignored.
+
+    Raises
+    ------
+    InputError
+        Not a survey directory, incomplete, or (with ``verify``) a part that
+        is missing or does not match its SHA-256.
+    """
+    if table not in ("bodies", "orbits"):
+        raise InputError(f"table must be 'bodies' or 'orbits', got {table!r}")
+    document = load_manifest(out_dir)
+    status = check_survey(out_dir) if verify else None
+    if status is not None and not status["complete"]:
+        problems = status["damaged"] + [f"{m} missing" for m in status["missing"]]
+        raise InputError(
+            f"{out_dir} is damaged or incomplete ({len(problems)} "
+            f"problem(s), first: {problems[0]}); rerun the survey command "
+            "to recompute, or check it with 'orbits survey --check'"
+        )
+    ledger, parameters = document["parts"], document["parameters"]
+    compact = parameters.get("columns", "all") == "compact"  # format 2: all
+    frames = []
+    for key in sorted(ledger, key=int):
+        entry = ledger[key]
+        problem = entry_problem(key, entry, parameters)
+        if problem:
+            raise InputError(f"{out_dir}: chunk {key}: {problem}")
+        frame = _read_checked(out_dir, key, table, entry, parameters)
+        if compact and table == "bodies":
+            frame = frame.drop(columns=list(UNIT_COLUMNS))
+        elif compact:
+            bodies = _read_checked(out_dir, key, "bodies", entry, parameters)
+            try:
+                frame = derive_orbit_rows(
+                    frame,
+                    bodies[list(UNIT_COLUMNS)].to_numpy(dtype=float),
+                    entry["first_body"],
+                    parameters["n_max"],
+                    parameters["q_max"],
+                )
+            except (KeyError, ValueError, TypeError) as error:
+                raise InputError(f"{out_dir}: chunk {key} is damaged: {one_line(error)}") from None
+            except InputError as error:
+                raise InputError(f"{out_dir}: chunk {key} of orbits: {error}") from None
+        frames.append(frame)
+    if not frames:
+        raise InputError(f"no {table} table in {out_dir}")
+    return pd.concat(frames, ignore_index=True)
+
+
+def _read_checked(out_dir, key, table, entry, parameters):
+    """One part, read and checked against its ledger entry (rows, body ids)."""
+    try:
+        frame = read_part(Path(out_dir) / entry[table]["file"])
+        problem = _rows_problem(frame, table, entry, parameters)
+        if problem:
+            raise InputError(f"{out_dir}: chunk {key} of {table}: {problem}")
+        return frame
+    except InputError:
+        raise
+    except (OSError, ValueError, KeyError) as error:
+        raise InputError(
+            f"{out_dir}: cannot read chunk {key} of {table}: {one_line(error)}"
+        ) from None
+    except Exception as error:  # noqa: BLE001 - pyarrow's own errors
+        raise InputError(
+            f"{out_dir}: chunk {key} of {table} is damaged: {one_line(error)}"
+        ) from None
+
+
+def _rows_problem(frame, table, entry, parameters):
+    """A part's rows against its ledger entry: count and body ids ('' if they agree)."""
+    if len(frame) != entry[table]["rows"]:
+        return f"{len(frame)} rows, the ledger says {entry[table]['rows']}"
+    if "body" not in frame.columns:
+        return "no body column"
+    body = frame["body"].to_numpy()
+    first, last = entry["first_body"], entry["last_body"]
+    if table == "bodies":
+        if not np.array_equal(body, np.arange(first, last + 1)):
+            return f"its body ids are not the chunk's {first}..{last}"
+    elif len(body) and (body.min() < first or body.max() > last or (np.diff(body) < 0).any()):
+        return f"its orbits are not of the chunk's bodies {first}..{last}"
+    return ""
+
+
+def read_survey(out_dir, verify=True):
+    """``(bodies, orbits)`` DataFrames of a complete, verified survey directory.
+
+    Raises
+    ------
+    InputError
+        Not a survey directory, incomplete, or damaged (a part missing,
+        changed or truncated: each is checked against the ledger's SHA-256).
+    """
+    bodies = read_table(out_dir, "bodies", verify)
+    table = read_table(out_dir, "orbits", verify)
+    if len(table) != int(bodies["orbits"].sum()):
+        raise InputError(
+            f"{out_dir}: {len(table)} orbit rows, but the bodies table counts "
+            f"{int(bodies['orbits'].sum())}; rerun the survey into a new directory"
+        )
+    return bodies, table
+
+
+def survey_grid(out_dir):
+    """The Fig. 2 data (i1, i2, minimum) of a grid survey.
+
+    Raises
+    ------
+    InputError
+        Not a survey directory, damaged, not complete, or not a grid survey.
+    """
+    parameters = load_manifest(out_dir)["parameters"]
+    grid = parameters["bodies"]
+    resolution = grid.get("grid") if isinstance(grid, dict) else None
+    if not isinstance(resolution, int) or resolution < 2:
+        raise InputError(f"{out_dir} surveys a list of bodies; Fig. 2 needs a grid survey")
+    bodies = read_table(out_dir, "bodies")
+    if len(bodies) != parameters["body_count"]:
+        raise InputError(f"{out_dir}: the survey is not complete")
+    from ..bodies import REGION_BOX
+
+    (lo1, hi1), (lo2, hi2) = REGION_BOX
+    # grid cells are centred: i = lo + (k + 1/2) (hi - lo) / N
+    k1 = np.rint((bodies["I1"].to_numpy() - lo1) / (hi1 - lo1) * resolution - 0.5).astype(int)
+    k2 = np.rint((bodies["I2"].to_numpy() - lo2) / (hi2 - lo2) * resolution - 0.5).astype(int)
+    if k1.min() < 0 or k2.min() < 0 or k1.max() >= resolution or k2.max() >= resolution:
+        raise InputError(f"{out_dir}: bodies outside the grid of the manifest")
+    axis1 = lo1 + (np.arange(resolution) + 0.5) * (hi1 - lo1) / resolution
+    axis2 = lo2 + (np.arange(resolution) + 0.5) * (hi2 - lo2) / resolution
+    i1, i2 = np.meshgrid(axis1, axis2, indexing="xy")
+    minimum = np.full(i1.shape, np.nan)
+    minimum[k2, k1] = bodies["min_total_phase"].to_numpy()
+    return i1, i2, minimum
