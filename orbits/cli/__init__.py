@@ -32,6 +32,7 @@ from .shared import (
     bodies_file_from_args,
     bodies_from_args,
     body_from_args,
+    check_arguments,
     command_line,
     positive_int,
     progress_bar,
@@ -50,6 +51,7 @@ __all__ = [
     "bodies_from_args",
     "body_from_args",
     "build_parser",
+    "check_arguments",
     "command_line",
     "format_value",
     "main",
@@ -62,7 +64,9 @@ def build_parser():
     parser = Parser(
         prog="orbits",
         description="Geometric phase, exact motion and closed orbits of the "
-        "force-free asymmetric top (Mecholsky 2019).",
+        "force-free asymmetric top (Mecholsky 2019).  An option given where it "
+        "does not apply (--mass with --t-handle, --units with --theta, ...) is "
+        "refused, never ignored.",
     )
     parser.add_argument("--version", action="version", version=f"orbits {__version__}")
     parser.add_argument(
@@ -143,6 +147,7 @@ def main(argv=None):
     try:
         args = build_parser().parse_args(argv)
         args.argv = argv
+        check_arguments(args)
         if args.threads is not None:
             from ..threads import set_num_threads
 

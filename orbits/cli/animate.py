@@ -92,8 +92,12 @@ def add_parser(subparsers):
     )
     add_body_options(parser)
     spin = parser.add_argument_group("spin (exactly one)")
-    spin.add_argument("--theta", type=finite, help="polar angle of omega0 from I3 (rad)")
-    spin.add_argument("--dtheta", type=finite, help="offset theta - theta_crit (rad)")
+    spin.add_argument(
+        "--theta", type=finite, help="polar angle of omega0 from I3 (rad, within [-2 pi, 2 pi])"
+    )
+    spin.add_argument(
+        "--dtheta", type=finite, help="offset theta - theta_crit (rad, within [-2 pi, 2 pi])"
+    )
     spin.add_argument("--n", type=positive_int, help="the closed orbit Delta alpha = 2 pi n")
     spin.add_argument("--p", type=positive_int, help="the closed orbit 2 pi p/q (with --q)")
     spin.add_argument("--q", type=positive_int, help="see --p")
@@ -110,7 +114,7 @@ def add_parser(subparsers):
         "--phi",
         type=finite,
         default=0.0,
-        help="azimuth of omega0 from I1 with --theta/--dtheta (rad)",
+        help="azimuth of omega0 from I1 with --theta/--dtheta (rad, within [-2 pi, 2 pi])",
     )
     parser.add_argument(
         "--branch",
