@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ._args import integer, path_argument
+from ._args import below_normal, below_normal_message, integer, path_argument
 from ._version import __version__
 from .atomic import atomic_path, csv_float_options
 from .bodies import FLAT_SLACK, Body, flat_excess, validate_moments
@@ -368,6 +368,7 @@ def read_bodies_csv(path, skip_invalid=False):
     while start < len(lines) and (lines[start].startswith("#") or not lines[start].strip("\r")):
         start += 1
     rest = "\n".join(lines[start:])
+    _check_quotes_close(path, rest, start)
     try:
         raw_header = next(csv.reader(io.StringIO(rest), strict=True), [])
     except csv.Error as error:
@@ -375,8 +376,33 @@ def read_bodies_csv(path, skip_invalid=False):
     header = _check_header(path, raw_header)
     cells = _arrow_cells(rest, raw_header) if _have_pyarrow() else None
     if cells is None:
-        cells = _python_cells(path, rest, header)
+        cells = _python_cells(path, rest, header, start)
     return _validated(path, header, cells, skip_invalid)
+
+
+def _check_quotes_close(path, rest, start):
+    """Refuse a quote that is never closed (both parsers would swallow the rest).
+
+    An unclosed quote makes every later line part of one cell: Arrow and the
+    csv module (not strict) read three bodies as one whose name holds the
+    other two.  Only a file with an odd number of quotes can hold one, so
+    the record-by-record scan runs only then.  ``start`` is the number of
+    comment and blank lines before the header.
+    """
+    if rest.count('"') % 2 == 0:
+        return
+    reader = csv.reader(io.StringIO(rest), strict=True)
+    done = 0  # lines of rest read by whole records
+    try:
+        for _ in reader:
+            done = reader.line_num
+    except csv.Error as error:
+        if "unexpected end of data" not in str(error):
+            return  # another defect: the parsers name it
+        raise InputError(
+            f"{path}, line {start + done + 1}: a quote opened on this line is never "
+            "closed, so every later line would be read into one cell; close the quote"
+        ) from None
 
 
 def _check_header(path, raw_header):
@@ -547,12 +573,17 @@ def _arrow_numbers(column, given, problems, whole=None):
     return values
 
 
-def _python_cells(path, rest, header):
+def _python_cells(path, rest, header, start=0):
     """Parse with the csv module: slower, but names every malformed row."""
+    reader = csv.reader(io.StringIO(rest), strict=True)
+    records = []
     try:
-        records = list(csv.reader(io.StringIO(rest), strict=True))
+        for record in reader:
+            records.append(record)
     except csv.Error as error:
-        raise InputError(f"{path} is not a CSV of bodies: {error}") from None
+        raise InputError(
+            f"{path}, line {start + reader.line_num}: not a CSV of bodies: {error}"
+        ) from None
     data = [r for r in records[1:] if r]  # blank lines
     width = len(header)
     count = len(data)
@@ -593,6 +624,7 @@ def _validated(path, header, cells, skip_invalid):
     count, moments, problems, names = cells.count, cells.moments, cells.problems, cells.names
     if not count:
         raise InputError(f"{path}: no bodies")
+    _check_rows(moments, names, problems)
     candidate = np.array(sorted(set(range(count)) - set(problems)), dtype=np.int64)
     for k in _invalid_moments(moments[candidate]):
         index = int(candidate[k])
@@ -621,6 +653,35 @@ def _validated(path, header, cells, skip_invalid):
         rows=np.flatnonzero(keep) + 1,
         skipped=[(k + 1, f"{label(k)}: {problems[k]}") for k in bad],
     )
+
+
+# a line of a multi-line name that looks like a row of moments: an unclosed
+# quote closed only by a later row's quote swallowed the rows in between
+_SWALLOWED_ROW = re.compile(
+    rf"(?:^|,)\s*{NUMBER.pattern}\s*,\s*{NUMBER.pattern}\s*,\s*{NUMBER.pattern}\s*(?:,|$)"
+)
+
+
+def _check_rows(moments, names, problems):
+    """Add the problems both parsers share: subnormal moments, swallowed rows.
+
+    A moment below the smallest normal double is refused as ``--moments``
+    refuses it (:func:`orbits._args.below_normal`); a name whose later lines
+    look like rows of moments is refused as a misplaced quote.
+    """
+    for k, j in zip(*np.nonzero(below_normal(moments))):
+        problems.setdefault(
+            int(k), below_normal_message(f"{BODY_FILE_COLUMNS[j]} {moments[k, j]:.3g}")
+        )
+    for k, name in enumerate(names or ()):
+        if ("\n" in name or "\r" in name) and any(
+            _SWALLOWED_ROW.search(line) for line in name.splitlines()[1:]
+        ):
+            problems.setdefault(
+                k,
+                "the name spans lines that look like rows of bodies: a quote opened in "
+                "it is closed only on a later line; close it where the name ends",
+            )
 
 
 def _invalid_moments(moments):
