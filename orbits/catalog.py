@@ -33,7 +33,7 @@ from ._args import below_normal, below_normal_message, integer, path_argument
 from ._version import __version__
 from .atomic import atomic_path, csv_float_options
 from .bodies import FLAT_SLACK, Body, flat_excess, validate_moments
-from .cells import neutralize, unneutralize
+from .cells import escape_header, neutralize, unescape_header, unneutralize
 from .errors import ArgumentTypeError, InputError, OrbitsError
 from .limits import check_search_bounds
 from .search import CATALOG_COLUMNS, closed_orbits
@@ -135,8 +135,23 @@ def write_catalog(frame, path, command=None, notes=()):
     ``notes`` are extra header lines (e.g. the rows ``--skip-invalid``
     skipped).  The header ends with the row count and the SHA-256 of the
     data section (every byte after the header), which :func:`read_catalog`
-    checks.  ``path`` ``"-"`` writes to standard output.
+    checks.  Control characters in a header line (a newline in a body's
+    name or the command) are escaped (:func:`orbits.cells.escape_header`),
+    so each stays one ``#`` line; :func:`read_catalog` unescapes them.
+    ``path`` ``"-"`` writes to standard output.
+
+    Raises
+    ------
+    ArgumentTypeError
+        ``frame`` is not a pandas DataFrame.
+    InputError
+        ``path`` ``"-"`` while standard output is closed; an unwritable path.
     """
+    if not isinstance(frame, pd.DataFrame):
+        raise ArgumentTypeError(
+            f"write_catalog needs a pandas DataFrame (e.g. from orbits.catalog), "
+            f"got {type(frame).__name__}"
+        )
     data = csv_text(frame)
     header = [
         f"orbits {__version__} closed-orbit catalog",
@@ -148,10 +163,13 @@ def write_catalog(frame, path, command=None, notes=()):
         f"{ROWS_KEY}{len(frame)}",
         f"{CHECKSUM_KEY}{hashlib.sha256(data.encode()).hexdigest()}",
     ]
-    text = "".join(f"# {line}\n" for line in header) + data
+    # one line each, whatever the command or a name holds (read_catalog unescapes)
+    text = "".join(f"# {escape_header(line)}\n" for line in header) + data
     if os.fspath(path) == "-":
         import sys
 
+        if sys.stdout is None or getattr(sys.stdout, "closed", False):
+            raise InputError("standard output is closed: give a file to write the catalog to")
         sys.stdout.write(text)
         sys.stdout.flush()
         return
@@ -166,7 +184,7 @@ def _split_header(raw):
     while raw.startswith(b"#", position):
         end = raw.find(b"\n", position)
         end = len(raw) if end < 0 else end + 1
-        header.append(raw[position + 1 : end].decode("utf-8").strip())
+        header.append(unescape_header(raw[position + 1 : end].decode("utf-8").strip()))
         position = end
     return header, raw[position:]
 

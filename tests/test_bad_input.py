@@ -732,6 +732,24 @@ CLI_CASES = [
         "look like rows of bodies",
     ),
     (
+        "animate-dpi-20000",
+        [A] + FIG6 + ["--theta", "1", "--dpi", "20000", "--out", "{d}/a.gif"],
+        {},
+        "--dpi must be a number from 0.25 to 7281",
+    ),
+    (
+        "animate-dpi-7000-memory",
+        [A] + FIG6 + ["--theta", "1", "--dpi", "7000", "--out", "{d}/a.mp4"],
+        {},
+        "for one frame",
+    ),
+    (
+        "animate-frames-1e8",
+        [A] + FIG6 + ["--theta", "1", "--frames", "100000000", "--out", "{d}/a.gif"],
+        {},
+        "lower --frames or --dpi",
+    ),
+    (
         "bodies-subnormal",
         BODIES,
         bodies("I1,I2,I3\n0.3,0.5,0.7\n1e-320,2e-320,2.5e-320\n"),
@@ -993,7 +1011,20 @@ API_CASES = [
         "read_bodies_csv-subnormal",
         on_file(_bodies_file("I1,I2,I3\n1e-310,0.5,0.7\n"), _read_bodies),
     ),
+    ("set_num_threads-text", call(orbits.set_num_threads, "2")),
+    ("write_catalog-list", lambda d, s: lambda: orbits.write_catalog([1, 2], d / "c.csv")),
+    (
+        "poinsot_animation-dpi-negative",
+        lambda d, s: lambda: _animation(d, dpi=-80),
+    ),
+    ("poinsot_animation-frames-1e8", lambda d, s: lambda: _animation(d, frames=10**8)),
 ]
+
+
+def _animation(directory, **kwargs):
+    from orbits.animate import poinsot_animation
+
+    return poinsot_animation(_body(), 1.0, out=directory / "a.gif", **kwargs)
 
 
 @pytest.mark.parametrize("case", API_CASES, ids=[c[0] for c in API_CASES])

@@ -4,8 +4,10 @@ import argparse
 import math
 import sys
 
+from ..cells import literal_text
 from ..errors import InputError
-from .shared import add_body_options, body_from_args, finite, positive_int
+from ..limits import check_animation
+from .shared import add_body_options, announce, body_from_args, finite, positive_int
 
 
 def _cmd_animate(args):
@@ -13,6 +15,15 @@ def _cmd_animate(args):
 
     from .. import animate
 
+    # sizes first, with the options' own names: nothing is computed for a run
+    # that cannot fit the machine
+    memory, seconds = check_animation(
+        args.frames,
+        args.dpi,
+        keep_frames=str(args.out).lower().endswith(".gif"),
+        frames_name="--frames",
+        dpi_name="--dpi",
+    )
     body = body_from_args(args)
     spins = [
         args.theta is not None,
@@ -39,10 +50,13 @@ def _cmd_animate(args):
         from ..motion import Motion
 
         source = Motion.from_spin(body, args.theta, dtheta=args.dtheta, phi=args.phi)
+    _check_out(args.out)
+    # every input checked: say how long the drawing will take
+    announce("animate", seconds, memory)
     title = None
     if args.flip is not None:
         title = (
-            f"{body.name or 'body'}: the Dzhanibekov (tennis-racket) flip, spin "
+            f"{literal_text(body.name or 'body')}: the Dzhanibekov (tennis-racket) flip, spin "
             f"{args.flip:g} rad from the intermediate axis $I_2$, "
             f"T = {source.period:.4g} s"
         )
@@ -64,6 +78,19 @@ def _cmd_animate(args):
         file=sys.stderr,
     )
     return 0
+
+
+def _check_out(path):
+    """The output's format and directory, checked before the estimate is announced."""
+    from pathlib import Path
+
+    from ..animate import FORMATS
+    from ..atomic import ensure_writable
+
+    suffix = Path(path).suffix
+    if suffix.lstrip(".").lower() not in FORMATS:
+        raise InputError(f"unknown animation format {suffix!r}; use .gif or .mp4")
+    ensure_writable(path)
 
 
 def _flip_offset(text):
