@@ -20,6 +20,10 @@ def _stop(signum, frame):
     raise _Stopped(signum)
 
 
+def _ignore(signum, frame):
+    """A signal once the run is over (not SIG_IGN: see orbits.cli._hold_signals)."""
+
+
 def entry():
     """Run the command line; returns the exit code."""
     previous = {}
@@ -34,7 +38,7 @@ def entry():
         code = main()
     except (_Stopped, KeyboardInterrupt) as stop:
         for number in previous:  # a second signal must not cut the message short
-            signal.signal(number, signal.SIG_IGN)
+            signal.signal(number, _ignore)
         number = getattr(stop, "signum", signal.SIGINT)
         name = signal.Signals(number).name
         print(f"orbits: stopped by {name}; no partial output was written", file=sys.stderr)
@@ -42,7 +46,7 @@ def entry():
     finally:
         # the run is over: a signal during interpreter shutdown changes nothing
         for number in previous:
-            signal.signal(number, signal.SIG_IGN)
+            signal.signal(number, _ignore)
     return code
 
 

@@ -250,3 +250,28 @@ def test_figures_of_too_many_orbits_are_refused_before_drawing(tmp_path, capsys)
     assert err[-1].startswith("orbits: error: the contact sheet of ")
     assert "lower --n-max or --q-max" in err[-1]
     assert not out.exists()
+
+
+def test_a_second_signal_during_clean_up_is_ignored(monkeypatch, capsys):
+    """Ctrl-C, then SIGTERM while the first unwinds: one line, exit 130, handlers restored."""
+    import orbits.cli.phase
+
+    cleaned = []
+
+    def run(args):
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(5)
+        finally:
+            os.kill(os.getpid(), signal.SIGTERM)  # arrives during the clean-up
+            time.sleep(0.05)
+            cleaned.append(True)
+        return 0
+
+    monkeypatch.setattr(orbits.cli.phase, "_cmd_phase", run)
+    before = {n: signal.getsignal(n) for n in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
+    assert main(["phase", "--preset", "fig6", "--theta", "0.3"]) == 130
+    assert cleaned == [True]
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["orbits: interrupted; no partial output was written"]
+    assert {n: signal.getsignal(n) for n in before} == before

@@ -94,14 +94,21 @@ def _hold_signals():
 
     A second Ctrl-C (or a SIGTERM after it) while the first unwinds would
     interrupt the removal of a temporary file or the one-line message, and
-    a traceback would escape.  :func:`main` restores the handlers after.
+    a traceback would escape.  A handler that does nothing, not SIG_IGN: a
+    signal already caught but not yet handled would find SIG_IGN and raise
+    "OSError: Signal 15 ignored due to race condition".  :func:`main`
+    restores the handlers after.
     """
     import signal
 
     for name in _STOP_SIGNALS:
         number = getattr(signal, name, None)
         if number is not None:
-            signal.signal(number, signal.SIG_IGN)
+            signal.signal(number, _ignore_signal)
+
+
+def _ignore_signal(signum, frame):
+    """A stop signal after the first: the run is already ending."""
 
 
 def _raise_terminated(signum, frame):
