@@ -1,7 +1,54 @@
-"""``python -m orbits``: the same command line as the ``orbits`` script."""
+"""``python -m orbits`` and the ``orbits`` script: :func:`orbits.cli.main`.
 
+:func:`entry` also covers the start-up: a Ctrl-C or SIGTERM while the
+command line's modules are imported (NumPy and pandas take a few tenths of
+a second) ends with one line and exit 130 (128 + the signal), not a
+traceback; nothing can have been written yet.
+"""
+
+import signal
 import sys
 
-from .cli import main
 
-sys.exit(main())
+class _Stopped(BaseException):
+    def __init__(self, signum):
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _stop(signum, frame):
+    raise _Stopped(signum)
+
+
+def _ignore(signum, frame):
+    """A signal once the run is over (not SIG_IGN: see orbits.cli._hold_signals)."""
+
+
+def entry():
+    """Run the command line; returns the exit code."""
+    previous = {}
+    for name in ("SIGINT", "SIGTERM", "SIGHUP"):
+        number = getattr(signal, name, None)
+        if number is not None:
+            previous[number] = signal.signal(number, _stop)
+    try:
+        from .cli import main
+
+        # main installs its own handlers and gives ours back when it ends
+        code = main()
+    except (_Stopped, KeyboardInterrupt) as stop:
+        for number in previous:  # a second signal must not cut the message short
+            signal.signal(number, _ignore)
+        number = getattr(stop, "signum", signal.SIGINT)
+        name = signal.Signals(number).name
+        print(f"orbits: stopped by {name}; no partial output was written", file=sys.stderr)
+        return 128 + number
+    finally:
+        # the run is over: a signal during interpreter shutdown changes nothing
+        for number in previous:
+            signal.signal(number, _ignore)
+    return code
+
+
+if __name__ == "__main__":
+    sys.exit(entry())

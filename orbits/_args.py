@@ -141,3 +141,28 @@ def finite_array(name, value, error=InputError):
 def flat_broadcast(array, shape):
     """``array`` broadcast to ``shape`` as a fresh contiguous 1-D float array."""
     return np.ascontiguousarray(np.broadcast_to(array, shape), dtype=float).ravel()
+
+
+# the smallest normal double: below it a decimal keeps fewer than 53 bits
+SMALLEST_NORMAL = 2.2250738585072014e-308
+
+
+def below_normal(values):
+    """Where a value is subnormal (``0 < |v| < 2.2e-308``): boolean array.
+
+    A moment typed in decimal below the smallest normal double is stored
+    with fewer than 53 bits (``1e-320`` becomes ``9.99988671826831e-321``),
+    so the body computed would silently differ from the one typed.  The
+    command line's ``--moments`` and the rows of a ``--bodies`` file both
+    refuse such values, with :func:`below_normal_message`.
+    """
+    magnitude = np.abs(np.asarray(values, dtype=float))
+    return (magnitude > 0.0) & (magnitude < SMALLEST_NORMAL)
+
+
+def below_normal_message(text):
+    """Why a subnormal moment ``text`` is refused (one line)."""
+    return (
+        f"{text} is below the smallest normal double (2.2e-308) and would be "
+        "stored with reduced precision; give the moments in larger units"
+    )

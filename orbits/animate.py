@@ -55,7 +55,9 @@ from .animation_scene import (
 )
 from .atomic import atomic_path, ensure_writable
 from .bodies import Body
+from .cells import literal_text
 from .errors import InputError
+from .limits import check_animation
 from .motion import Motion, as_body
 
 FORMATS = ("gif", "mp4")
@@ -207,7 +209,9 @@ class PoinsotAnimation:
     ):
         self.motion = motion
         self.fps = int(fps)
-        self.dpi = dpi
+        # a positive dpi whose frame buffers fit the machine (limits.check_animation)
+        check_animation(len(times), dpi, size, keep_frames=False)
+        self.dpi = float(dpi)
         self.scene = PoinsotScene(motion, times, solid=solid, subsamples=subsamples)
         self.times = self.scene.times
         self.plane_height = self.scene.plane_height
@@ -324,7 +328,7 @@ class PoinsotAnimation:
         body_ax.view_init(elev=22, azim=-50)
         self.artists = artists
         body = self.motion.body
-        name = body.name or "body"
+        name = literal_text(body.name or "body")
         heading = title or (
             f"{name}: Poinsot construction, {self.motion.branch}, T = {self.motion.period:.4g} s"
         )
@@ -562,7 +566,9 @@ def poinsot_animation(
         The solid drawn; see :func:`solid_faces`.
     title : str, optional
     dpi : float
-        Pixel density of the frames (figure 9 x 4 in).
+        Pixel density of the frames (figure 9 x 4 in): from 0.25 to 7281
+        (matplotlib's Agg draws at most 65535 pixels a side), and one
+        frame's buffers must fit half the machine's memory.
     pyplot : bool
         Create the figure through ``matplotlib.pyplot`` (for notebooks and
         sphinx-gallery's animation scraper); default headless Agg.
@@ -580,7 +586,9 @@ def poinsot_animation(
     Raises
     ------
     InputError
-        Bad ``frames``, ``fps``, ``periods`` or output path.
+        Bad ``frames``, ``fps``, ``periods``, ``dpi`` or output path;
+        frames whose memory or drawing time would exceed the machine
+        (:func:`orbits.limits.check_animation`; a GIF holds every frame).
     AngleError, SeparatrixError
         Bad spin, as :meth:`Motion.from_spin`.
 
@@ -600,12 +608,16 @@ def poinsot_animation(
     periods = default_periods if periods is None else periods
     if not (np.isfinite(periods) and periods > 0):
         raise InputError(f"periods must be positive, got {periods!r}")
-    times = np.linspace(0.0, float(periods) * motion.period, int(frames))
+    fmt = None
     if out is not None:
         path = Path(out)
         fmt = path.suffix.lstrip(".").lower()
         if fmt not in FORMATS:
             raise InputError(f"unknown animation format {path.suffix!r}; use .gif or .mp4")
+    # before any array of frames exists: the frames must fit memory and a day
+    check_animation(frames, dpi, keep_frames=fmt == "gif")
+    times = np.linspace(0.0, float(periods) * motion.period, int(frames))
+    if out is not None:
         ensure_writable(path)
     animation = PoinsotAnimation(
         motion, times, fps=fps, solid=solid, title=title or label, dpi=dpi, pyplot=pyplot
@@ -635,7 +647,7 @@ def _motion_from(source, theta, dtheta, phi, speed, row_body=None):
         motion = Motion.from_spin(body, dtheta=float(row["dtheta"]))
         p, q = int(row["n"]), int(row["q"])
         multiple = f"{p}" if q == 1 else f"{p}/{q}"
-        name = row.get("body") or "body"
+        name = literal_text(row.get("body") or "body")
         label = (
             rf"{name}: closed orbit $\Delta\alpha = 2\pi\cdot{multiple}$, "
             rf"{row['branch']}, $\theta-\theta_c$ = {float(row['dtheta']):.3e}"

@@ -29,11 +29,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ._args import integer, path_argument
+from ._args import below_normal, below_normal_message, integer, path_argument
 from ._version import __version__
 from .atomic import atomic_path, csv_float_options
 from .bodies import FLAT_SLACK, Body, flat_excess, validate_moments
-from .cells import neutralize, unneutralize
+from .cells import escape_header, neutralize, unescape_header, unneutralize
 from .errors import ArgumentTypeError, InputError, OrbitsError
 from .limits import check_search_bounds
 from .search import CATALOG_COLUMNS, closed_orbits
@@ -141,8 +141,23 @@ def write_catalog(frame, path, command=None, notes=()):
     ``notes`` are extra header lines (e.g. the rows ``--skip-invalid``
     skipped).  The header ends with the row count and the SHA-256 of the
     data section (every byte after the header), which :func:`read_catalog`
-    checks.  ``path`` ``"-"`` writes to standard output.
+    checks.  Control characters in a header line (a newline in a body's
+    name or the command) are escaped (:func:`orbits.cells.escape_header`),
+    so each stays one ``#`` line; :func:`read_catalog` unescapes them.
+    ``path`` ``"-"`` writes to standard output.
+
+    Raises
+    ------
+    ArgumentTypeError
+        ``frame`` is not a pandas DataFrame.
+    InputError
+        ``path`` ``"-"`` while standard output is closed; an unwritable path.
     """
+    if not isinstance(frame, pd.DataFrame):
+        raise ArgumentTypeError(
+            f"write_catalog needs a pandas DataFrame (e.g. from orbits.catalog), "
+            f"got {type(frame).__name__}"
+        )
     data = csv_text(frame)
     header = [
         f"orbits {__version__} closed-orbit catalog",
@@ -154,10 +169,13 @@ def write_catalog(frame, path, command=None, notes=()):
         f"{ROWS_KEY}{len(frame)}",
         f"{CHECKSUM_KEY}{hashlib.sha256(data.encode()).hexdigest()}",
     ]
-    text = "".join(f"# {line}\n" for line in header) + data
+    # one line each, whatever the command or a name holds (read_catalog unescapes)
+    text = "".join(f"# {escape_header(line)}\n" for line in header) + data
     if os.fspath(path) == "-":
         import sys
 
+        if sys.stdout is None or getattr(sys.stdout, "closed", False):
+            raise InputError("standard output is closed: give a file to write the catalog to")
         sys.stdout.write(text)
         sys.stdout.flush()
         return
@@ -172,7 +190,7 @@ def _split_header(raw):
     while raw.startswith(b"#", position):
         end = raw.find(b"\n", position)
         end = len(raw) if end < 0 else end + 1
-        header.append(raw[position + 1 : end].decode("utf-8").strip())
+        header.append(unescape_header(raw[position + 1 : end].decode("utf-8").strip()))
         position = end
     return header, raw[position:]
 
@@ -374,6 +392,7 @@ def read_bodies_csv(path, skip_invalid=False):
     while start < len(lines) and (lines[start].startswith("#") or not lines[start].strip("\r")):
         start += 1
     rest = "\n".join(lines[start:])
+    _check_quotes_close(path, rest, start)
     try:
         raw_header = next(csv.reader(io.StringIO(rest), strict=True), [])
     except csv.Error as error:
@@ -381,8 +400,33 @@ def read_bodies_csv(path, skip_invalid=False):
     header = _check_header(path, raw_header)
     cells = _arrow_cells(rest, raw_header) if _have_pyarrow() else None
     if cells is None:
-        cells = _python_cells(path, rest, header)
+        cells = _python_cells(path, rest, header, start)
     return _validated(path, header, cells, skip_invalid)
+
+
+def _check_quotes_close(path, rest, start):
+    """Refuse a quote that is never closed (both parsers would swallow the rest).
+
+    An unclosed quote makes every later line part of one cell: Arrow and the
+    csv module (not strict) read three bodies as one whose name holds the
+    other two.  Only a file with an odd number of quotes can hold one, so
+    the record-by-record scan runs only then.  ``start`` is the number of
+    comment and blank lines before the header.
+    """
+    if rest.count('"') % 2 == 0:
+        return
+    reader = csv.reader(io.StringIO(rest), strict=True)
+    done = 0  # lines of rest read by whole records
+    try:
+        for _ in reader:
+            done = reader.line_num
+    except csv.Error as error:
+        if "unexpected end of data" not in str(error):
+            return  # another defect: the parsers name it
+        raise InputError(
+            f"{path}, line {start + done + 1}: a quote opened on this line is never "
+            "closed, so every later line would be read into one cell; close the quote"
+        ) from None
 
 
 def _check_header(path, raw_header):
@@ -553,12 +597,17 @@ def _arrow_numbers(column, given, problems, whole=None):
     return values
 
 
-def _python_cells(path, rest, header):
+def _python_cells(path, rest, header, start=0):
     """Parse with the csv module: slower, but names every malformed row."""
+    reader = csv.reader(io.StringIO(rest), strict=True)
+    records = []
     try:
-        records = list(csv.reader(io.StringIO(rest), strict=True))
+        for record in reader:
+            records.append(record)
     except csv.Error as error:
-        raise InputError(f"{path} is not a CSV of bodies: {error}") from None
+        raise InputError(
+            f"{path}, line {start + reader.line_num}: not a CSV of bodies: {error}"
+        ) from None
     data = [r for r in records[1:] if r]  # blank lines
     width = len(header)
     count = len(data)
@@ -599,6 +648,7 @@ def _validated(path, header, cells, skip_invalid):
     count, moments, problems, names = cells.count, cells.moments, cells.problems, cells.names
     if not count:
         raise InputError(f"{path}: no bodies")
+    _check_rows(moments, names, problems)
     candidate = np.array(sorted(set(range(count)) - set(problems)), dtype=np.int64)
     for k in _invalid_moments(moments[candidate]):
         index = int(candidate[k])
@@ -627,6 +677,35 @@ def _validated(path, header, cells, skip_invalid):
         rows=np.flatnonzero(keep) + 1,
         skipped=[(k + 1, f"{label(k)}: {problems[k]}") for k in bad],
     )
+
+
+# a line of a multi-line name that looks like a row of moments: an unclosed
+# quote closed only by a later row's quote swallowed the rows in between
+_SWALLOWED_ROW = re.compile(
+    rf"(?:^|,)\s*{NUMBER.pattern}\s*,\s*{NUMBER.pattern}\s*,\s*{NUMBER.pattern}\s*(?:,|$)"
+)
+
+
+def _check_rows(moments, names, problems):
+    """Add the problems both parsers share: subnormal moments, swallowed rows.
+
+    A moment below the smallest normal double is refused as ``--moments``
+    refuses it (:func:`orbits._args.below_normal`); a name whose later lines
+    look like rows of moments is refused as a misplaced quote.
+    """
+    for k, j in zip(*np.nonzero(below_normal(moments))):
+        problems.setdefault(
+            int(k), below_normal_message(f"{BODY_FILE_COLUMNS[j]} {moments[k, j]:.3g}")
+        )
+    for k, name in enumerate(names or ()):
+        if ("\n" in name or "\r" in name) and any(
+            _SWALLOWED_ROW.search(line) for line in name.splitlines()[1:]
+        ):
+            problems.setdefault(
+                k,
+                "the name spans lines that look like rows of bodies: a quote opened in "
+                "it is closed only on a later line; close it where the name ends",
+            )
 
 
 def _invalid_moments(moments):

@@ -17,7 +17,9 @@ from matplotlib.figure import Figure
 from . import plotting
 from .atomic import atomic_path
 from .bodies import Body
+from .cells import literal_text
 from .errors import InputError
+from .limits import AGG_MAX_PIXELS, MAX_SECONDS, about_duration, format_bytes, memory_budget
 from .search import closed_orbits
 
 FORMATS = ("png", "svg", "pdf")
@@ -97,6 +99,7 @@ def herpolhode_set(
     if orbits is None:
         orbits = closed_orbits(body, n_max=n_max, q_max=q_max)
     orbits = _paper_order(orbits)
+    check_figure_set(len(orbits), formats)
     name = body.name or "body"
     radii = [plotting.herpolhode_radii(body, dtheta=row.dtheta) for row in orbits.itertuples()]
     limit = _common_limit(radii) if radii else None
@@ -211,6 +214,67 @@ def _marks_legend(figure, fontsize="x-small"):
     )
 
 
+def _sheet_columns(count):
+    return max(1, min(8, math.ceil(math.sqrt(count * 1.5))))
+
+
+# measured here (2-core VM, 2026-11-24): herpolhode_set of fig6 with n_max = 6
+# (10 orbits and the contact sheet) took 1.2 s a figure and format
+_SECONDS_PER_FIGURE = 1.2
+
+
+def figure_set_estimate(count, formats):
+    """Rough memory (bytes) and time (s) of :func:`herpolhode_set` for ``count`` orbits.
+
+    The contact sheet dominates the memory: 2 x 2.2 in a panel, 8 columns,
+    at :data:`DPI`, a few buffers of 4 bytes a pixel.
+    """
+    columns = _sheet_columns(max(count, 1))
+    rows = math.ceil(max(count, 1) / columns)
+    pixels = (2.0 * columns * DPI) * ((2.2 * rows + 1.0) * DPI)
+    memory = 3 * 4.0 * pixels
+    seconds = (count + 1) * max(1, len(formats)) * _SECONDS_PER_FIGURE
+    return memory, seconds
+
+
+def check_figure_set(count, formats, advice="lower n_max or q_max"):
+    """Refuse a figure set that matplotlib cannot draw or that would take a day.
+
+    The contact sheet of every orbit must stay below Agg's 65535 pixels a
+    side (at most 1584 orbits at :data:`DPI` = 150); memory and time as
+    :func:`figure_set_estimate`.  ``advice`` ends the message (the command
+    line names its options).
+
+    Returns
+    -------
+    memory, seconds : float
+
+    Raises
+    ------
+    InputError
+    """
+    columns = _sheet_columns(max(count, 1))
+    height = (2.2 * math.ceil(max(count, 1) / columns) + 1.0) * DPI
+    most = int((AGG_MAX_PIXELS / DPI - 1.0) / 2.2) * 8
+    if height > AGG_MAX_PIXELS:
+        raise InputError(
+            f"the contact sheet of {count} closed orbits would be {height:.0f} pixels tall, "
+            f"more than the {AGG_MAX_PIXELS} matplotlib can draw (at most {most} orbits); "
+            f"{advice}"
+        )
+    memory, seconds = figure_set_estimate(count, formats)
+    if memory > memory_budget():
+        raise InputError(
+            f"the figures of {count} closed orbits would need {format_bytes(memory)} of "
+            f"memory, more than the {format_bytes(memory_budget())} allowed; {advice}"
+        )
+    if seconds > MAX_SECONDS:
+        raise InputError(
+            f"the figures of {count} closed orbits would take {about_duration(seconds)}; {advice}"
+        )
+    return memory, seconds
+
+
 def contact_sheet(body, orbits, columns=None):
     """All closed herpolhodes of a body in one grid, in Fig. 6's order.
 
@@ -223,7 +287,7 @@ def contact_sheet(body, orbits, columns=None):
     count = len(orbits)
     if count == 0:
         raise InputError("the contact sheet needs at least one closed orbit")
-    columns = columns or max(1, min(8, math.ceil(math.sqrt(count * 1.5))))
+    columns = columns or _sheet_columns(count)
     rows = math.ceil(count / columns)
     figure = new_figure(2.0 * columns, 2.2 * rows + 1.0)
     grid = figure.subplots(rows, columns, squeeze=False, sharex=True, sharey=True)
@@ -259,7 +323,7 @@ def contact_sheet(body, orbits, columns=None):
     for ax in grid[:, 0]:
         ax.set_ylabel(r"$\omega_y$ (rad/s)", fontsize="x-small")
     figure.suptitle(
-        f"Closed herpolhodes of {body.name or 'the body'} in the invariable plane\n"
+        f"Closed herpolhodes of {literal_text(body.name or 'the body')} in the invariable plane\n"
         r"one scale ($|\omega_0|$ = 1 rad/s), left to right in $\theta$; "
         "odd n close after T/2",
         fontsize="medium",

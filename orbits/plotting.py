@@ -18,6 +18,7 @@ import math
 import numpy as np
 
 from .bodies import REGION_BOX, Body, region_moments
+from .cells import literal_text
 from .motion import Motion, as_body, herpolhode, polhode
 from .phases import critical_angle, phase_limits, phases, total_phase
 
@@ -210,7 +211,7 @@ def theta_text(theta, dtheta, precision=5):
 def orbit_label(row, body_name=None, precision=6):
     """A figure title for a catalog row: multiple, branch, theta, body, closure."""
     multiple = f"{row.n}" if row.q == 1 else f"{row.n}/{row.q}"
-    name = f"{body_name}: " if body_name else ""
+    name = f"{literal_text(body_name)}: " if body_name else ""
     text = (
         rf"{name}$\Delta\alpha = 2\pi\cdot{multiple}$, {row.branch}, "
         rf"$\theta$ = {row.theta:.{precision}f}"

@@ -36,14 +36,22 @@ def set_num_threads(count):
 
     Raises
     ------
+    ArgumentTypeError
+        ``count`` is not a real number (a string, None, ...).
     InputError
         ``count`` not an integer in that range.
     """
-    from .errors import InputError
+    import numbers
+
+    from .errors import ArgumentTypeError, InputError
 
     numba = _numba()
     top = numba.config.NUMBA_NUM_THREADS
-    if isinstance(count, bool) or not float(count).is_integer() or not 1 <= count <= top:
+    if isinstance(count, (bool, np.bool_)) or not isinstance(count, numbers.Real):
+        raise ArgumentTypeError(
+            f"threads must be an integer from 1 to {top}, got {count!r} ({type(count).__name__})"
+        )
+    if not np.isfinite(count) or not float(count).is_integer() or not 1 <= count <= top:
         raise InputError(
             f"threads must be an integer from 1 to {top} (NUMBA_NUM_THREADS), got {count!r}"
         )

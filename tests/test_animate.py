@@ -313,7 +313,10 @@ class TestCli:
             (["--preset", "fig6", "--out", "a.gif"], "exactly one spin"),
             (["--preset", "fig6", "--n", "2", "--theta", "1", "--out", "a.gif"], "exactly one"),
             (["--preset", "fig6", "--n", "5", "--out", "a.gif"], "--branch"),
-            (["--preset", "fig6", "--q", "2", "--theta", "1", "--out", "a.gif"], "--q needs --p"),
+            (
+                ["--preset", "fig6", "--q", "2", "--theta", "1", "--out", "a.gif"],
+                "--q applies to --p",
+            ),
             (["--preset", "fig6", "--theta", "0.5", "--out", "a.png"], "use .gif or .mp4"),
             (["--preset", "fig6", "--flip", "2", "--out", "a.gif"], "(0, pi/4)"),
             (

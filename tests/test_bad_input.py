@@ -727,6 +727,120 @@ CLI_CASES = [
         {"s": survey("grid", "no-manifest")},
         "no manifest.json",
     ),
+    # --- issue 20: arguments, files, names, streams ---
+    (
+        "mass-with-t-handle",
+        [P, "--t-handle", "8", "4", "1", "--mass", "0.05", "--theta", "0.3"],
+        {},
+        "--mass applies to --box and --cylinder, not to --t-handle",
+    ),
+    (
+        "mass-with-moments",
+        [P, "--moments", "1", "2", "2.5", "--mass", "1", "--theta", "0.3"],
+        {},
+        "not to --moments",
+    ),
+    (
+        "density-with-box",
+        [P, "--box", "1", "2", "3", "--density", "2", "--theta", "0.3"],
+        {},
+        "--density applies to --mesh, not to --box",
+    ),
+    (
+        "units-with-theta",
+        [P] + FIG6 + ["--theta", "0.3", "--units", "Hz"],
+        {},
+        "--units applies to --omega, not to --theta",
+    ),
+    (
+        "unit-with-preset",
+        [P] + FIG6 + ["--theta", "0.3", "--unit", "MHz"],
+        {},
+        "not to --preset",
+    ),
+    ("phi-with-omega", [P] + FIG6 + ["--omega", "1", "2", "3", "--phi", "1"], {}, "--phi"),
+    (
+        "degrees-with-period-ratio",
+        [P] + FIG6 + ["--period-ratio", "2", "--degrees"],
+        {},
+        "not to --period-ratio",
+    ),
+    ("theta-60", [P] + FIG6 + ["--theta", "60"], {}, "looks like degrees"),
+    ("theta-400-degrees", [P] + FIG6 + ["--theta", "400", "--degrees"], {}, "[-360, 360]"),
+    (
+        "catalog-mass-with-preset",
+        CAT + ["{d}/c.csv", "--mass", "2"],
+        {},
+        "--mass applies to --box and --cylinder, not to --preset",
+    ),
+    (
+        "figures-q-max-with-paper",
+        [F, "--paper", "--q-max", "3", "--out", "{d}/o"],
+        {},
+        "not to --paper",
+    ),
+    (
+        "verify-count-with-body",
+        [V] + FIG6 + ["--bodies", "4"],
+        {},
+        "--bodies applies to the region sample",
+    ),
+    ("verify-mass-without-body", [V, "--mass", "2"], {}, "not to the region sample"),
+    (
+        "survey-check-q-max",
+        [S, "--check", "{d}/s", "--q-max", "3"],
+        {"s": survey("grid")},
+        "only the directory",
+    ),
+    (
+        "animate-branch-with-theta",
+        [A] + FIG6 + ["--theta", "1", "--branch", "SAM", "--out", "{d}/a.gif"],
+        {},
+        "--branch applies to --n and --p, not to --theta",
+    ),
+    ("animate-theta-45", [A] + FIG6 + ["--theta", "45", "--out", "{d}/a.gif"], {}, "degrees"),
+    (
+        "bodies-unclosed-quote",
+        BODIES,
+        bodies('I1,I2,I3,name\n0.26,0.55,0.793662,"a\n0.3,0.5,0.7,b\n0.2,0.6,0.75,c\n'),
+        "line 2: a quote opened on this line is never closed",
+    ),
+    (
+        "survey-bodies-unclosed-quote",
+        SURVEY_B,
+        bodies('I1,I2,I3,name\n0.26,0.55,0.793662,"a\n0.3,0.5,0.7,b\n0.2,0.6,0.75,c\n'),
+        "line 2",
+    ),
+    (
+        "bodies-quote-closed-rows-later",
+        BODIES,
+        bodies('I1,I2,I3,name\n0.26,0.55,0.793662,"a\n0.3,0.5,0.7,b\n0.2,0.6,0.75,c"\n'),
+        "look like rows of bodies",
+    ),
+    (
+        "animate-dpi-20000",
+        [A] + FIG6 + ["--theta", "1", "--dpi", "20000", "--out", "{d}/a.gif"],
+        {},
+        "--dpi must be a number from 0.25 to 7281",
+    ),
+    (
+        "animate-dpi-7000-memory",
+        [A] + FIG6 + ["--theta", "1", "--dpi", "7000", "--out", "{d}/a.mp4"],
+        {},
+        "for one frame",
+    ),
+    (
+        "animate-frames-1e8",
+        [A] + FIG6 + ["--theta", "1", "--frames", "100000000", "--out", "{d}/a.gif"],
+        {},
+        "lower --frames or --dpi",
+    ),
+    (
+        "bodies-subnormal",
+        BODIES,
+        bodies("I1,I2,I3\n0.3,0.5,0.7\n1e-320,2e-320,2.5e-320\n"),
+        "row 2: I1 1e-320 is below the smallest normal double",
+    ),
 ]
 
 
@@ -990,7 +1104,31 @@ API_CASES = [
             "grid", None, lambda p: orbits.survey.Survey.grid(p, 4, 3, fmt="csv", chunk=2).run()
         ),
     ),
+    # --- issue 20: arguments, files, names, streams ---
+    (
+        "read_bodies_csv-unclosed-quote",
+        on_file(
+            _bodies_file('I1,I2,I3,name\n0.26,0.55,0.793662,"a\n0.3,0.5,0.7,b\n'), _read_bodies
+        ),
+    ),
+    (
+        "read_bodies_csv-subnormal",
+        on_file(_bodies_file("I1,I2,I3\n1e-310,0.5,0.7\n"), _read_bodies),
+    ),
+    ("set_num_threads-text", call(orbits.set_num_threads, "2")),
+    ("write_catalog-list", lambda d, s: lambda: orbits.write_catalog([1, 2], d / "c.csv")),
+    (
+        "poinsot_animation-dpi-negative",
+        lambda d, s: lambda: _animation(d, dpi=-80),
+    ),
+    ("poinsot_animation-frames-1e8", lambda d, s: lambda: _animation(d, frames=10**8)),
 ]
+
+
+def _animation(directory, **kwargs):
+    from orbits.animate import poinsot_animation
+
+    return poinsot_animation(_body(), 1.0, out=directory / "a.gif", **kwargs)
 
 
 @pytest.mark.parametrize("case", API_CASES, ids=[c[0] for c in API_CASES])

@@ -179,3 +179,41 @@ def test_same_bodies_by_another_path_resume(tmp_path, monkeypatch, capsys):
     (tmp_path / "copy.csv").write_text("# same\nI1 , I2,I3\n0.26,0.55,0.793662\n0.3, 0.5,0.7\n")
     assert main(argv + ["./copy.csv"]) == 0
     assert "(0 computed now" in capsys.readouterr().out
+
+
+# issue 20, item 5: an unclosed quote, rows swallowed into a name, subnormal moments
+THREE = "0.26,0.55,0.793662,{0}a\n0.3,0.5,0.7,b\n0.2,0.6,0.75,c{1}\n"
+
+
+def test_an_unclosed_quote_is_refused_with_its_line(tmp_path, parser):
+    path = write(tmp_path, "# made by hand\n\nI1,I2,I3,name\n" + THREE.format('"', ""))
+    with pytest.raises(InputError, match=r"b.csv, line 4: a quote opened on this line is never"):
+        read_bodies_csv(path)
+
+
+def test_a_lone_quote_inside_an_unquoted_name_is_text(tmp_path):
+    # an odd number of quotes, but no quote left open (the csv-module path reads it)
+    path = write(tmp_path, 'I1,I2,I3,name\n0.3,0.5,0.7,my 5" top\n0.26,0.55,0.793662,x\n')
+    assert read_bodies_csv(path).names == ['my 5" top', "x"]
+
+
+def test_rows_swallowed_into_a_name_are_refused(tmp_path, parser):
+    path = write(tmp_path, "I1,I2,I3,name\n" + THREE.format('"', '"'))
+    with pytest.raises(InputError, match="row 1 .*look like rows of bodies"):
+        read_bodies_csv(path)
+
+
+def test_subnormal_moments_are_refused_as_on_the_command_line(tmp_path, parser, capsys):
+    path = write(tmp_path, "I1,I2,I3\n0.3,0.5,0.7\n1e-320,2e-320,2.5e-320\n0.3,4e-310,0.7\n")
+    with pytest.raises(InputError, match=r"row 2: I1 1e-320 is below the smallest normal") as e:
+        read_bodies_csv(path)
+    assert "1 more bad row" in str(e.value)
+    table = read_bodies_csv(path, skip_invalid=True)
+    assert table.rows.tolist() == [1] and [row for row, _ in table.skipped] == [2, 3]
+    assert "I2 4e-310" in table.skipped[1][1]
+    # the same words as --moments
+    assert main(["phase", "--moments", "1e-320", "2e-320", "2.5e-320", "--theta", "0.3"]) == 2
+    assert "below the smallest normal double (2.2e-308)" in capsys.readouterr().err
+    # the smallest normal double itself is a number like any other
+    path = write(tmp_path, "I1,I2,I3\n2.2250738585072014e-308,4e-308,5e-308\n")
+    np.testing.assert_array_equal(read_bodies_csv(path).moments[0, 0], sys.float_info.min)

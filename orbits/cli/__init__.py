@@ -18,7 +18,7 @@ arguments, progress, exit codes) is in :mod:`orbits.cli.shared`.
 import sys
 
 from .._version import __version__
-from ..errors import OrbitsError
+from ..errors import InputError, OrbitsError
 from . import animate, bench, catalog, figures, phase, survey, verify
 from .phase import OMEGA_UNITS, format_value
 from .shared import (
@@ -32,6 +32,7 @@ from .shared import (
     bodies_file_from_args,
     bodies_from_args,
     body_from_args,
+    check_arguments,
     command_line,
     positive_int,
     progress_bar,
@@ -50,6 +51,7 @@ __all__ = [
     "bodies_from_args",
     "body_from_args",
     "build_parser",
+    "check_arguments",
     "command_line",
     "format_value",
     "main",
@@ -62,7 +64,9 @@ def build_parser():
     parser = Parser(
         prog="orbits",
         description="Geometric phase, exact motion and closed orbits of the "
-        "force-free asymmetric top (Mecholsky 2019).",
+        "force-free asymmetric top (Mecholsky 2019).  An option given where it "
+        "does not apply (--mass with --t-handle, --units with --theta, ...) is "
+        "refused, never ignored.",
     )
     parser.add_argument("--version", action="version", version=f"orbits {__version__}")
     parser.add_argument(
@@ -82,24 +86,60 @@ def build_parser():
     return parser
 
 
+_STOP_SIGNALS = ("SIGINT", "SIGTERM", "SIGHUP")
+
+
+def _hold_signals():
+    """Ignore further stop signals: the first one's clean-up must finish.
+
+    A second Ctrl-C (or a SIGTERM after it) while the first unwinds would
+    interrupt the removal of a temporary file or the one-line message, and
+    a traceback would escape.  A handler that does nothing, not SIG_IGN: a
+    signal already caught but not yet handled would find SIG_IGN and raise
+    "OSError: Signal 15 ignored due to race condition".  :func:`main`
+    restores the handlers after.
+    """
+    import signal
+
+    for name in _STOP_SIGNALS:
+        number = getattr(signal, name, None)
+        if number is not None:
+            signal.signal(number, _ignore_signal)
+
+
+def _ignore_signal(signum, frame):
+    """A stop signal after the first: the run is already ending."""
+
+
 def _raise_terminated(signum, frame):
     from ..atomic import Terminated
 
+    _hold_signals()
     raise Terminated(signum)
 
 
+def _raise_interrupt(signum, frame):
+    _hold_signals()
+    raise KeyboardInterrupt
+
+
 def _install_signal_handlers():
-    """SIGTERM and SIGHUP raise :class:`~orbits.atomic.Terminated` (main thread only)."""
+    """SIGINT raises KeyboardInterrupt, SIGTERM and SIGHUP :class:`~orbits.atomic.Terminated`.
+
+    Each handler ignores the stop signals that follow it (:func:`_hold_signals`).
+    Main thread only; returns the previous handlers.
+    """
     import signal
     import threading
 
     if threading.current_thread() is not threading.main_thread():
         return {}
     previous = {}
-    for name in ("SIGTERM", "SIGHUP"):
+    for name in _STOP_SIGNALS:
         number = getattr(signal, name, None)
         if number is not None:
-            previous[number] = signal.signal(number, _raise_terminated)
+            handler = _raise_interrupt if name == "SIGINT" else _raise_terminated
+            previous[number] = signal.signal(number, handler)
     return previous
 
 
@@ -133,16 +173,66 @@ def announce_compilation(stream=None):
     return True
 
 
+# the options that set the size of each command's work (for an out-of-memory line)
+_SIZE_OPTIONS = {
+    "phase": "fewer --theta or --dtheta values",
+    "catalog": "--n-max, --q-max, --bodies",
+    "figures": "--n-max, --q-max",
+    "survey": "--resolution, --n-max, --q-max, --chunk, --bodies",
+    "verify": "--bodies, --angles",
+    "animate": "--frames, --dpi",
+    None: "--n-max, --q-max, --resolution, --chunk, --bodies",
+}
+
+# commands whose results go to standard output (catalog too with --out -)
+_PRINTING = ("phase", "survey", "verify", "bench")
+
+
+def _check_stdout(args):
+    """Refuse, before any work, a run whose results would go to a closed stdout.
+
+    Python sets ``sys.stdout`` to None when descriptor 1 is closed
+    (``orbits phase ... >&-``); ``print`` then drops every line silently.
+    """
+    if sys.stdout is not None and not getattr(sys.stdout, "closed", False):
+        return
+    if args.command in _PRINTING or getattr(args, "out", None) == "-":
+        where = "--out -" if getattr(args, "out", None) == "-" else f"orbits {args.command}"
+        raise InputError(f"standard output is closed, so {where} has nowhere to write its results")
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None):
+    """A warning as one ``orbits: warning:`` line (no source path, no code line)."""
+    stream = sys.stderr if file is None else file
+    if stream is None:
+        return
+    try:
+        print(f"orbits: warning: {' '.join(str(message).split())}", file=stream, flush=True)
+    except (OSError, ValueError):
+        pass  # stderr closed: nothing to tell
+
+
 def main(argv=None):
-    """Entry point of the ``orbits`` console script; returns the exit code."""
+    """Entry point of the ``orbits`` console script; returns the exit code.
+
+    Python warnings raised during the run are shown as one ``orbits:
+    warning:`` line each (``warnings.showwarning`` is replaced for the run
+    and restored after).
+    """
     import signal
+    import warnings
 
     from ..atomic import Terminated
 
     previous = _install_signal_handlers()
+    shown = warnings.showwarning
+    warnings.showwarning = _show_warning
+    args = None
     try:
         args = build_parser().parse_args(argv)
         args.argv = argv
+        check_arguments(args)
+        _check_stdout(args)
         if args.threads is not None:
             from ..threads import set_num_threads
 
@@ -160,11 +250,8 @@ def main(argv=None):
         print(f"orbits: error: {' '.join(str(error).split())}", file=sys.stderr)
         return EXIT_USAGE
     except MemoryError:
-        print(
-            "orbits: error: out of memory; use smaller sizes (--n-max, --q-max, "
-            "--resolution, --chunk, --bodies)",
-            file=sys.stderr,
-        )
+        sizes = _SIZE_OPTIONS.get(getattr(args, "command", None), _SIZE_OPTIONS[None])
+        print(f"orbits: error: out of memory; use smaller sizes ({sizes})", file=sys.stderr)
         return EXIT_USAGE
     except BrokenPipeError:
         # the reader (e.g. `head`) closed the pipe: not an error of ours
@@ -177,5 +264,7 @@ def main(argv=None):
         )
         return EXIT_USAGE
     finally:
+        warnings.showwarning = shown
         for number, handler in previous.items():
-            signal.signal(number, handler)
+            if handler is not None:  # None: a handler not installed from Python
+                signal.signal(number, handler)

@@ -4,8 +4,10 @@ import argparse
 import math
 import sys
 
+from ..cells import literal_text
 from ..errors import InputError
-from .shared import add_body_options, body_from_args, finite, positive_int
+from ..limits import check_animation
+from .shared import add_body_options, announce, body_from_args, finite, positive_int
 
 
 def _cmd_animate(args):
@@ -13,6 +15,15 @@ def _cmd_animate(args):
 
     from .. import animate
 
+    # sizes first, with the options' own names: nothing is computed for a run
+    # that cannot fit the machine
+    memory, seconds = check_animation(
+        args.frames,
+        args.dpi,
+        keep_frames=str(args.out).lower().endswith(".gif"),
+        frames_name="--frames",
+        dpi_name="--dpi",
+    )
     body = body_from_args(args)
     spins = [
         args.theta is not None,
@@ -39,10 +50,13 @@ def _cmd_animate(args):
         from ..motion import Motion
 
         source = Motion.from_spin(body, args.theta, dtheta=args.dtheta, phi=args.phi)
+    _check_out(args.out)
+    # every input checked: say how long the drawing will take
+    announce("animate", seconds, memory)
     title = None
     if args.flip is not None:
         title = (
-            f"{body.name or 'body'}: the Dzhanibekov (tennis-racket) flip, spin "
+            f"{literal_text(body.name or 'body')}: the Dzhanibekov (tennis-racket) flip, spin "
             f"{args.flip:g} rad from the intermediate axis $I_2$, "
             f"T = {source.period:.4g} s"
         )
@@ -64,6 +78,19 @@ def _cmd_animate(args):
         file=sys.stderr,
     )
     return 0
+
+
+def _check_out(path):
+    """The output's format and directory, checked before the estimate is announced."""
+    from pathlib import Path
+
+    from ..animate import FORMATS
+    from ..atomic import ensure_writable
+
+    suffix = Path(path).suffix
+    if suffix.lstrip(".").lower() not in FORMATS:
+        raise InputError(f"unknown animation format {suffix!r}; use .gif or .mp4")
+    ensure_writable(path)
 
 
 def _flip_offset(text):
@@ -92,8 +119,12 @@ def add_parser(subparsers):
     )
     add_body_options(parser)
     spin = parser.add_argument_group("spin (exactly one)")
-    spin.add_argument("--theta", type=finite, help="polar angle of omega0 from I3 (rad)")
-    spin.add_argument("--dtheta", type=finite, help="offset theta - theta_crit (rad)")
+    spin.add_argument(
+        "--theta", type=finite, help="polar angle of omega0 from I3 (rad, within [-2 pi, 2 pi])"
+    )
+    spin.add_argument(
+        "--dtheta", type=finite, help="offset theta - theta_crit (rad, within [-2 pi, 2 pi])"
+    )
     spin.add_argument("--n", type=positive_int, help="the closed orbit Delta alpha = 2 pi n")
     spin.add_argument("--p", type=positive_int, help="the closed orbit 2 pi p/q (with --q)")
     spin.add_argument("--q", type=positive_int, help="see --p")
@@ -110,7 +141,7 @@ def add_parser(subparsers):
         "--phi",
         type=finite,
         default=0.0,
-        help="azimuth of omega0 from I1 with --theta/--dtheta (rad)",
+        help="azimuth of omega0 from I1 with --theta/--dtheta (rad, within [-2 pi, 2 pi])",
     )
     parser.add_argument(
         "--branch",

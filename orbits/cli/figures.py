@@ -4,7 +4,14 @@ import sys
 
 from ..errors import InputError
 from ..limits import check_search_bounds
-from .shared import BODY_SELECTORS, add_body_options, body_from_args, positive_int, progress_bar
+from .shared import (
+    BODY_SELECTORS,
+    add_body_options,
+    announce,
+    body_from_args,
+    positive_int,
+    progress_bar,
+)
 
 
 def _output_directory(path):
@@ -60,8 +67,16 @@ def _cmd_figures(args):
         body = body_from_args(args)
         from ..search import closed_orbits
 
-        check_search_bounds(args.n_max, args.q_max, 1, "the figures' search")
+        announce(
+            "figures",
+            *reversed(check_search_bounds(args.n_max, args.q_max, 1, "the figures' search")),
+        )
         orbits_table = closed_orbits(body, n_max=args.n_max, q_max=args.q_max)
+        # drawing is the long part: estimated (and refused) before any file
+        memory, seconds = figures.check_figure_set(
+            len(orbits_table), args.formats, "lower --n-max or --q-max"
+        )
+        announce("figures", seconds, memory)
         out = _output_directory(args.out)
         with progress_bar(len(orbits_table) + 1, "figures", unit="figure") as bar:
             written = figures.herpolhode_set(

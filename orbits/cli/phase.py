@@ -157,14 +157,16 @@ def add_parser(subparsers):
         "--theta",
         nargs="+",
         type=finite,
-        help="polar angle(s) of omega0 from the I3 axis (any value: folded "
-        "into [0, pi/2] by the top's symmetries)",
+        help="polar angle(s) of omega0 from the I3 axis, radians within one "
+        "turn [-2 pi, 2 pi] (beyond it refused: --theta 60 means degrees, "
+        "add --degrees); folded into [0, pi/2] by the top's symmetries",
     )
     angle.add_argument(
         "--dtheta",
         nargs="+",
         type=finite,
-        help="offset(s) theta - theta_crit from the separatrix (well conditioned down to 1e-300)",
+        help="offset(s) theta - theta_crit from the separatrix, radians within "
+        "[-2 pi, 2 pi] (well conditioned down to 1e-300)",
     )
     angle.add_argument(
         "--omega",
@@ -191,7 +193,11 @@ def add_parser(subparsers):
         "P_psi/P_phi is R (Pravec et al. 2005 convention)",
     )
     parser.add_argument(
-        "--phi", type=finite, default=0.0, help="azimuth of omega0 from the I1 axis (default 0)"
+        "--phi",
+        type=finite,
+        default=0.0,
+        help="with --theta/--dtheta: azimuth of omega0 from the I1 axis, "
+        "radians within [-2 pi, 2 pi] (default 0)",
     )
     parser.add_argument(
         "--units",
@@ -202,7 +208,8 @@ def add_parser(subparsers):
     parser.add_argument(
         "--degrees",
         action="store_true",
-        help="--theta, --dtheta, --phi and --total-phase in degrees",
+        help="--theta, --dtheta, --phi and --total-phase in degrees "
+        "(angles then within [-360, 360])",
     )
     parser.add_argument("--csv", action="store_true", help="print CSV rows instead of a table")
     parser.set_defaults(run=_cmd_phase)

@@ -13,6 +13,7 @@ import math
 import re
 import sys
 
+from .._args import below_normal, below_normal_message
 from ..bodies import PRESETS, Body
 from ..errors import InputError
 from ..limits import format_bytes, format_duration
@@ -40,6 +41,47 @@ class Parser(argparse.ArgumentParser):
     def error(self, message):
         raise InputError(f"{self.prog}: {message}")
 
+    def parse_known_args(self, args=None, namespace=None):
+        """Parse as argparse does, and record in ``namespace.given`` what was typed.
+
+        argparse fills every option's default in, so ``--mass 1`` and no
+        ``--mass`` look the same; the defaults are therefore swapped for a
+        sentinel while parsing, the options still holding it are set to
+        their real defaults afterwards, and the others (those on the
+        command line) are the set ``given`` of destinations, which
+        :func:`check_arguments` judges against :data:`APPLIES`.
+        """
+        saved = {
+            action: action.default
+            for action in self._actions
+            if action.dest is not argparse.SUPPRESS and action.default is not argparse.SUPPRESS
+        }
+        for action in saved:
+            action.default = _NOT_GIVEN
+        try:
+            namespace, extras = super().parse_known_args(args, namespace)
+        finally:
+            for action, default in saved.items():
+                action.default = default
+        given = set(getattr(namespace, "given", ()))
+        for action, default in saved.items():
+            if getattr(namespace, action.dest, _NOT_GIVEN) is _NOT_GIVEN:
+                if isinstance(default, str):
+                    default = self._get_value(action, default)  # as argparse does
+                setattr(namespace, action.dest, default)
+            else:
+                given.add(action.dest)
+        namespace.given = given
+        return namespace, extras
+
+
+class _NotGivenType:
+    def __repr__(self):
+        return "<not given>"
+
+
+_NOT_GIVEN = _NotGivenType()
+
 
 def finite(text):
     try:
@@ -59,11 +101,8 @@ def moment(text):
     body computed would silently differ from the one typed.
     """
     value = finite(text)
-    if 0.0 < abs(value) < sys.float_info.min:
-        raise argparse.ArgumentTypeError(
-            f"{text!r} is below the smallest normal double (2.2e-308) and would be "
-            "stored with reduced precision; give the moments in larger units"
-        )
+    if below_normal(value):
+        raise argparse.ArgumentTypeError(below_normal_message(repr(text)))
     return value
 
 
@@ -376,3 +415,215 @@ def progress_bar(total, description, enabled=None, unit="orbit"):
         file=sys.stderr,
         dynamic_ncols=True,
     )
+
+
+# ------------------------------------------------------------ applicability
+# What a subcommand works on (argparse dest names): the body, or the source
+# that stands in for one, and the spin.  At most one of each kind is given
+# (argparse's exclusive groups and the commands' own checks see to that).
+# "sample" is verify's region sample, chosen by giving no body option.
+SINGLE_BODIES = BODY_SELECTORS
+SELECTORS = {
+    "phase": (SINGLE_BODIES, ("theta", "dtheta", "omega", "total_phase", "period_ratio")),
+    "catalog": (SINGLE_BODIES + ("bodies",), ()),
+    "figures": (SINGLE_BODIES + ("paper", "survey"), ()),
+    "survey": (("resolution", "bodies", "check"), ()),
+    "verify": (SINGLE_BODIES, ()),
+    "bench": ((), ()),
+    "animate": (SINGLE_BODIES, ("theta", "dtheta", "n", "p", "flip")),
+}
+# what a command works on when none of its body selectors is given (a
+# command not listed reports the missing body itself)
+NO_BODY = {"verify": "sample"}
+ALL_BODIES = frozenset(name for bodies, _ in SELECTORS.values() for name in bodies) | frozenset(
+    NO_BODY.values()
+)
+COMMANDS = tuple(SELECTORS)
+BODY_COMMANDS = ("phase", "catalog", "figures", "verify", "animate")
+
+
+def _only(*names):
+    return frozenset(names)
+
+
+def _all_but(*names):
+    return ALL_BODIES - frozenset(names)
+
+
+class Applies:
+    """Where one option applies: subcommands, bodies and spins.
+
+    Parameters
+    ----------
+    commands : tuple of str
+        The subcommands that have the option (argparse refuses it elsewhere).
+    bodies, spins : frozenset of str or None
+        The body and spin selectors (dest names of :data:`SELECTORS`, or
+        ``"sample"``) it applies to; None: every one.
+    """
+
+    __slots__ = ("commands", "bodies", "spins")
+
+    def __init__(self, commands, bodies=None, spins=None):
+        self.commands, self.bodies, self.spins = tuple(commands), bodies, spins
+
+    def __repr__(self):
+        return f"Applies({self.commands!r}, bodies={self.bodies!r}, spins={self.spins!r})"
+
+
+# Every option that is not itself a selector, and where it applies.  A new
+# option is one line here (tests/test_cli_applicability.py fails for an
+# option of the parser that is missing).  Given where it does not apply, an
+# option is refused with one line naming both (check_arguments): never
+# silently ignored.
+APPLIES = {
+    "--threads": Applies(COMMANDS),
+    # ---- body modifiers
+    "--name": Applies(BODY_COMMANDS, bodies=_only(*SINGLE_BODIES)),
+    "--mass": Applies(BODY_COMMANDS, bodies=_only("box", "cylinder")),
+    "--density": Applies(BODY_COMMANDS, bodies=_only("mesh")),
+    "--unit": Applies(BODY_COMMANDS, bodies=_only("rotational_constants")),
+    "--defect": Applies(BODY_COMMANDS, bodies=_only("rotational_constants")),
+    "--skip-invalid": Applies(("catalog", "survey"), bodies=_only("bodies")),
+    # verify --bodies N: the size of the region sample (a selector elsewhere)
+    "--bodies": Applies(("verify",), bodies=_only("sample")),
+    # ---- spin modifiers
+    "--phi": Applies(("phase", "animate"), spins=_only("theta", "dtheta")),
+    "--degrees": Applies(("phase",), spins=_only("theta", "dtheta", "total_phase")),
+    "--units": Applies(("phase",), spins=_only("omega")),
+    "--q": Applies(("animate",), spins=_only("p")),
+    "--branch": Applies(("animate",), spins=_only("n", "p")),
+    # ---- searches and outputs
+    "--n-max": Applies(
+        ("catalog", "figures", "survey"), bodies=_only(*SINGLE_BODIES, "bodies", "resolution")
+    ),
+    "--q-max": Applies(
+        ("catalog", "figures", "survey"), bodies=_only(*SINGLE_BODIES, "bodies", "resolution")
+    ),
+    "--verify": Applies(("catalog",)),
+    "--out": Applies(("catalog", "figures", "survey", "animate"), bodies=_all_but("check")),
+    "--csv": Applies(("phase",)),
+    "--formats": Applies(("figures",)),
+    "--format": Applies(("survey",), bodies=_all_but("check")),
+    "--chunk": Applies(("survey",), bodies=_all_but("check")),
+    "--scheduler": Applies(("survey",), bodies=_all_but("check")),
+    "--json": Applies(("survey", "verify", "bench")),
+    "--angles": Applies(("verify",)),
+    "--tolerance": Applies(("verify",)),
+    "--table": Applies(("verify",)),
+    "--no-progress": Applies(("verify",)),
+    "--only": Applies(("bench",)),
+    "--quick": Applies(("bench",)),
+    "--no-load-check": Applies(("bench",)),
+    "--periods": Applies(("animate",)),
+    "--frames": Applies(("animate",)),
+    "--fps": Applies(("animate",)),
+    "--dpi": Applies(("animate",)),
+    "--solid": Applies(("animate",)),
+}
+
+# what follows the name of a selector in a refusal
+_SELECTOR_NOTES = {
+    "sample": "the region sample (no body option)",
+    "check": "--check (which takes only the directory and --json)",
+}
+
+# Angles typed in radians beyond one turn are refused: the top's symmetries
+# would fold them silently, and --theta 60 almost surely means degrees.
+ANGLE_OPTIONS = ("theta", "dtheta", "phi")
+ONE_TURN = 2.0 * math.pi
+
+
+def option_string(dest):
+    """``--t-handle`` for the dest ``t_handle`` (every option here is spelled so)."""
+    return "--" + dest.replace("_", "-")
+
+
+def _label(selector):
+    return _SELECTOR_NOTES.get(selector, option_string(selector))
+
+
+def _targets(names, command):
+    """Words for the selectors an option applies to, in the command's order."""
+    bodies, spins = SELECTORS[command]
+    order = list(bodies) + list(spins) + [NO_BODY.get(command)]
+    present = [name for name in order if name in names]
+    singles = [name for name in present if name in SINGLE_BODIES]
+    words = [_label(name) for name in present]
+    if len(singles) == len(SINGLE_BODIES) > 1:
+        words = ["a single body (" + ", ".join(option_string(name) for name in singles) + ")"] + [
+            _label(name) for name in present if name not in SINGLE_BODIES
+        ]
+    if len(words) <= 2:
+        return " and ".join(words)
+    return ", ".join(words[:-1]) + " and " + words[-1]
+
+
+def _selected(args, names):
+    given = [name for name in names if name in args.given]
+    return given[0] if len(given) == 1 else None
+
+
+def check_arguments(args):
+    """Refuse options given where they do not apply, and angles beyond a turn.
+
+    Run by :func:`orbits.cli.main` after parsing, before any work.  Only
+    options typed on the command line are judged (``args.given``, see
+    :meth:`Parser.parse_known_args`); defaults never are.
+
+    Raises
+    ------
+    InputError
+        ``--mass applies to --box and --cylinder, not to --t-handle``, or an
+        angle in radians outside [-2 pi, 2 pi] (or degrees outside
+        [-360, 360] with ``--degrees``).
+    """
+    command = getattr(args, "command", None)
+    if command not in SELECTORS:
+        return
+    given = getattr(args, "given", set())
+    bodies, spins = SELECTORS[command]
+    body = _selected(args, bodies)
+    if body is None and not any(name in given for name in bodies):
+        body = NO_BODY.get(command)
+    spin = _selected(args, spins)
+    for dest in sorted(given, key=option_string):
+        if dest in bodies or dest in spins or dest == "command":
+            continue
+        option = option_string(dest)
+        rule = APPLIES.get(option)
+        if rule is None:
+            continue  # tests/test_cli_applicability.py keeps this from happening
+        for selected, allowed in ((body, rule.bodies), (spin, rule.spins)):
+            if selected is not None and allowed is not None and selected not in allowed:
+                raise InputError(
+                    f"{option} applies to {_targets(allowed, command)}, not to {_label(selected)}"
+                )
+    _check_angles(args, given)
+
+
+def _check_angles(args, given):
+    degrees = "degrees" in given
+    limit = 360.0 if degrees else ONE_TURN
+    for dest in ANGLE_OPTIONS:
+        if dest not in given:
+            continue
+        value = getattr(args, dest)
+        for angle in value if isinstance(value, list) else [value]:
+            if abs(angle) <= limit:
+                continue
+            option = option_string(dest)
+            if degrees:
+                raise InputError(
+                    f"{option} {angle:g} deg is outside [-360, 360] (one turn either way)"
+                )
+            if abs(angle) <= 720.0:
+                hint = "add --degrees, or " if hasattr(args, "degrees") else ""
+                raise InputError(
+                    f"{option} {angle:g} rad is outside [-2 pi, 2 pi] and looks like degrees "
+                    f"({angle:g} deg = {math.radians(angle):.6g} rad): {hint}give radians"
+                )
+            raise InputError(
+                f"{option} {angle:g} rad is outside [-2 pi, 2 pi]: too large to fold as an "
+                "angle (give radians within one turn)"
+            )

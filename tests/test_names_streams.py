@@ -1,0 +1,277 @@
+"""Names and streams (issue 20, item 6): header escaping, names drawn
+literally, warnings as one line, closed stdout, typed errors, size estimates
+of figures and animations, signals at start-up."""
+
+import io
+import os
+import signal
+import sys
+import time
+import unicodedata
+import warnings
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import example, given, settings
+from hypothesis import strategies as st
+
+import orbits
+from orbits import Body, read_catalog, write_catalog
+from orbits.cells import escape_header, literal_text, unescape_header
+from orbits.cli import main
+from orbits.errors import ArgumentTypeError, InputError
+from orbits.limits import AGG_MAX_PIXELS, animation_estimate, check_animation
+
+NASTY = [
+    "a\nb",
+    "=1+1",
+    "x\n=1+1",
+    "cr\rlf\r\n",
+    "tab\there",
+    "nel\x85ls\u2028ps\u2029",
+    "nul\x00del\x7fc1\x9b",
+    "back\\slash\\n not a newline",
+    "$x^$",
+    "é ü ñ",
+    "",
+]
+
+
+# ------------------------------------------------------------ header escaping
+@given(st.text())
+@settings(max_examples=300, deadline=None)
+@example("\\x41\\\\")
+@example("\\u2028")
+def test_escape_header_round_trips_and_stays_one_line(text):
+    escaped = escape_header(text)
+    assert unescape_header(escaped) == text
+    # one line for every reader: no line break of any kind, no control character
+    assert len(f"<{escaped}>".splitlines()) == 1
+    assert not any(unicodedata.category(c) == "Cc" for c in escaped)
+
+
+@pytest.mark.parametrize("name", NASTY[:-1])
+def test_a_catalog_with_any_name_reads_back(tmp_path, name):
+    frame = orbits.catalog(Body([0.26, 0.55, 0.793662], name=name), n_max=2)
+    path = tmp_path / "c.csv"
+    command = f"orbits catalog --name {name!s} --n-max 2"
+    write_catalog(frame, path, command=command, notes=[f"note about {name}"])
+    raw = path.read_bytes()
+    # every header line is a comment; the data start at the column names
+    lines = raw.split(b"\n")
+    first = next(k for k, line in enumerate(lines) if not line.startswith(b"#"))
+    assert lines[first].startswith(b"body,")
+    assert all(b"\r" not in line and b"\x85" not in line for line in lines[:first])
+    back = read_catalog(path)
+    assert back["body"].tolist() == [name] * len(frame)
+    assert back.attrs["header"][1] == f"command: {command}"
+    pd.testing.assert_frame_equal(back.drop(columns="body"), frame.drop(columns="body"))
+    # pandas alone reads the same rows (the header is all comments)
+    assert len(pd.read_csv(path, comment="#")) == len(frame)
+
+
+def test_the_command_line_name_round_trips(tmp_path, capsys):
+    out = tmp_path / "c.csv"
+    name = "two\nlines =1+1 $x^$"
+    assert (
+        main(["catalog", "--preset", "fig6", "--name", name, "--n-max", "2", "--out", str(out)])
+        == 0
+    )
+    header = read_catalog(out).attrs["header"]
+    assert any(line.startswith("command: ") and "two\nlines" in line for line in header)
+    assert read_catalog(out)["body"].iloc[0] == name
+
+
+def test_write_catalog_of_a_non_frame():
+    with pytest.raises(ArgumentTypeError, match="pandas DataFrame"):
+        write_catalog([1, 2, 3], "x.csv")
+    with pytest.raises(ArgumentTypeError):
+        write_catalog(None, "-")
+
+
+# ------------------------------------------------------------ names drawn
+@pytest.mark.parametrize("name", NASTY)
+def test_literal_text_draws_every_name(name):
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(4, 1))
+    FigureCanvasAgg(figure)
+    # alone and beside mathtext of our own
+    figure.suptitle(literal_text(name))
+    figure.text(0, 0, literal_text(name) + r": $\Delta\alpha = 2\pi$")
+    figure.canvas.draw()
+    text = literal_text(name)
+    assert "\n" not in text and "\x00" not in text
+
+
+def test_names_with_mathtext_in_figures_and_animations(tmp_path):
+    from orbits import figures
+    from orbits.animate import poinsot_animation
+
+    body = Body([0.26, 0.55, 0.793662], name="$x^$ \\alpha_1\n")
+    written = figures.herpolhode_set(body, 2, tmp_path, formats=["png"])
+    assert len(written) == 3
+    anim = poinsot_animation(body, 1.0, frames=2, dpi=20)
+    assert anim.render(0).shape == (80, 180, 3)
+    assert "$\\$$x^$\\$$" in anim._title.get_text()
+
+
+# ------------------------------------------------------------ warnings
+def test_warnings_are_one_line(capsys, monkeypatch):
+    import orbits.cli.phase
+
+    def run(args):
+        warnings.warn("something\n  odd happened", RuntimeWarning, stacklevel=1)
+        return 0
+
+    monkeypatch.setattr(orbits.cli.phase, "_cmd_phase", run)
+    shown = warnings.showwarning
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        assert main(["phase", "--preset", "fig6", "--theta", "0.3"]) == 0
+    err = capsys.readouterr().err
+    assert err == "orbits: warning: something odd happened\n"
+    assert warnings.showwarning is shown  # given back after the run
+
+
+# ------------------------------------------------------------ streams
+def test_closed_stdout_is_refused_before_any_work(capsys, monkeypatch, tmp_path):
+    monkeypatch.setattr(sys, "stdout", None)
+    for argv in (
+        ["phase", "--preset", "fig6", "--theta", "0.3"],
+        ["catalog", "--preset", "fig6", "--n-max", "2", "--out", "-"],
+    ):
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "standard output is closed" in err[0], err
+    # a file output does not need stdout
+    out = tmp_path / "c.csv"
+    assert main(["catalog", "--preset", "fig6", "--n-max", "2", "--out", str(out)]) == 0
+    frame = read_catalog(out)
+    with pytest.raises(InputError, match="standard output is closed"):
+        write_catalog(frame, "-")
+    closed = io.StringIO()
+    closed.close()
+    monkeypatch.setattr(sys, "stdout", closed)
+    with pytest.raises(InputError, match="standard output is closed"):
+        write_catalog(frame, "-")
+
+
+@pytest.mark.parametrize("value", ["2", None, b"2", 2j])
+def test_set_num_threads_of_a_non_number(value):
+    before = orbits.get_num_threads()
+    with pytest.raises(ArgumentTypeError, match="threads must be an integer"):
+        orbits.set_num_threads(value)
+    assert orbits.get_num_threads() == before
+
+
+# ------------------------------------------------------------ sizes
+def test_animation_estimate_and_refusals():
+    memory, seconds = animation_estimate(120, 80)
+    pixels = 720 * 320
+    assert memory == pytest.approx(120 * 2048 + 3 * 4 * pixels + 120 * 4 * pixels)
+    assert seconds == pytest.approx(120 * (0.2 + pixels * 1e-8))
+    assert check_animation(120, 80) == (memory, seconds)
+    for dpi in (-1, 0, 0.1, float("nan"), float("inf"), AGG_MAX_PIXELS / 9 + 1):
+        with pytest.raises(InputError, match="--dpi must be a number from 0.25 to 7281"):
+            check_animation(10, dpi, dpi_name="--dpi")
+    with pytest.raises(ArgumentTypeError):
+        check_animation(10, "80")
+    with pytest.raises(InputError, match="lower --frames or --dpi"):
+        check_animation(10**8, 80, frames_name="--frames", dpi_name="--dpi")
+    # an mp4 streams its frames: the same count is refused for its time instead
+    with pytest.raises(InputError, match=r"to draw; lower --frames"):
+        check_animation(10**6, 80, keep_frames=False, frames_name="--frames")
+
+
+def test_poinsot_animation_checks_dpi_and_frames(tmp_path):
+    from orbits.animate import PoinsotAnimation, poinsot_animation
+
+    body = Body.preset("fig6")
+    for dpi in (-5, 0, 20000):
+        with pytest.raises(InputError, match="dpi must be a number"):
+            poinsot_animation(body, 1.0, frames=2, dpi=dpi)
+    with pytest.raises(InputError, match="lower frames or dpi"):
+        poinsot_animation(body, 1.0, frames=10**8, out=tmp_path / "a.gif")
+    assert list(tmp_path.iterdir()) == []
+    motion = orbits.Motion.from_spin(body, 1.0)
+    with pytest.raises(InputError, match="dpi must be a number"):
+        PoinsotAnimation(motion, np.linspace(0, 1, 3), dpi=-80)
+
+
+def test_figure_sets_are_estimated_and_bounded(tmp_path):
+    from orbits import figures
+
+    memory, seconds = figures.check_figure_set(1584, ["png", "svg"])
+    assert seconds == pytest.approx(1585 * 2 * 1.2) and memory > 0
+    with pytest.raises(InputError, match="at most 1584 orbits"):
+        figures.check_figure_set(1585, ["png"])
+    frame = orbits.closed_orbits(Body.preset("fig6"), n_max=2)
+    many = pd.concat([frame] * 800, ignore_index=True)
+    with pytest.raises(InputError, match="contact sheet of 1600 closed orbits"):
+        figures.herpolhode_set(Body.preset("fig6"), 2, tmp_path, orbits=many)
+    assert list(tmp_path.iterdir()) == []
+
+
+# ------------------------------------------------------------ signals
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT])
+def test_a_signal_at_start_up_is_one_line(signum, monkeypatch, capsys):
+    """A stop signal before main has installed its handlers: one line, 128 + N."""
+    import orbits.__main__ as entry_module
+    import orbits.cli
+
+    def stopped_main():
+        os.kill(os.getpid(), signum)
+        time.sleep(5)  # the handler runs here
+        raise AssertionError("the signal was not delivered")
+
+    monkeypatch.setattr(orbits.cli, "main", stopped_main)
+    saved = {n: signal.getsignal(n) for n in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
+    try:
+        assert entry_module.entry() == 128 + signum
+    finally:
+        for number, handler in saved.items():
+            signal.signal(number, handler)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        f"orbits: stopped by {signal.Signals(signum).name}; no partial output was written"
+    ]
+
+
+def test_figures_of_too_many_orbits_are_refused_before_drawing(tmp_path, capsys):
+    out = tmp_path / "o"
+    argv = ["figures", "--preset", "fig6", "--n-max", "2000", "--q-max", "3", "--out", str(out)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    # warnings of the search (one line each), then the refusal
+    assert all(line.startswith("orbits: warning: ") for line in err[:-1])
+    assert err[-1].startswith("orbits: error: the contact sheet of ")
+    assert "lower --n-max or --q-max" in err[-1]
+    assert not out.exists()
+
+
+def test_a_second_signal_during_clean_up_is_ignored(monkeypatch, capsys):
+    """Ctrl-C, then SIGTERM while the first unwinds: one line, exit 130, handlers restored."""
+    import orbits.cli.phase
+
+    cleaned = []
+
+    def run(args):
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(5)
+        finally:
+            os.kill(os.getpid(), signal.SIGTERM)  # arrives during the clean-up
+            time.sleep(0.05)
+            cleaned.append(True)
+        return 0
+
+    monkeypatch.setattr(orbits.cli.phase, "_cmd_phase", run)
+    before = {n: signal.getsignal(n) for n in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
+    assert main(["phase", "--preset", "fig6", "--theta", "0.3"]) == 130
+    assert cleaned == [True]
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["orbits: interrupted; no partial output was written"]
+    assert {n: signal.getsignal(n) for n in before} == before
