@@ -9,6 +9,7 @@ import math
 import sys
 
 from ..errors import InputError
+from ..units import OMEGA_UNITS
 from .shared import add_body_options, body_from_args, finite
 
 
@@ -39,15 +40,6 @@ def _phase_table(args):
     dtheta = None if args.dtheta is None else [_angle(v, args) for v in args.dtheta]
     table = phases(body, theta, _angle(args.phi, args), dtheta=dtheta)
     return _print_table(table, args.csv)
-
-
-# angular-velocity units -> rad/s
-OMEGA_UNITS = {
-    "rad/s": 1.0,
-    "deg/s": math.pi / 180.0,
-    "rpm": 2.0 * math.pi / 60.0,
-    "Hz": 2.0 * math.pi,
-}
 
 
 def _angle(value, args):
