@@ -36,7 +36,7 @@ from .atomic import atomic_path, csv_float_options
 from .bodies import FLAT_SLACK, Body, flat_excess, validate_moments
 from .cells import neutralize, unneutralize
 from .errors import ArgumentTypeError, InputError, OrbitsError
-from .limits import check_search_bounds
+from .limits import check_search_bounds, plural
 from .search import CATALOG_COLUMNS, closed_orbits
 
 VERIFIED_COLUMN = "closure_error"
@@ -468,7 +468,8 @@ class BodiesFile:
             return []
         rows = ", ".join(str(row) for row, _ in self.skipped)
         return [
-            f"skipped {len(self.skipped)} invalid row(s) of {self.path} (--skip-invalid): {rows}"
+            f"skipped {plural(len(self.skipped), 'invalid row')} of {self.path} "
+            f"(--skip-invalid): {rows}"
         ]
 
 
@@ -749,7 +750,7 @@ def _validated(path, header, cells, skip_invalid):
     bad = sorted(problems)
     if bad and not skip_invalid:
         more = len(bad) - 1
-        tail = f"; {more} more bad row(s) (--skip-invalid skips them)" if more else ""
+        tail = f"; {plural(more, 'more bad row')} (--skip-invalid skips them)" if more else ""
         raise InputError(f"{label(bad[0])}: {problems[bad[0]]}{tail}")
     keep = np.ones(count, dtype=bool)
     keep[bad] = False

@@ -99,3 +99,114 @@ def test_nearest_orbits_refuses_bad_input():
     with pytest.raises(orbits.AngleError):
         orbits.nearest_orbits(phone(), (1.0, np.nan, 0.0), 3)
     assert main(["catalog", "--preset", "fig6", "--nearest", "2", "--out", "-"]) == 2
+
+
+# --------------------------------------------------------------- asteroids by their periods
+APOPHIS = ("--moments", "0.61", "0.965", "1")
+
+
+def test_apophis_from_its_periods(capsys):
+    import io
+
+    import pandas as pd
+
+    argv = ["phase", *APOPHIS, "--periods", "263", "27.38", "--time-unit", "h", "--csv"]
+    assert main(argv) == 0
+    table = pd.read_csv(io.StringIO(capsys.readouterr().out))
+    sam = table[table["branch"] == "SAM"].iloc[0]
+    # Pravec et al. (2014): E/E0 = 1.024 for Apophis on SAM
+    assert round(sam["E_over_E0"], 4) == 1.0236
+    assert sam["P_psi"] == pytest.approx(263.0, rel=1e-12)
+    assert sam["P_phi"] == pytest.approx(27.38, rel=1e-9)
+    # E/E0 a second way: 2 E I3 / M^2 from the printed spin vector itself
+    body = Body((0.61, 0.965, 1.0))
+    w = sam[["w1", "w2", "w3"]].to_numpy(dtype=float)
+    two_e = float(np.sum(body.moments * w * w))
+    m_sq = float(np.sum((body.moments * w) ** 2))
+    assert two_e * 1.0 / m_sq == pytest.approx(sam["E_over_E0"], rel=1e-12)
+    # the period ratio a second way: the closed-form total phase (cel), SAM
+    total = orbits.total_phase(body, dtheta=sam["dtheta"])
+    assert total / (2 * math.pi) + 1.0 == pytest.approx(263.0 / 27.38, rel=1e-10)
+    # and the rotation period: T = P_psi at |omega0| in rad/h
+    assert Motion.from_omega(body, w).period == pytest.approx(263.0, rel=1e-12)
+    # the text table names the units of the periods and the frame of omega
+    assert main(["phase", *APOPHIS, "--periods", "263", "27.38", "--time-unit", "h"]) == 0
+    text = capsys.readouterr().out
+    assert "P_psi        [h]" in text and "[rad/h, principal axes I1<I2<I3]" in text
+
+
+def test_periods_in_other_units_agree():
+    hours = orbits.spins_with_periods((0.61, 0.965, 1.0), 263.0, 27.38)
+    days = orbits.spins_with_periods((0.61, 0.965, 1.0), 263.0 / 24, 27.38 / 24)
+    assert days["E_over_E0"].to_numpy() == pytest.approx(hours["E_over_E0"].to_numpy(), 1e-12)
+    assert 24 * days["P_about_L"].to_numpy() == pytest.approx(hours["P_about_L"].to_numpy())
+
+
+def test_time_unit_needs_periods(capsys):
+    assert main(["phase", *APOPHIS, "--theta", "0.3", "--time-unit", "h"]) == 2
+    assert "--time-unit applies to --periods" in capsys.readouterr().err
+
+
+# --------------------------------------------------------------- units and words
+def test_constants_unit_and_deprecated_unit(capsys):
+    water = ("--rotational-constants", "835840.3", "435351.7", "278138.7")
+    argv = ["phase", *water, "--defect", "flatten", "--theta", "0.3", "--csv"]
+    assert main([*argv, "--constants-unit", "MHz"]) == 0
+    new = capsys.readouterr()
+    assert "deprecated" not in new.err
+    assert main([*argv, "--unit", "MHz"]) == 0
+    old = capsys.readouterr()
+    assert old.out == new.out
+    notes = [line for line in old.err.splitlines() if "deprecated" in line]
+    assert notes == [
+        "orbits: note: --unit is deprecated; use --constants-unit (the unit of "
+        "--rotational-constants; --units is the unit of a spin)"
+    ]
+
+
+def test_phase_omega_prints_units_frame_and_flip(capsys):
+    argv = ["phase", "--box", "0.071", "0.147", "0.0078", "--mass", "0.17"]
+    assert main([*argv, "--omega", "120", "2", "1", "--units", "rpm"]) == 0
+    text = capsys.readouterr().out
+    lines = {line.split()[0]: line for line in text.splitlines() if line.strip()}
+    assert "[rad/s, principal axes I1<I2<I3]" in lines["w2"]
+    assert "[J s]" in lines["momentum"] and "[s]" in lines["period"]
+    period = float(lines["period"].split()[-1])
+    assert f"every T/2 = {0.5 * period:.6g} s" in text and "flip" in text
+    # a spin far from I2: no flip claimed
+    assert main([*argv, "--omega", "0", "0", "100", "--units", "rpm"]) == 0
+    assert "no flip is seen" in capsys.readouterr().out
+
+
+def test_singular_and_plural(capsys, tmp_path):
+    out = str(tmp_path / "c.csv")
+    assert main(["catalog", "--preset", "fig6", "--n-max", "3", "--out", out]) == 0
+    err = capsys.readouterr().err
+    assert "of 1 body written" in err and "body(ies)" not in err
+
+
+# --------------------------------------------------------------- flat limit of measured bodies
+@pytest.mark.parametrize("option", ["--point-masses", "--mesh"])
+def test_measured_bodies_pass_defect_flatten(option, tmp_path, capsys, monkeypatch):
+    """``--defect flatten`` reaches the constructor as ``defect="flatten"`` and its
+    warning (the excess removed) is printed as one line; the default passes none."""
+    import warnings
+
+    calls = []
+
+    def fake(*args, **options):
+        calls.append(options.get("defect"))
+        if options.get("defect") == "flatten":
+            warnings.warn("excess 0.13 % of I3 removed: I3 set to I1 + I2 (flat body)")
+        return Body((1.0, 2.0, 3.0))
+
+    name = "from_point_masses" if option == "--point-masses" else "from_mesh"
+    monkeypatch.setattr(Body, name, fake)
+    path = tmp_path / "masses.csv"
+    path.write_text("mass,x,y,z\n1,1,0,0\n1,-1,0,0\n2,0,0.5,0\n2,0,-0.5,0.1\n")
+    argv = ["phase", option, str(path), "--theta", "0.3", "--csv"]
+    assert main(argv) == 0
+    assert main([*argv, "--defect", "flatten"]) == 0
+    assert calls == [None, "flatten"]
+    err = capsys.readouterr().err
+    assert err.count("orbits: warning: excess 0.13 % of I3 removed") == 1

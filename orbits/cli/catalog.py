@@ -3,7 +3,7 @@
 import sys
 
 from ..errors import InputError
-from ..limits import check_search_bounds
+from ..limits import check_search_bounds, plural
 from ..units import OMEGA_UNITS
 from .shared import (
     EXIT_CHECK_FAILED,
@@ -59,8 +59,9 @@ def _cmd_catalog(args):
         worst = float(frame["closure_error"].max()) if len(frame) else 0.0
         note = f"; largest closure error {worst:.2e} rad"
     print(
-        f"orbits catalog: {len(frame)} closed orbits of {len(bodies)} "
-        f"body(ies) written to {'standard output' if args.out == '-' else args.out} "
+        f"orbits catalog: {plural(len(frame), 'closed orbit')} of "
+        f"{plural(len(bodies), 'body', 'bodies')} written to "
+        f"{'standard output' if args.out == '-' else args.out} "
         f"in {elapsed:.2f} s{note}",
         file=sys.stderr,
     )
