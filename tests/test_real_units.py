@@ -197,7 +197,9 @@ def test_measured_bodies_pass_defect_flatten(option, tmp_path, capsys, monkeypat
     def fake(*args, **options):
         calls.append(options.get("defect"))
         if options.get("defect") == "flatten":
-            warnings.warn("excess 0.13 % of I3 removed: I3 set to I1 + I2 (flat body)")
+            warnings.warn(
+                "excess 0.13 % of I3 removed: I3 set to I1 + I2 (flat body)", stacklevel=2
+            )
         return Body((1.0, 2.0, 3.0))
 
     name = "from_point_masses" if option == "--point-masses" else "from_mesh"
@@ -210,3 +212,36 @@ def test_measured_bodies_pass_defect_flatten(option, tmp_path, capsys, monkeypat
     assert calls == [None, "flatten"]
     err = capsys.readouterr().err
     assert err.count("orbits: warning: excess 0.13 % of I3 removed") == 1
+
+
+# --------------------------------------------------------------- a real throw, animated
+def test_phone_throw_animates_in_real_time(tmp_path, capsys):
+    from PIL import Image
+
+    out = tmp_path / "throw.gif"
+    argv = ["animate", "--box", "0.071", "0.147", "0.0078", "--mass", "0.17"]
+    argv += ["--omega", *map(str, PHONE_THROW_RPM), "--units", "rpm", "--fps", "4"]
+    assert main([*argv, "--out", str(out)]) == 0
+    body = phone()
+    motion = Motion.from_omega(body, body.frame @ (np.array(PHONE_THROW_RPM) * RPM))
+    frames = round(motion.period * 4) + 1  # one period T = 2.337 s at 4 frames/s
+    with Image.open(out) as image:
+        assert image.size[0] >= 960
+        assert image.n_frames == frames
+        assert image.info["duration"] == 250  # ms per frame: real time at 4 frames/s
+    err = capsys.readouterr().err
+    assert f"over {motion.period:.4g} s = 1 period at 4 frames/s (real time)" in err
+
+
+def test_real_time_library_and_clock():
+    from orbits import animate
+
+    body = phone()
+    motion = Motion.from_omega(body, body.frame @ (np.array(PHONE_THROW_RPM) * RPM))
+    drawn = animate.poinsot_animation(motion, seconds=1.0, fps=5, dpi=20)
+    assert len(drawn.times) == 6 and drawn.times[-1] == pytest.approx(1.0, rel=1e-15)
+    drawn.frame(5)
+    assert drawn._clock.get_text() == f"t = 1.000 s = {1.0 / motion.period:.3f} T"
+    assert drawn.figure.get_size_inches()[0] * animate.DEFAULT_DPI >= 960
+    with pytest.raises(orbits.InputError, match="not both"):
+        animate.poinsot_animation(motion, seconds=1.0, frames=5)
