@@ -395,6 +395,22 @@ class PoinsotAnimation:
             )
         return self._animation
 
+    def to_html(self):
+        """The animation as an HTML player (matplotlib's ``to_jshtml``), shown once.
+
+        The figure is closed after the HTML is built, so that a notebook
+        (or sphinx-gallery) does not show it a second time as a static image
+        under the player.
+        """
+        html = self.animation.to_jshtml(fps=self.fps)
+        import matplotlib.pyplot as plt
+
+        plt.close(self.figure)
+        return html
+
+    def _repr_html_(self):
+        return self.to_html()
+
     def render(self, k):
         """Frame ``k`` as an RGB array (height, width, 3), uint8."""
         self.frame(k)

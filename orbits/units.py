@@ -55,3 +55,35 @@ def time_factor(unit):
         raise InputError(
             f"unknown time unit {unit!r}; use one of {', '.join(TIME_UNITS)}"
         ) from None
+
+
+# ----------------------------------------------------------------- notebook display
+def html_table(caption, rows):
+    """A small HTML table for a notebook's ``_repr_html_``.
+
+    Parameters
+    ----------
+    caption : str
+        The heading (escaped).
+    rows : iterable of (name, value, unit)
+        ``value`` a float (shown to 10 significant digits), an int or text;
+        ``unit`` text, empty where there is none.
+    """
+    from html import escape
+
+    cells = []
+    for name, value, unit in rows:
+        if isinstance(value, float):
+            shown = f"{value:.10g}"
+        else:
+            shown = str(value)
+        cells.append(
+            f"<tr><th style='text-align:left'>{escape(str(name))}</th>"
+            f"<td style='text-align:right'>{escape(shown)}</td>"
+            f"<td style='text-align:left'>{escape(str(unit))}</td></tr>"
+        )
+    return (
+        f"<table><caption style='text-align:left'><b>{escape(caption)}</b></caption>"
+        + "".join(cells)
+        + "</table>"
+    )

@@ -245,3 +245,38 @@ def test_real_time_library_and_clock():
     assert drawn.figure.get_size_inches()[0] * animate.DEFAULT_DPI >= 960
     with pytest.raises(orbits.InputError, match="not both"):
         animate.poinsot_animation(motion, seconds=1.0, frames=5)
+
+
+# --------------------------------------------------------------- notebooks
+def test_html_reprs_carry_units():
+    body = phone()
+    html = body._repr_html_()
+    assert "phone" in html and "kg m^2" in html and "7.227606667e-05" in html
+    motion = Motion.from_omega(body, body.frame @ (np.array(PHONE_THROW_RPM) * RPM))
+    html = motion._repr_html_()
+    assert "LAM" in html and f"{motion.period:.10g}" in html and "J s" in html
+    assert f"{motion.total_phase():.10g}" in html and "principal axes" in html
+    periods = motion.tumbling_periods()
+    assert f"{periods.precession:.10g}" in periods._repr_html_()
+    assert isinstance(periods, tuple) and periods.rotation == motion.period
+    limits = orbits.phase_limits(body)
+    assert f"{limits.theta_zero:.10g}" in limits._repr_html_() and "rad" in limits._repr_html_()
+    report = orbits.verify(n_bodies=2, n_angles=2)
+    assert repr(report).startswith("VerifyReport(passed=True, 4 initial conditions")
+    assert "passed" in report._repr_html_()
+
+
+def test_animation_html_shown_once():
+    import matplotlib.pyplot as plt
+
+    body = phone()
+    motion = Motion.from_omega(body, body.frame @ (np.array(PHONE_THROW_RPM) * RPM))
+    drawn = orbits.poinsot_animation(motion, frames=3, dpi=20, pyplot=True)
+    number = drawn.figure.number
+    assert plt.fignum_exists(number)
+    html = drawn._repr_html_()
+    assert "<script" in html and "animation" in html.lower()
+    assert not plt.fignum_exists(number)  # no second, static figure below the player
+    assert {"poinsot_animation", "PoinsotAnimation", "flip_motion", "orbit_row"} <= set(
+        orbits.__all__
+    )
