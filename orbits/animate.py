@@ -61,6 +61,8 @@ from .limits import check_animation
 from .motion import Motion, as_body
 
 FORMATS = ("gif", "mp4")
+# 9 x 4 in frames at 120 dpi: 1080 x 480 px, text 14 px (small) to 17 px (title)
+DEFAULT_DPI = 120
 # colours of the drawing (one place, so that the two panels agree)
 COLOURS = {
     "solid": "tab:green",
@@ -203,7 +205,7 @@ class PoinsotAnimation:
         solid="auto",
         title=None,
         size=(9.0, 4.0),
-        dpi=80,
+        dpi=DEFAULT_DPI,
         pyplot=False,
         subsamples=8,
     ):
@@ -330,7 +332,9 @@ class PoinsotAnimation:
         body = self.motion.body
         name = literal_text(body.name or "body")
         heading = title or (
-            f"{name}: Poinsot construction, {self.motion.branch}, T = {self.motion.period:.4g} s"
+            f"{name}: Poinsot construction, {self.motion.branch}, "
+            f"T = {self.motion.period:.4g} s at "
+            f"|omega0| = {np.linalg.norm(self.motion.omega0):.4g} rad/s"
         )
         self._title = figure.suptitle(heading, fontsize="medium", y=0.985)
         figure.text(
@@ -339,7 +343,7 @@ class PoinsotAnimation:
             "space frame (L fixed, along z): inertia ellipsoid rolling\n"
             "on the invariable plane; herpolhode (purple), "
             r"$\omega$ (red)",
-            fontsize="x-small",
+            fontsize="small",
             ha="center",
             va="center",
         )
@@ -348,11 +352,11 @@ class PoinsotAnimation:
             0.905 - extra,
             "body frame: polhode (orange) on the inertia ellipsoid\n"
             f"{self.solid_kind} drawn x{self.solid_scale:.3g}",
-            fontsize="x-small",
+            fontsize="small",
             ha="center",
             va="center",
         )
-        self._clock = figure.text(0.01, 0.02, "", fontsize="small")
+        self._clock = figure.text(0.01, 0.02, "", fontsize="medium")
 
     def frame(self, k):
         """Draw frame ``k`` and return its :class:`FrameData`."""
@@ -373,7 +377,7 @@ class PoinsotAnimation:
             [contact_body[0]], [contact_body[1]], [contact_body[2]]
         )
         fraction = data.t / self.motion.period
-        self._clock.set_text(f"t = {data.t:.3f} = {fraction:.3f} T")
+        self._clock.set_text(f"t = {data.t:.3f} s = {fraction:.3f} T")
         return data
 
     @property
@@ -394,6 +398,22 @@ class PoinsotAnimation:
                 blit=False,
             )
         return self._animation
+
+    def to_html(self):
+        """The animation as an HTML player (matplotlib's ``to_jshtml``), shown once.
+
+        The figure is closed after the HTML is built, so that a notebook
+        (or sphinx-gallery) does not show it a second time as a static image
+        under the player.
+        """
+        html = self.animation.to_jshtml(fps=self.fps)
+        import matplotlib.pyplot as plt
+
+        plt.close(self.figure)
+        return html
+
+    def _repr_html_(self):
+        return self.to_html()
 
     def render(self, k):
         """Frame ``k`` as an RGB array (height, width, 3), uint8."""
@@ -529,14 +549,15 @@ def poinsot_animation(
     phi=0.0,
     speed=1.0,
     periods=None,
-    frames=120,
+    frames=None,
     fps=20,
     out=None,
     solid="auto",
     title=None,
-    dpi=80,
+    dpi=DEFAULT_DPI,
     pyplot=False,
     body=None,
+    seconds=None,
 ):
     """The Poinsot animation of a body's torque-free motion.
 
@@ -554,10 +575,16 @@ def poinsot_animation(
     periods : float, optional
         Duration in periods T.  Default: ``q`` for a catalog row (the body
         is back at its start, so the last frame equals the first), else 1.
-    frames : int
-        Number of frames (>= 2), evenly spaced in time, both ends included.
+    frames : int, optional
+        Number of frames (>= 2), evenly spaced in time, both ends included
+        (default 120; not with ``seconds``).
     fps : int
         Frames per second of the written file.
+    seconds : float, optional
+        Real time: the animation lasts ``seconds`` of the motion's time
+        (seconds when omega is in rad/s) and plays at that speed,
+        ``round(seconds * fps) + 1`` frames; not with ``periods`` or
+        ``frames``.
     out : path, optional
         Write the animation there (``.gif``, or ``.mp4`` with an ffmpeg
         writer); atomic and deterministic (the same call gives the same
@@ -566,9 +593,10 @@ def poinsot_animation(
         The solid drawn; see :func:`solid_faces`.
     title : str, optional
     dpi : float
-        Pixel density of the frames (figure 9 x 4 in): from 0.25 to 7281
-        (matplotlib's Agg draws at most 65535 pixels a side), and one
-        frame's buffers must fit half the machine's memory.
+        Pixel density of the frames (figure 9 x 4 in; the default 120 gives
+        1080 x 480 px): from 0.25 to 7281 (matplotlib's Agg draws at most
+        65535 pixels a side), and one frame's buffers must fit half the
+        machine's memory.
     pyplot : bool
         Create the figure through ``matplotlib.pyplot`` (for notebooks and
         sphinx-gallery's animation scraper); default headless Agg.
@@ -600,11 +628,24 @@ def poinsot_animation(
     >>> anim = poinsot_animation(orbit_row(body, n=5, branch="SAM"), out="n5.gif")
     >>> flip = poinsot_animation(flip_motion(), out="flip.gif")   # Dzhanibekov
     """
-    if isinstance(frames, bool) or int(frames) != frames or frames < 2:
-        raise InputError(f"frames must be an integer >= 2, got {frames!r}")
     if isinstance(fps, bool) or int(fps) != fps or not 1 <= fps <= 100:
         raise InputError(f"fps must be an integer in 1..100, got {fps!r}")
     motion, default_periods, label = _motion_from(source, theta, dtheta, phi, speed, body)
+    if seconds is not None:
+        if periods is not None or frames is not None:
+            raise InputError("give seconds (real time) or periods and frames, not both")
+        if not (np.isfinite(seconds) and seconds > 0):
+            raise InputError(f"seconds must be positive, got {seconds!r}")
+        frames = int(round(seconds * fps)) + 1
+        if frames > MAX_FRAMES:
+            raise InputError(
+                f"{seconds:g} s at {fps} frames/s is {frames} frames, more than "
+                f"{MAX_FRAMES}; lower seconds or fps"
+            )
+        periods = seconds / motion.period
+    frames = 120 if frames is None else frames
+    if isinstance(frames, bool) or int(frames) != frames or frames < 2:
+        raise InputError(f"frames must be an integer >= 2, got {frames!r}")
     periods = default_periods if periods is None else periods
     if not (np.isfinite(periods) and periods > 0):
         raise InputError(f"periods must be positive, got {periods!r}")
@@ -625,6 +666,10 @@ def poinsot_animation(
     if out is not None:
         animation.save(out)
     return animation
+
+
+# the most frames of a real-time animation (100 s at 20 frames/s)
+MAX_FRAMES = 2000
 
 
 def _motion_from(source, theta, dtheta, phi, speed, row_body=None):

@@ -472,6 +472,23 @@ class Body:
         values = ", ".join(f"{v:.17g}" for v in self._moments)
         return f"Body(({values}){label})"
 
+    def _repr_html_(self):
+        """The body in a notebook: moments (with their unit where known) and axes."""
+        from .units import html_table
+
+        kind = self.shape[0] if self.shape is not None else None
+        unit = "kg m^2 (lengths in m, mass in kg)" if kind in ("box", "cylinder", "mesh") else ""
+        rows = [(f"I{k + 1}", float(v), unit) for k, v in enumerate(self._moments)]
+        rows += [(f"I{k + 1} / |I|", float(v), "") for k, v in enumerate(self.normalized_moments)]
+        rows += [
+            ("flat (I3 = I1 + I2)", "yes" if self.is_flat else "no", ""),
+            ("separatrix angle theta_crit (phi = 0)", float(self.critical_angle()), "rad"),
+            ("principal axes (rows: I1, I2, I3 in your axes)", self._frame.round(6).tolist(), ""),
+        ]
+        if self.shape is not None:
+            rows.append(("solid", kind, ""))
+        return html_table(f"Body {self.name!r}" if self.name else "Body", rows)
+
     def __eq__(self, other):
         if not isinstance(other, Body):
             return NotImplemented

@@ -22,6 +22,7 @@ Bodies files (``--bodies``) are read strictly by :func:`read_bodies_csv`.
 import csv
 import hashlib
 import io
+import math
 import os
 import re
 from dataclasses import dataclass, field
@@ -35,7 +36,7 @@ from .atomic import atomic_path, csv_float_options
 from .bodies import FLAT_SLACK, Body, flat_excess, validate_moments
 from .cells import escape_header, neutralize, unescape_header, unneutralize
 from .errors import ArgumentTypeError, InputError, OrbitsError
-from .limits import check_search_bounds
+from .limits import check_search_bounds, plural
 from .search import CATALOG_COLUMNS, closed_orbits
 
 VERIFIED_COLUMN = "closure_error"
@@ -107,6 +108,145 @@ def catalog(bodies, n_max=10, q_max=1, *, verify=False, progress=None):
         if progress is not None:
             progress(1)
     return pd.concat(frames, ignore_index=True)
+
+
+# --------------------------------------------------------------- nearest orbits
+# extra columns of nearest_orbits: the starting spin in the body's own axes
+# (in the caller's unit) and the period in seconds
+NEAREST_COLUMNS = ("omega_x", "omega_y", "omega_z", "period_s")
+
+
+def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
+    """The ``k`` closed orbits nearest a real spin, started at its ``|L|``.
+
+    A throw sets the angular momentum; the closed orbits of the body
+    (``Delta alpha = 2 pi n/q``, :func:`orbits.closed_orbits`) are ranked by
+    how far their total phase (eqn:GeometricPhase) is from the spin's, on
+    the spin's branch first:
+
+    1. orbits on the spin's branch (SAM or LAM) before the other branch;
+    2. then ``|Delta alpha_orbit - Delta alpha_spin|`` (radians): the change
+       of the precession gained per period that closes the orbit;
+    3. ties by ``|D_orbit - D_spin|`` (``D = M^2/(2E)`` over ``|I|``, the
+       polhode's level).
+
+    The total phase depends on the orbit only (not on where on the polhode
+    the spin starts), so the ranking holds for any spin.  On the spin's
+    branch every level ``2 pi m`` above ``Delta alpha_spin`` has an orbit
+    (the phase grows without bound towards the separatrix), so a search up
+    to ``n_max = ceil(Delta alpha_spin / 2 pi) + k`` holds the ``k``
+    nearest.  Each orbit is started at ``phi = 0`` (its catalog spin) and
+    scaled so that its ``|L| = |I omega0|`` is the given spin's.
+
+    Parameters
+    ----------
+    body : Body or array_like, shape (3,)
+    omega : array_like, shape (3,)
+        The spin in the body's own axes (:attr:`Body.frame` turns them to
+        the principal axes: x y z of :meth:`Body.box`, the order of the
+        moments of ``Body(moments)``), in ``units``.
+    k : int
+        Number of orbits (>= 1).
+    q_max : int
+        Also the orbits closing after up to ``q_max`` periods (``2 pi p/q``).
+    units : {"rad/s", "deg/s", "rpm", "Hz"}
+        Unit of ``omega`` and of the ``omega_*`` columns.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``k`` rows, nearest first, with the catalog columns
+        (:data:`orbits.CATALOG_COLUMNS`, for ``|I| = 1`` and
+        ``|omega0| = 1`` as in every catalog) and :data:`NEAREST_COLUMNS`:
+        ``omega_x, omega_y, omega_z``, the orbit's starting spin in the
+        body's own axes in ``units`` (``Motion.from_omega(body, body.frame @
+        omega)`` is the orbit, with the throw's ``|L|``), and ``period_s``,
+        its period T (eqn:TK) in seconds for moments in any unit (the
+        period does not depend on their scale).  ``attrs`` holds the spin's
+        ``total_phase``, ``branch``, ``momentum`` (in the moments' unit
+        times rad/s: kg m^2 gives J s) and ``D``.
+
+    Raises
+    ------
+    AngleError
+        ``omega`` not a finite nonzero 3-vector.
+    SeparatrixError
+        ``omega`` on the separatrix (no closed orbits accumulate at a finite
+        phase there: its phase is infinite).
+    InputError
+        ``k`` or ``q_max`` not integers >= 1, an unknown unit, or a search
+        beyond the machine (a spin very close to the separatrix).
+    """
+    from .errors import AngleError
+    from .motion import Motion
+    from .units import omega_factor
+
+    if not isinstance(body, Body):
+        body = Body(body)
+    k = integer("k", k, minimum=1)
+    q_max = integer("q_max", q_max, minimum=1)
+    factor = omega_factor(units)
+    given = np.asarray(omega, dtype=float) if not isinstance(omega, str) else None
+    if given is None or given.shape != (3,) or not np.all(np.isfinite(given)):
+        raise AngleError(f"omega must be a finite 3-vector, got {omega!r}")
+    own = given * factor
+    spin = Motion.from_omega(body, body.frame @ own)
+    alpha = spin.total_phase()
+    norm = float(np.linalg.norm(body.moments))
+    d_spin = spin.D / norm
+    n_max = int(math.ceil(alpha / (2.0 * math.pi))) + k
+    frame = closed_orbits(body, n_max=n_max, q_max=q_max)
+    distance = np.abs(frame["total_phase"].to_numpy() - alpha)
+    other = (frame["branch"].astype(str) != spin.branch).to_numpy()
+    level = np.abs(frame["D"].to_numpy() - d_spin)
+    order = np.lexsort((level, distance, other))[:k]
+    frame = frame.iloc[order].reset_index(drop=True)
+    columns = {name: [] for name in NEAREST_COLUMNS}
+    for dtheta in frame["dtheta"].to_numpy():
+        unit = Motion.from_spin(body, dtheta=float(dtheta))
+        orbit = Motion.from_spin(body, dtheta=float(dtheta), speed=spin.momentum / unit.momentum)
+        start = body.frame.T @ _start_near(body.moments, orbit, spin.omega0) / factor
+        for name, value in zip(NEAREST_COLUMNS, [*start, orbit.period]):
+            columns[name].append(float(value))
+    for name in NEAREST_COLUMNS:
+        frame[name] = np.array(columns[name])
+    frame.attrs = {
+        "total_phase": alpha,
+        "branch": spin.branch,
+        "momentum": spin.momentum,
+        "D": d_spin,
+    }
+    return frame
+
+
+def _start_near(moments, orbit, spin):
+    """The point of ``orbit``'s polhode at the azimuth of ``spin`` about I3.
+
+    On the orbit ``omega = (r c, r s, z)`` (principal axes, ``c, s`` the
+    cosine and sine of the spin's azimuth) keeps ``2E = omega.I.omega`` and
+    ``M^2 = |I omega|^2`` (eqn:E, eqn:J); linear in ``r^2`` and ``z^2``:
+    ``r^2 = (M^2 - 2E I3) / (I1 (I1 - I3) c^2 + I2 (I2 - I3) s^2)`` and
+    ``z^2 = (2E - r^2 (I1 c^2 + I2 s^2)) / I3``.  A LAM polhode that does
+    not reach that azimuth is started where it crosses ``omega3 = 0``
+    nearest it.  Components keep the signs of the spin's, so the orbit
+    starts close to the throw.
+    """
+    i1, i2, i3 = (float(v) for v in moments)
+    two_e, m_sq = 2.0 * orbit.energy, orbit.momentum**2
+    w1, w2, w3 = (float(v) for v in spin)
+    norm = math.hypot(w1, w2)
+    c, s = (abs(w1) / norm, abs(w2) / norm) if norm > 0.0 else (1.0, 0.0)
+    r_sq = (m_sq - two_e * i3) / (i1 * (i1 - i3) * c * c + i2 * (i2 - i3) * s * s)
+    z_sq = (two_e - r_sq * (i1 * c * c + i2 * s * s)) / i3
+    if z_sq < 0.0:  # LAM, azimuth beyond the polhode's reach: its crossing of omega3 = 0
+        y_sq = (m_sq - two_e * i1) / (i2 * (i2 - i1))
+        x, y, z = math.sqrt((two_e - i2 * y_sq) / i1), math.sqrt(y_sq), 0.0
+    else:
+        r = math.sqrt(r_sq)
+        x, y, z = r * c, r * s, math.sqrt(z_sq)
+    return np.array(
+        [math.copysign(x, w1), math.copysign(y, w2), math.copysign(z, w3) if z else 0.0]
+    )
 
 
 # --------------------------------------------------------------- CSV text
@@ -253,7 +393,7 @@ def read_catalog(path, *, check=True):
                 f"{path} is damaged: the data section does not match its "
                 "SHA-256 (changed, truncated or extended)"
             )
-    dtypes = {name: float for name in CATALOG_COLUMNS + (VERIFIED_COLUMN,)}
+    dtypes = {name: float for name in CATALOG_COLUMNS + (VERIFIED_COLUMN,) + NEAREST_COLUMNS}
     dtypes.update(body=str, branch=str, n="int64", q="int64", closes_after=str)
     try:
         frame = pd.read_csv(
@@ -277,7 +417,10 @@ def read_catalog(path, *, check=True):
             f"{path}: columns {columns} do not start with the catalog schema {expected}"
         )
     extra = columns[len(expected) :]
-    if extra not in ([], [VERIFIED_COLUMN]):
+    if extra not in ([], [VERIFIED_COLUMN], list(NEAREST_COLUMNS)) and extra != [
+        VERIFIED_COLUMN,
+        *NEAREST_COLUMNS,
+    ]:
         raise InputError(f"{path}: unexpected columns {extra}")
     if not frame["branch"].isin(["SAM", "LAM"]).all():
         raise InputError(f"{path}: branch must be SAM or LAM")
@@ -349,7 +492,8 @@ class BodiesFile:
             return []
         rows = ", ".join(str(row) for row, _ in self.skipped)
         return [
-            f"skipped {len(self.skipped)} invalid row(s) of {self.path} (--skip-invalid): {rows}"
+            f"skipped {plural(len(self.skipped), 'invalid row')} of {self.path} "
+            f"(--skip-invalid): {rows}"
         ]
 
 
@@ -662,7 +806,7 @@ def _validated(path, header, cells, skip_invalid):
     bad = sorted(problems)
     if bad and not skip_invalid:
         more = len(bad) - 1
-        tail = f"; {more} more bad row(s) (--skip-invalid skips them)" if more else ""
+        tail = f"; {plural(more, 'more bad row')} (--skip-invalid skips them)" if more else ""
         raise InputError(f"{label(bad[0])}: {problems[bad[0]]}{tail}")
     keep = np.ones(count, dtype=bool)
     keep[bad] = False

@@ -345,14 +345,52 @@ def closure_errors(moments, dtheta, periods, rtol=1e-13):
     return out
 
 
-VerifyReport = namedtuple("VerifyReport", ["table", "summary", "passed"])
-VerifyReport.__doc__ = """Result of :func:`verify`.
+class VerifyReport(namedtuple("VerifyReport", ["table", "summary", "passed"])):
+    """Result of :func:`verify`.
 
-table : DataFrame, one row per initial condition (I1, I2, I3, theta, branch,
-    the closed form and each check with its discrepancy)
-summary : dict in the ``orbits verify --json`` format
-passed : every discrepancy within the tolerance
-"""
+    table : DataFrame, one row per initial condition (I1, I2, I3, theta, branch,
+        the closed form and each check with its discrepancy)
+    summary : dict in the ``orbits verify --json`` format
+    passed : every discrepancy within the tolerance
+    """
+
+    __slots__ = ()
+
+    def _rows(self):
+        summary = self.summary
+        rows = [
+            (f"{name}: max |discrepancy|", float(check["max_abs_error"]), "rad")
+            for name, check in summary["checks"].items()
+        ]
+        rows.append(
+            (
+                "ODE period vs eqn:TK: max |dT|",
+                float(summary["ode_period_max_abs_error"]),
+                "1/|w0|",
+            )
+        )
+        return rows
+
+    def __repr__(self):
+        summary = self.summary
+        checks = ", ".join(f"{name} {value:.2e}" for name, value, _ in self._rows())
+        return (
+            f"VerifyReport(passed={self.passed}, {summary['initial_conditions']} initial "
+            f"conditions, tolerance {summary['tolerance']:g} rad; {checks}; "
+            "rows in .table)"
+        )
+
+    def _repr_html_(self):
+        from .units import html_table
+
+        summary = self.summary
+        rows = [
+            ("result", "passed" if self.passed else "FAILED", ""),
+            ("initial conditions", summary["initial_conditions"], ""),
+            ("tolerance", float(summary["tolerance"]), "rad"),
+            *self._rows(),
+        ]
+        return html_table("orbits.verify: closed form against independent checks", rows)
 
 
 def verify(n_bodies=293, n_angles=22, *, tolerance=TOLERANCE, progress=None, chunk=2048):

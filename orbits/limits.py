@@ -93,14 +93,14 @@ def check_search_bounds(n_max, q_max, bodies=1, what="this search"):
     n_max, q_max = short_number(n_max), short_number(q_max)
     if not memory <= budget:  # also a NaN estimate (inf * 0 for a huge n_max)
         raise InputError(
-            f"{what} (n_max={n_max}, q_max={q_max}, {bodies} body(ies)) "
+            f"{what} (n_max={n_max}, q_max={q_max}, {plural(bodies, 'body', 'bodies')}) "
             f"would need {about_bytes(memory)} of memory, more than the "
             f"{format_bytes(budget)} allowed (half of this machine's); "
             "lower --n-max or --q-max"
         )
     if not seconds <= MAX_SECONDS:
         raise InputError(
-            f"{what} (n_max={n_max}, q_max={q_max}, {bodies} body(ies)) "
+            f"{what} (n_max={n_max}, q_max={q_max}, {plural(bodies, 'body', 'bodies')}) "
             f"would take {about_duration(seconds)}; lower --n-max or --q-max"
         )
     return memory, seconds
@@ -202,6 +202,15 @@ def check_animation(
 
 
 # --------------------------------------------------------------- wording
+def plural(count, singular, many=None):
+    """``"1 body"``, ``"2 bodies"``: the count and the word in the right number.
+
+    ``many`` defaults to ``singular + "s"``.
+    """
+    word = singular if count == 1 else (many or singular + "s")
+    return f"{count} {word}"
+
+
 def short_number(number):
     """A count for a message: digits up to 1e15, else ~1.2e+30."""
     if abs(number) < 10**15:

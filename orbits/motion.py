@@ -50,15 +50,33 @@ unwrapped; rotation : (n, 3, 3) body -> space; omega_space : (n, 3) the
 angular velocity in the space frame (z along M).
 """
 
-TumblingPeriods = namedtuple(
-    "TumblingPeriods", ["precession", "rotation", "ratio", "axis", "about_momentum"]
-)
-TumblingPeriods.__doc__ = """Periods of a tumbling body; see :meth:`Motion.tumbling_periods`.
 
-precession : P_phi; rotation : P_psi (= T); ratio : P_psi / P_phi;
-axis : "short" (SAM) or "long" (LAM), the axis whose Euler angles these are;
-about_momentum : 2 pi T / Delta alpha, the mean rotation period about L.
-"""
+class TumblingPeriods(
+    namedtuple("TumblingPeriods", ["precession", "rotation", "ratio", "axis", "about_momentum"])
+):
+    """Periods of a tumbling body; see :meth:`Motion.tumbling_periods`.
+
+    precession : P_phi; rotation : P_psi (= T); ratio : P_psi / P_phi;
+    axis : "short" (SAM) or "long" (LAM), the axis whose Euler angles these are;
+    about_momentum : 2 pi T / Delta alpha, the mean rotation period about L.
+    Periods in the time unit of omega0 (s for rad/s).
+    """
+
+    __slots__ = ()
+
+    def _repr_html_(self):
+        from .units import html_table
+
+        rows = [
+            ("P_psi (rotation about the " + self.axis + " axis, = T)", self.rotation, "s"),
+            ("P_phi (precession of that axis about L)", self.precession, "s"),
+            ("P_psi / P_phi", self.ratio, ""),
+            ("2 pi T / Delta alpha (mean rotation about L)", self.about_momentum, "s"),
+        ]
+        return html_table(
+            "TumblingPeriods (Pravec et al. 2005; s when omega0 is in rad/s)",
+            [(name, float(value), unit) for name, value, unit in rows],
+        )
 
 
 class AxesWarning(UserWarning):
@@ -485,6 +503,35 @@ class Motion:
             f"Motion({self.body!r}, omega0={self.omega0.tolist()}, "
             f"branch={self.branch!r}, period={self.period:.6g})"
         )
+
+    def _repr_html_(self):
+        """The motion in a notebook: spin, branch, period, E, |L|, D and the phases."""
+        from .units import html_table
+
+        real = self.body.shape is not None and self.body.shape[0] in ("box", "cylinder", "mesh")
+        total = self.total_phase()
+        periods = self.tumbling_periods()
+        w = self.omega0
+        rows = [
+            (
+                "omega0 (principal axes I1 < I2 < I3)",
+                f"({w[0]:.6g}, {w[1]:.6g}, {w[2]:.6g})",
+                "rad/s",
+            ),
+            ("branch", self.branch, "SAM: about I3, LAM: about I1"),
+            ("period T (eqn:TK)", self.period, "s"),
+            ("omega's I2 part reverses (flip) every T/2", 0.5 * self.period, "s"),
+            ("energy E", self.energy, "J" if real else "I rad^2/s^2"),
+            ("angular momentum |L|", self.momentum, "J s" if real else "I rad/s"),
+            ("D = M^2 / (2E)", self.D, "kg m^2" if real else "I"),
+            ("elliptic parameter m = k^2", float(self.m), ""),
+            ("total phase Delta alpha", total, "rad"),
+            ("", total / (2.0 * math.pi), "turns (x 2 pi)"),
+            ("P_psi / P_phi (Pravec et al. 2005)", periods.ratio, ""),
+            ("P_phi (precession)", periods.precession, "s"),
+        ]
+        name = f" of {self.body.name!r}" if self.body.name else ""
+        return html_table(f"Motion{name} (time in s for omega in rad/s)", rows)
 
 
 # largest curve returned by herpolhode/polhode (about 0.5 GB of state)

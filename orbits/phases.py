@@ -59,12 +59,33 @@ from .threads import size_aware
 
 HALF_PI = 0.5 * np.pi
 
-PhaseLimits = namedtuple("PhaseLimits", ["theta_zero", "theta_half_pi"])
-PhaseLimits.__doc__ = """Limits of the total phase at the two ends of 0 < theta < pi/2 (phi = 0).
 
-theta_zero : eqn:alphamin1, ``2 pi sqrt(I1 I2 / ((I3-I2)(I3-I1)))``
-theta_half_pi : eqn:alphamin2, ``2 pi sqrt(I2 I3 / ((I2-I1)(I3-I1)))``
-"""
+class PhaseLimits(namedtuple("PhaseLimits", ["theta_zero", "theta_half_pi"])):
+    """Limits of the total phase at the two ends of 0 < theta < pi/2 (phi = 0).
+
+    theta_zero : eqn:alphamin1, ``2 pi sqrt(I1 I2 / ((I3-I2)(I3-I1)))``
+    theta_half_pi : eqn:alphamin2, ``2 pi sqrt(I2 I3 / ((I2-I1)(I3-I1)))``
+    """
+
+    __slots__ = ()
+
+    def _repr_html_(self):
+        """The two limits in radians and in turns (one body), or their ranges."""
+        from .units import html_table
+
+        rows = []
+        for name, value in (
+            ("theta -> 0", self.theta_zero),
+            ("theta -> pi/2", self.theta_half_pi),
+        ):
+            values = np.asarray(value, dtype=float)
+            if values.ndim == 0:
+                rows.append((f"total phase, {name}", float(values), "rad"))
+                rows.append(("", float(values) / (2.0 * np.pi), "turns (x 2 pi)"))
+            else:
+                low, high = float(values.min()), float(values.max())
+                rows.append((f"total phase, {name}", f"{low:.10g} to {high:.10g}", "rad"))
+        return html_table("PhaseLimits (eqn:alphamin1, eqn:alphamin2)", rows)
 
 
 def _first_bad(array):

@@ -20,7 +20,7 @@ from .bodies import Body, unit_moments
 from .core import search as _kernels
 from .device import check_device, cuda_kernels, run_cuda
 from .errors import InputError
-from .limits import check_search_bounds
+from .limits import check_search_bounds, plural
 from .phases import phases_of_unit_moments
 
 #: The catalog's columns, in order: name -> (unit, meaning).  The one
@@ -323,7 +323,8 @@ def closed_orbits(body, n_max=10, q_max=1):
     unreached = int(info[_kernels.INFO_UNREACHED_SAM] + info[_kernels.INFO_UNREACHED_LAM])
     if unreached:
         warnings.warn(
-            f"{unreached} closed orbit(s) with 2 pi p/q <= 2 pi {n_max} lie "
+            f"{plural(unreached, 'closed orbit')} with 2 pi p/q <= 2 pi {n_max} "
+            f"{'lies' if unreached == 1 else 'lie'} "
             "closer than |dtheta| = 2.2e-308 to the separatrix and cannot be "
             "stored in double precision; they are left out",
             UnresolvedOrbitsWarning,

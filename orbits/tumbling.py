@@ -17,6 +17,7 @@ import numpy as np
 from ._args import real_scalar
 from .bodies import unit_moments
 from .errors import InputError
+from .limits import plural
 
 TWO_PI = 2.0 * math.pi
 
@@ -47,7 +48,8 @@ def _solve(moments, targets):
         unreached += int(info[slot])
     if unreached:
         warnings.warn(
-            f"{unreached} spin(s) with this total phase lie closer than "
+            f"{plural(unreached, 'spin')} with this total phase "
+            f"{'lies' if unreached == 1 else 'lie'} closer than "
             "|dtheta| = 2.2e-308 to the separatrix and cannot be stored in "
             "double precision; they are left out",
             UnresolvedOrbitsWarning,
@@ -185,3 +187,75 @@ def spins_with_period_ratio(body_or_moments, ratio):
     if offsets.size == 0:
         raise _no_spin(moments, f"period ratio P_psi/P_phi = {ratio:.17g}")
     return _table(moments, offsets, targets)
+
+
+def spins_with_periods(body_or_moments, p_psi, p_phi):
+    """Every spin of a tumbling body with the observed periods ``P_psi`` and ``P_phi``.
+
+    The convention of Pravec et al. (2005, Icarus 173, 108) and
+    :meth:`orbits.Motion.tumbling_periods`: ``P_psi`` the rotation period
+    (the period T of eqn:TK), ``P_phi`` the mean precession period of the
+    short (SAM) or long (LAM) axis about L.  The ratio fixes the orbit
+    (:func:`spins_with_period_ratio`); ``P_psi`` then fixes the time scale,
+    ``|omega0| = T(|omega0| = 1) / P_psi``.
+
+    Parameters
+    ----------
+    body_or_moments : Body or array_like, shape (3,)
+        The moments in any unit and scale (asteroids: ratios, e.g.
+        ``(0.61, 0.965, 1)``).
+    p_psi, p_phi : float
+        The periods, in any one time unit: every result is in that unit.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per spin, sorted by ``dtheta``: ``branch``, ``axis``
+        (``"short"``/``"long"``), ``P_psi`` and ``P_phi`` recomputed from
+        the spin (:meth:`~orbits.Motion.tumbling_periods`), ``P_about_L``
+        (``2 pi T / Delta alpha``), ``E_over_E0`` (Pravec's
+        ``E/E0 = 2 E I3 / M^2 = I3/D``, 1 for a spin about the short axis,
+        ``I3/I2`` on the separatrix), ``theta`` and ``dtheta`` (radians,
+        ``phi = 0``), ``w1, w2, w3`` (the starting spin in the principal
+        axes, radians per time unit), ``energy``, ``momentum`` (in the
+        moments' unit and that time unit), ``D`` and ``total_phase``.
+
+    Raises
+    ------
+    InputError
+        A period not finite and positive, or no spin with that ratio.
+    """
+    import pandas as pd
+
+    from .motion import Motion, as_body
+
+    body = as_body(body_or_moments)
+    p_psi = _positive_finite("P_psi", p_psi)
+    p_phi = _positive_finite("P_phi", p_phi)
+    table = spins_with_period_ratio(body, p_psi / p_phi)
+    rows = []
+    i3 = float(body.moments[2])
+    for dtheta, theta in zip(table["dtheta"].to_numpy(), table["theta"].to_numpy()):
+        unit = Motion.from_spin(body, dtheta=float(dtheta))
+        motion = Motion.from_spin(body, dtheta=float(dtheta), speed=unit.period / p_psi)
+        periods = motion.tumbling_periods()
+        rows.append(
+            {
+                "branch": motion.branch,
+                "axis": periods.axis,
+                "P_psi": periods.rotation,
+                "P_phi": periods.precession,
+                "P_about_L": periods.about_momentum,
+                "E_over_E0": i3 / motion.D,
+                "theta": float(theta),
+                "dtheta": float(dtheta),
+                "w1": float(motion.omega0[0]),
+                "w2": float(motion.omega0[1]),
+                "w3": float(motion.omega0[2]),
+                "energy": motion.energy,
+                "momentum": motion.momentum,
+                "D": motion.D,
+                "total_phase": motion.total_phase(),
+            }
+        )
+    return pd.DataFrame(rows)

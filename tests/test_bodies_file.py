@@ -122,7 +122,7 @@ def test_one_message_per_bad_row_and_skip_invalid(tmp_path, parser):
     assert [row for row, _ in table.skipped] == [2, 3, 5]
     for row, message in table.skipped:
         assert message.count(f"row {row}") == 1
-    note = f"skipped 3 invalid row(s) of {path} (--skip-invalid): 2, 3, 5"
+    note = f"skipped 3 invalid rows of {path} (--skip-invalid): 2, 3, 5"
     assert table.skipped_note() == [note]
 
 
@@ -140,7 +140,7 @@ def test_skip_invalid_on_the_command_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "skipped" in err and "row 2 ('bad')" in err
     text = out.read_text()
-    assert "# skipped 1 invalid row(s)" in text and "(--skip-invalid): 2" in text
+    assert "# skipped 1 invalid row " in text and "(--skip-invalid): 2" in text
     assert "\"'=cmd|' /C calc'!A0\"" in text  # neutralised in the file
     frame = orbits.read_catalog(out)
     assert set(frame["body"]) == {"=cmd|' /C calc'!A0"}  # and read back unchanged

@@ -35,7 +35,7 @@ LAYERS = [
     ["motion"],
     ["phases"],
     ["bodies"],
-    ["limits", "cells"],
+    ["limits", "cells", "units"],
     ["_args", "atomic", "threads", "device"],
     ["core", "errors", "_version"],
 ]

@@ -143,22 +143,22 @@ ax.legend(fontsize="small", loc="lower right")
 # ------------------------------------
 # Observers give a tumbling asteroid's two periods: the precession ``P_φ``
 # of its axis about the angular momentum and the rotation ``P_ψ`` about
-# its own axis.  Their ratio fixes the spin (up to the branch); the period
-# then fixes the time unit.  Pravec et al. (2014) give ``P_φ = 27.38 h``,
+# its own axis.  Their ratio fixes the spin (one per branch); ``P_ψ`` then
+# fixes its rate.  Pravec et al. (2014) give ``P_φ = 27.38 h``,
 # ``P_ψ = 263 h`` and a strongest light-curve period ``P_1 = 30.56 h`` on
-# the short-axis mode (SAM).
-spins = orbits.spins_with_period_ratio(apophis, 263.0 / 27.38)
+# the short-axis mode (SAM).  :func:`orbits.spins_with_periods` takes the
+# periods in any one unit and answers in it (the command line:
+# ``orbits phase --moments 0.61 0.965 1 --periods 263 27.38 --time-unit h``).
+spins = orbits.spins_with_periods(apophis, 263.0, 27.38)  # hours in, hours out
 sam = spins[spins["branch"] == "SAM"].iloc[0]
-motion = Motion.from_spin(apophis, dtheta=sam["dtheta"])
-hours = motion.period / 263.0  # model time units per hour
-periods = motion.tumbling_periods()
 print(f"theta = {sam['theta']:.6f} rad (theta_c = {apophis.critical_angle():.6f})")
 print(
-    f"P_phi = {periods.precession / hours:.2f} h, P_psi = {periods.rotation / hours:.1f} h, "
-    f"P_1 = 2 pi T / Delta alpha = {periods.about_momentum / hours:.2f} h (observed 30.56 h)"
+    f"P_phi = {sam['P_phi']:.2f} h, P_psi = {sam['P_psi']:.1f} h, "
+    f"P_1 = 2 pi T / Delta alpha = {sam['P_about_L']:.2f} h (observed 30.56 h)"
 )
-print(
-    f"E/E0 = {2 * motion.energy * apophis.moments[2] / motion.momentum**2:.4f} "
-    "(observed 1.024 +- 0.013)"
-)
+print(f"E/E0 = 2 E I3 / M^2 = {sam['E_over_E0']:.4f} (observed 1.024 +- 0.013)")
+print(spins[["branch", "P_psi", "P_phi", "P_about_L", "E_over_E0"]])
+# the row's spin (principal axes, rad/h) is a Motion whose period is P_psi
+motion = Motion.from_omega(apophis, sam[["w1", "w2", "w3"]].to_numpy(dtype=float))
+print(f"Motion from (w1, w2, w3): T = {motion.period:.6f} h")
 plt.show()

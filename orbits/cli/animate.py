@@ -7,21 +7,28 @@ import sys
 from ..cells import literal_text
 from ..errors import InputError
 from ..limits import check_animation
+from ..units import OMEGA_UNITS
 from .shared import add_body_options, announce, body_from_args, finite, positive_int
 
 
 def _cmd_animate(args):
     import time
 
+    import numpy as np
+
     from .. import animate
 
     # sizes first, with the options' own names: nothing is computed for a run
-    # that cannot fit the machine
-    memory, seconds = check_animation(
-        args.frames,
+    # that cannot fit the machine (a real-time run's frames: round(S x fps) + 1)
+    if args.seconds is not None and math.isfinite(args.seconds):
+        planned = int(min(round(args.seconds * args.fps), 2**62)) + 1
+    else:
+        planned = 120 if args.frames is None else args.frames
+    memory, seconds_estimate = check_animation(
+        planned,
         args.dpi,
         keep_frames=str(args.out).lower().endswith(".gif"),
-        frames_name="--frames",
+        frames_name="--seconds" if args.seconds is not None else "--frames",
         dpi_name="--dpi",
     )
     body = body_from_args(args)
@@ -31,34 +38,67 @@ def _cmd_animate(args):
         args.n is not None,
         args.p is not None,
         args.flip is not None,
+        args.omega is not None,
     ]
     if sum(spins) != 1:
         raise InputError(
-            "orbits animate: give exactly one spin: --theta, --dtheta, --n, --p/--q or --flip"
+            "orbits animate: give exactly one spin: --theta, --dtheta, --n, --p/--q, "
+            "--flip or --omega"
         )
     if args.q is not None and args.p is None:
         raise InputError("orbits animate: --q needs --p")
+    if args.speed is not None and (args.omega is not None or args.n or args.p):
+        raise InputError("orbits animate: --speed applies to --theta, --dtheta and --flip")
+    if args.seconds is not None and (args.frames is not None or args.periods is not None):
+        raise InputError("orbits animate: --seconds (real time) or --frames/--periods, not both")
+    if args.omega is not None and args.frames is not None:
+        raise InputError(
+            "orbits animate: --omega plays in real time: its length is --seconds "
+            "(or --periods) at --fps, not --frames"
+        )
+    factor = OMEGA_UNITS[args.units]
+    speed = 1.0 if args.speed is None else args.speed * factor
     solid = args.solid
     if solid == "auto" and args.t_handle is not None:
         solid = ("t-handle",) + tuple(args.t_handle)
     start = time.perf_counter()
+    from ..motion import Motion
+
+    rate = f"|omega0| = {speed / factor:g} {args.units}"
     if args.flip is not None:
-        source = animate.flip_motion(body, offset=args.flip)
+        source = animate.flip_motion(body, offset=args.flip, speed=speed)
     elif args.n is not None or args.p is not None:
         source = animate.orbit_row(body, n=args.n, p=args.p, q=args.q or 1, branch=args.branch)
+    elif args.omega is not None:
+        source = Motion.from_omega(body, np.array(args.omega) * factor, axes="body")
     else:
-        from ..motion import Motion
-
-        source = Motion.from_spin(body, args.theta, dtheta=args.dtheta, phi=args.phi)
+        source = Motion.from_spin(body, args.theta, dtheta=args.dtheta, phi=args.phi, speed=speed)
     _check_out(args.out)
     # every input checked: say how long the drawing will take
-    announce("animate", seconds, memory)
+    announce("animate", seconds_estimate, memory)
+    seconds = args.seconds
+    if args.omega is not None and seconds is None and args.periods is None:
+        seconds = source.period
     title = None
     if args.flip is not None:
         title = (
             f"{literal_text(body.name or 'body')}: the Dzhanibekov (tennis-racket) flip, spin "
-            f"{args.flip:g} rad from the intermediate axis $I_2$, "
-            f"T = {source.period:.4g} s"
+            f"{args.flip:g} rad from the intermediate axis $I_2$\n"
+            f"at {rate}: T = {source.period:.4g} s, "
+            f"flips every T/2 = {0.5 * source.period:.4g} s"
+        )
+    elif args.omega is not None:
+        spin = ", ".join(f"{v:g}" for v in args.omega)
+        name = literal_text(body.name or "body")
+        title = (
+            f"{name} thrown at omega = ({spin}) {args.units} (body axes), "
+            f"{source.branch}\nT = {source.period:.4g} s, omega along $I_2$ reverses "
+            f"every T/2 = {0.5 * source.period:.4g} s"
+        )
+    elif args.n is None and args.p is None:
+        title = (
+            f"{literal_text(body.name or 'body')}: Poinsot construction, {source.branch}, "
+            f"T = {source.period:.4g} s at {rate}"
         )
     drawn = animate.poinsot_animation(
         source,
@@ -70,11 +110,16 @@ def _cmd_animate(args):
         out=args.out,
         title=title,
         body=body if args.n is not None or args.p is not None else None,
+        seconds=seconds,
     )
+    count = len(drawn.times)
+    span = drawn.times[-1]
+    turns = span / drawn.motion.period
+    pace = " (real time)" if seconds is not None else ""
     print(
-        f"orbits animate: {len(drawn.times)} frames over "
-        f"{drawn.times[-1] / drawn.motion.period:.4g} periods written to {args.out} "
-        f"in {time.perf_counter() - start:.1f} s",
+        f"orbits animate: {count} frames over {span:.4g} s = {turns:.4g} "
+        f"{'period' if turns == 1 else 'periods'} at {args.fps} frames/s{pace} written to "
+        f"{args.out} in {time.perf_counter() - start:.1f} s",
         file=sys.stderr,
     )
     return 0
@@ -91,6 +136,13 @@ def _check_out(path):
     if suffix.lstrip(".").lower() not in FORMATS:
         raise InputError(f"unknown animation format {suffix!r}; use .gif or .mp4")
     ensure_writable(path)
+
+
+def _positive(text):
+    value = finite(text)
+    if value <= 0.0:
+        raise argparse.ArgumentTypeError(f"must be positive, got {text!r}")
+    return value
 
 
 def _flip_offset(text):
@@ -129,6 +181,15 @@ def add_parser(subparsers):
     spin.add_argument("--p", type=positive_int, help="the closed orbit 2 pi p/q (with --q)")
     spin.add_argument("--q", type=positive_int, help="see --p")
     spin.add_argument(
+        "--omega",
+        nargs=3,
+        type=finite,
+        metavar=("W1", "W2", "W3"),
+        help="a real throw: the angular velocity along the body's own axes (x y z "
+        "of --box, the order of --moments), in --units; plays in real time "
+        "(one period T unless --seconds or --periods)",
+    )
+    spin.add_argument(
         "--flip",
         type=_flip_offset,
         nargs="?",
@@ -149,10 +210,29 @@ def add_parser(subparsers):
         help="with --n or --p: the branch, when both have the orbit",
     )
     parser.add_argument(
+        "--units",
+        choices=list(OMEGA_UNITS),
+        default="rad/s",
+        help="unit of --omega and --speed (default rad/s); times are then in s",
+    )
+    parser.add_argument(
+        "--speed",
+        type=_positive,
+        metavar="W",
+        help="|omega0| of --theta, --dtheta or --flip, in --units (default 1 rad/s)",
+    )
+    parser.add_argument(
         "--periods", type=finite, help="duration in periods T (default q for an orbit, else 1)"
     )
     parser.add_argument(
-        "--frames", type=positive_int, default=120, help="number of frames (default 120)"
+        "--seconds",
+        type=_positive,
+        metavar="S",
+        help="real time: S seconds of the motion played in S seconds "
+        "(round(S x fps) + 1 frames); not with --frames/--periods",
+    )
+    parser.add_argument(
+        "--frames", type=positive_int, help="number of frames (default 120; not with --seconds)"
     )
     parser.add_argument(
         "--fps", type=positive_int, default=20, help="frames per second (default 20)"
@@ -160,8 +240,8 @@ def add_parser(subparsers):
     parser.add_argument(
         "--dpi",
         type=positive_int,
-        default=80,
-        help="pixels per inch of the 9 x 4 in frames (default 80)",
+        default=120,
+        help="pixels per inch of the 9 x 4 in frames (default 120: 1080 x 480 px)",
     )
     parser.add_argument(
         "--solid",

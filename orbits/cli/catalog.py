@@ -2,13 +2,16 @@
 
 import sys
 
-from ..limits import check_search_bounds
+from ..errors import InputError
+from ..limits import check_search_bounds, plural
+from ..units import OMEGA_UNITS
 from .shared import (
     EXIT_CHECK_FAILED,
     add_body_options,
     announce,
     bodies_from_args,
     command_line,
+    finite,
     positive_int,
     progress_bar,
 )
@@ -31,6 +34,10 @@ def _cmd_catalog(args):
     from ..search import UnresolvedOrbitsWarning
 
     _check_out(args.out)
+    if args.nearest is not None or args.omega is not None:
+        return _nearest(args)
+    if args.n_max is None:
+        raise InputError("orbits catalog: give --n-max N (or --omega W1 W2 W3 with --nearest K)")
     bodies, notes = bodies_from_args(args)
     memory, seconds = check_search_bounds(args.n_max, args.q_max, len(bodies), "the catalog")
     announce("catalog", seconds * (3 if args.verify else 1), memory)
@@ -52,14 +59,53 @@ def _cmd_catalog(args):
         worst = float(frame["closure_error"].max()) if len(frame) else 0.0
         note = f"; largest closure error {worst:.2e} rad"
     print(
-        f"orbits catalog: {len(frame)} closed orbits of {len(bodies)} "
-        f"body(ies) written to {'standard output' if args.out == '-' else args.out} "
+        f"orbits catalog: {plural(len(frame), 'closed orbit')} of "
+        f"{plural(len(bodies), 'body', 'bodies')} written to "
+        f"{'standard output' if args.out == '-' else args.out} "
         f"in {elapsed:.2f} s{note}",
         file=sys.stderr,
     )
     if args.verify and len(frame) and frame["closure_error"].max() > CLOSURE_TOLERANCE:
         print(f"orbits: error: closure errors above {CLOSURE_TOLERANCE:g} rad", file=sys.stderr)
         return EXIT_CHECK_FAILED
+    return 0
+
+
+def _nearest(args):
+    """``--omega`` with ``--nearest K``: the K closed orbits nearest a real spin."""
+    import time
+
+    from ..catalog import nearest_orbits, write_catalog
+
+    if args.omega is None or args.nearest is None:
+        raise InputError("orbits catalog: --nearest K and --omega W1 W2 W3 go together")
+    for option, value in (("--n-max", args.n_max), ("--bodies", getattr(args, "bodies", None))):
+        if value is not None:
+            raise InputError(f"orbits catalog: {option} does not apply with --nearest")
+    if args.verify:
+        raise InputError("orbits catalog: --verify does not apply with --nearest")
+    (body,), notes = bodies_from_args(args)
+    start = time.perf_counter()
+    frame = nearest_orbits(body, args.omega, args.nearest, args.q_max, units=args.units)
+    spin = frame.attrs
+    notes = [
+        *notes,
+        f"nearest closed orbits of the spin omega = ({', '.join(f'{v:g}' for v in args.omega)})"
+        f" {args.units} in the body's own axes: {spin['branch']}, total phase "
+        f"{spin['total_phase']:.12g} rad, |L| = {spin['momentum']:.12g} (moments' unit x rad/s)",
+        "ranked by branch (the spin's first), then |total_phase - the spin's|; "
+        f"omega_x, omega_y, omega_z: the orbit's starting spin at that |L|, body's own axes, "
+        f"{args.units}; period_s: its period in s",
+    ]
+    write_catalog(frame, args.out, command=command_line(args.argv), notes=notes)
+    count = len(frame)
+    print(
+        f"orbits catalog: the {count} closed {'orbit' if count == 1 else 'orbits'} nearest "
+        f"the spin ({spin['branch']}, total phase {spin['total_phase']:.6g} rad) written to "
+        f"{'standard output' if args.out == '-' else args.out} "
+        f"in {time.perf_counter() - start:.2f} s",
+        file=sys.stderr,
+    )
     return 0
 
 
@@ -78,7 +124,9 @@ def add_parser(subparsers):
     )
     add_body_options(parser, many=True)
     parser.add_argument(
-        "--n-max", type=positive_int, required=True, help="largest multiple n (or p/q) of 2 pi"
+        "--n-max",
+        type=positive_int,
+        help="largest multiple n (or p/q) of 2 pi (required, except with --nearest)",
     )
     parser.add_argument(
         "--q-max",
@@ -93,6 +141,31 @@ def add_parser(subparsers):
         help="add closure_error: an independent integration of "
         "each orbit over q periods (exit 1 if any exceeds "
         "1e-8 rad)",
+    )
+    nearest = parser.add_argument_group("nearest closed orbits of a real spin")
+    nearest.add_argument(
+        "--omega",
+        nargs=3,
+        type=finite,
+        metavar=("W1", "W2", "W3"),
+        help="a real spin along the body's own axes (x y z of --box, the order "
+        "of --moments, the input frame of --point-masses/--mesh), in --units; "
+        "with --nearest",
+    )
+    nearest.add_argument(
+        "--units",
+        choices=list(OMEGA_UNITS),
+        default="rad/s",
+        help="unit of --omega and of the omega_x/y/z columns (default rad/s)",
+    )
+    nearest.add_argument(
+        "--nearest",
+        type=positive_int,
+        metavar="K",
+        help="write the K closed orbits nearest the --omega spin (its branch "
+        "first, then by |total phase - the spin's|), each started at the "
+        "spin's |L| near its direction, with columns omega_x, omega_y, "
+        "omega_z (in --units) and period_s (s)",
     )
     parser.add_argument(
         "--out",

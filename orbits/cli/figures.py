@@ -3,7 +3,7 @@
 import sys
 
 from ..errors import InputError
-from ..limits import check_search_bounds
+from ..limits import check_search_bounds, plural
 from .shared import (
     BODY_SELECTORS,
     add_body_options,
@@ -89,7 +89,7 @@ def _cmd_figures(args):
                 orbits=orbits_table,
             )
     print(
-        f"orbits figures: {len(written)} files written to {out} in "
+        f"orbits figures: {plural(len(written), 'file')} written to {out} in "
         f"{time.perf_counter() - start:.1f} s",
         file=sys.stderr,
     )

@@ -5,10 +5,12 @@ angular-velocity vector (``--omega``, physical units) or found from a
 total phase or a tumbling period ratio; printed as a table or CSV.
 """
 
+import argparse
 import math
 import sys
 
 from ..errors import InputError
+from ..units import OMEGA_UNITS, TIME_UNITS
 from .shared import add_body_options, body_from_args, finite
 
 
@@ -22,9 +24,16 @@ def _cmd_phase(args):
 
 
 def _phase_table(args):
+    if args.time_unit is not None and args.periods is None:
+        raise InputError("orbits phase: --time-unit applies to --periods")
     body = body_from_args(args)
     if args.omega is not None:
-        return _print_table(_omega_table(body, args), args.csv)
+        table = _omega_table(body, args)
+        return _print_table(
+            table, args.csv, _omega_units(args, _moment_unit(args)), _flip_note(table)
+        )
+    if args.periods is not None:
+        return _periods_table(body, args)
     if args.total_phase is not None or args.period_ratio is not None:
         from .. import tumbling
 
@@ -32,22 +41,105 @@ def _phase_table(args):
             table = tumbling.spins_with_total_phase(body, _angle(args.total_phase, args))
         else:
             table = tumbling.spins_with_period_ratio(body, args.period_ratio)
-        return _print_table(table, args.csv)
+        return _print_table(table, args.csv, NORMALISED_UNITS)
     from ..phases import phases
 
     theta = None if args.theta is None else [_angle(v, args) for v in args.theta]
     dtheta = None if args.dtheta is None else [_angle(v, args) for v in args.dtheta]
     table = phases(body, theta, _angle(args.phi, args), dtheta=dtheta)
-    return _print_table(table, args.csv)
+    return _print_table(table, args.csv, NORMALISED_UNITS)
 
 
-# angular-velocity units -> rad/s
-OMEGA_UNITS = {
-    "rad/s": 1.0,
-    "deg/s": math.pi / 180.0,
-    "rpm": 2.0 * math.pi / 60.0,
-    "Hz": 2.0 * math.pi,
+# units of the printed rows (text tables; CSV keeps the bare column names)
+PRINCIPAL = "principal axes I1<I2<I3"
+NORMALISED_UNITS = {
+    **dict.fromkeys(["I1", "I2", "I3", "D"], "|I|=1"),
+    **dict.fromkeys(["energy", "momentum"], "|I|=|w0|=1"),
+    **dict.fromkeys(
+        [
+            "theta",
+            "dtheta",
+            "phi",
+            "theta_crit",
+            "dynamic_phase",
+            "total_phase",
+            "geometric_phase",
+            "target",
+            "residual",
+        ],
+        "rad",
+    ),
+    "m": "1",
+    "period": "1/|w0|",
 }
+REAL_BODIES = ("box", "cylinder", "point_masses", "mesh", "rotational_constants")
+
+
+def _moment_unit(args):
+    """kg m^2 for the bodies built from masses and lengths (kg, m), else the moments' own."""
+    real = any(getattr(args, name, None) is not None for name in REAL_BODIES)
+    return "kg m^2" if real else "I"
+
+
+def _omega_units(args, moment):
+    joule = moment == "kg m^2"
+    return {
+        **dict.fromkeys(["I1", "I2", "I3", "D"], moment),
+        **dict.fromkeys(["w1", "w2", "w3"], f"rad/s, {PRINCIPAL}"),
+        "D_normalised": "|I|=1",
+        "energy": "J" if joule else "I rad^2/s^2",
+        "momentum": "J s" if joule else "I rad/s",
+        "m": "1",
+        **dict.fromkeys(["period", "precession_period", "rotation_period"], "s"),
+        "period_ratio": "1",
+        **dict.fromkeys(["dynamic_phase", "total_phase", "geometric_phase"], "rad"),
+    }
+
+
+def _flip_note(table):
+    """Near the intermediate axis, the flip: omega's I2 part reverses every T/2."""
+    row = table.iloc[0]
+    components = [abs(float(row[name])) for name in ("w1", "w2", "w3")]
+    half = 0.5 * float(row["period"])
+    if components[1] < max(components):
+        return [
+            f"omega's I2 component reverses every T/2 = {half:.6g} s "
+            "(far from the intermediate axis: no flip is seen)"
+        ]
+    return [
+        f"spin about the intermediate axis I2: the body flips (I2 turns over, the "
+        f"tennis-racket flip) every T/2 = {half:.6g} s"
+    ]
+
+
+def _periods_table(body, args):
+    """``--periods P_PSI P_PHI``: the tumbling spins with those periods (Pravec et al. 2005)."""
+    from ..tumbling import spins_with_periods
+    from ..units import time_factor
+
+    unit = args.time_unit or "s"
+    time_factor(unit)  # a known unit (argparse checked it too)
+    table = spins_with_periods(body, *args.periods)
+    moment = _moment_unit(args)
+    units = {
+        "branch": "-",
+        "axis": "-",
+        **dict.fromkeys(["P_psi", "P_phi", "P_about_L"], unit),
+        "E_over_E0": "1",
+        **dict.fromkeys(["theta", "dtheta", "total_phase"], "rad"),
+        **dict.fromkeys(["w1", "w2", "w3"], f"rad/{unit}, {PRINCIPAL}"),
+        "energy": f"{moment} rad^2/{unit}^2",
+        "momentum": f"{moment} rad/{unit}",
+        "D": moment,
+    }
+    count = len(table)
+    notes = [
+        f"{count} {'spin' if count == 1 else 'spins'} with P_psi = {args.periods[0]:g} {unit} "
+        f"and P_phi = {args.periods[1]:g} {unit} (Pravec et al. 2005: P_psi the rotation, "
+        "P_phi the precession period of the short (SAM) or long (LAM) axis about L; "
+        "E_over_E0 = 2 E I3 / M^2; theta at phi = 0)"
+    ]
+    return _print_table(table, args.csv, units, notes)
 
 
 def _angle(value, args):
@@ -116,7 +208,7 @@ def format_value(value):
     return str(value)
 
 
-def _print_table(table, csv):
+def _print_table(table, csv, units=None, notes=()):
     import numpy as np
 
     numbers = table.select_dtypes("number")
@@ -134,12 +226,24 @@ def _print_table(table, csv):
     if csv:
         table.to_csv(sys.stdout, index=False, float_format="%.17g")
         return 0
+    units = units or {}
     rows = table.T
     width = max(len(str(name)) for name in rows.index)
+    labels = {name: f"[{units.get(name, '-')}]" for name in rows.index}
+    unit_width = max(len(label) for label in labels.values())
     for name, values in rows.iterrows():
         cells = "  ".join(f"{format_value(v):>24}" for v in values)
-        print(f"{str(name):<{width}}  {cells}")
+        print(f"{str(name):<{width}}  {labels[name]:<{unit_width}}  {cells}")
+    for note in notes:
+        print(note)
     return 0
+
+
+def _positive_period(text):
+    value = finite(text)
+    if value <= 0.0:
+        raise argparse.ArgumentTypeError(f"a period must be positive, got {text!r}")
+    return value
 
 
 def add_parser(subparsers):
@@ -191,6 +295,20 @@ def add_parser(subparsers):
         metavar="R",
         help="find every spin whose tumbling period ratio "
         "P_psi/P_phi is R (Pravec et al. 2005 convention)",
+    )
+    angle.add_argument(
+        "--periods",
+        nargs=2,
+        type=_positive_period,
+        metavar=("P_PSI", "P_PHI"),
+        help="find every spin of a tumbling body with rotation period P_psi and "
+        "precession period P_phi (Pravec et al. 2005), in --time-unit; prints "
+        "the periods back, E_over_E0 = 2 E I3/M^2 and the branch",
+    )
+    parser.add_argument(
+        "--time-unit",
+        choices=list(TIME_UNITS),
+        help="unit of --periods and of the periods printed (default s)",
     )
     parser.add_argument(
         "--phi",

@@ -221,7 +221,7 @@ def _add_real_body_options(group, exclusive):
         nargs=3,
         type=finite,
         metavar=("A", "B", "C"),
-        help="a molecule from its rotational constants, in --unit "
+        help="a molecule from its rotational constants, in --constants-unit "
         "(Body.from_rotational_constants)",
     )
     group.add_argument(
@@ -231,18 +231,43 @@ def _add_real_body_options(group, exclusive):
         "--density", type=finite, default=1.0, help="density for --mesh (default 1)"
     )
     group.add_argument(
-        "--unit",
-        choices=["cm-1", "MHz", "GHz"],
+        "--constants-unit",
+        choices=CONSTANTS_UNITS,
         default="cm-1",
         help="unit of --rotational-constants (default cm-1)",
+    )
+    # the old spelling, until the next major version: one deprecation line on stderr
+    group.add_argument(
+        "--unit",
+        dest="constants_unit",
+        choices=CONSTANTS_UNITS,
+        action=_DeprecatedUnit,
+        help=argparse.SUPPRESS,
     )
     group.add_argument(
         "--defect",
         choices=["error", "flatten"],
         default="error",
-        help="a positive inertial defect of --rotational-constants: "
-        "refuse (default) or put the body on the flat edge",
+        help="measured moments past the flat limit I3 = I1 + I2 (the inertial "
+        "defect of --rotational-constants, or --point-masses/--mesh a hair "
+        "past it): refuse (default) or put the body on the flat edge, "
+        "reporting the excess",
     )
+
+
+CONSTANTS_UNITS = ["cm-1", "MHz", "GHz"]
+
+
+class _DeprecatedUnit(argparse.Action):
+    """``--unit``: the old name of ``--constants-unit`` (works, with a note on stderr)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(
+            "orbits: note: --unit is deprecated; use --constants-unit (the unit of "
+            "--rotational-constants; --units is the unit of a spin)",
+            file=sys.stderr,
+        )
+        setattr(namespace, self.dest, values)
 
 
 def _point_masses_from_csv(path):
@@ -288,27 +313,43 @@ def _real_body_from_args(args):
         )
     if getattr(args, "point_masses", None) is not None:
         masses, positions = _point_masses_from_csv(args.point_masses)
-        return Body.from_point_masses(masses, positions, name=name or args.point_masses)
+        return _flattened(
+            Body.from_point_masses, args, masses, positions, name=name or args.point_masses
+        )
     if getattr(args, "mesh", None) is not None:
-        return Body.from_mesh(args.mesh, density=args.density, name=name or args.mesh)
+        return _flattened(
+            Body.from_mesh, args, args.mesh, density=args.density, name=name or args.mesh
+        )
     if getattr(args, "rotational_constants", None) is not None:
-        import warnings
-
-        from ..bodies import InertialDefectWarning
-
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", InertialDefectWarning)
-            body = Body.from_rotational_constants(
-                *args.rotational_constants,
-                unit=args.unit,
-                defect=args.defect,
-                name=name
-                or "rotational-constants({:g}, {:g}, {:g})".format(*args.rotational_constants),
-            )
-        for warning in caught:
-            print(f"orbits: warning: {warning.message}", file=sys.stderr)
-        return body
+        return _flattened(
+            Body.from_rotational_constants,
+            args,
+            *args.rotational_constants,
+            unit=args.constants_unit,
+            name=name
+            or "rotational-constants({:g}, {:g}, {:g})".format(*args.rotational_constants),
+        )
     return None
+
+
+def _flattened(constructor, args, *values, **options):
+    """A measured body built with ``--defect``; the excess removed is reported on stderr.
+
+    Measured moments (point masses, meshes, rotational constants) may lie a
+    hair past the flat limit ``I3 = I1 + I2``: ``--defect flatten`` puts the
+    body on it (the constructor's ``defect="flatten"``) and its warning,
+    which gives the excess, is printed as one line.
+    """
+    import warnings
+
+    if args.defect != "error":
+        options["defect"] = args.defect
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", UserWarning)
+        body = constructor(*values, **options)
+    for warning in caught:
+        print(f"orbits: warning: {warning.message}", file=sys.stderr)
+    return body
 
 
 def body_from_args(args):

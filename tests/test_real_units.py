@@ -1,0 +1,282 @@
+"""Real units end to end (issue #21): nearest closed orbits of a real spin,
+asteroids by their periods, real-time animations, the notebook reprs."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import orbits
+from orbits import Body, Motion
+from orbits.cli import main
+
+RPM = 2.0 * math.pi / 60.0
+PHONE_THROW_RPM = (120.0, 2.0, 1.0)
+
+
+def phone():
+    return Body.box(0.071, 0.147, 0.0078, 0.17, name="phone")
+
+
+def euler_rhs(moments):
+    i1, i2, i3 = moments
+
+    def rhs(t, w):
+        return [
+            (i2 - i3) / i1 * w[1] * w[2],
+            (i3 - i1) / i2 * w[2] * w[0],
+            (i1 - i2) / i3 * w[0] * w[1],
+        ]
+
+    return rhs
+
+
+def check_nearest_rows(body, frame, throw_rpm, q_max):
+    """Each row's spin fed back to Motion.from_omega: 2 pi n/q, period_s, the throw's |L|."""
+    principal_throw = body.frame @ (np.array(throw_rpm) * RPM)
+    throw_momentum = float(np.linalg.norm(body.moments * principal_throw))
+    for row in frame.itertuples():
+        own = np.array([row.omega_x, row.omega_y, row.omega_z]) * RPM
+        principal = body.frame @ own
+        motion = Motion.from_omega(body, principal)
+        target = 2.0 * math.pi * row.n / row.q
+        assert row.q <= q_max
+        assert abs(motion.total_phase() - target) <= 1e-9 * target
+        # the period two ways: the closed form, and the unit catalog's period
+        # (|I| = 1, momentum M_u) scaled to the body's |I| and the throw's |L|:
+        # Euler's equations give T = T_u |I| M_u / |L| on the same orbit
+        assert motion.period == pytest.approx(row.period_s, rel=1e-9)
+        scale = np.linalg.norm(body.moments) * row.momentum / throw_momentum
+        assert row.period * scale == pytest.approx(row.period_s, rel=1e-9)
+        # ... and Euler's equations integrated over period_s bring omega back
+        solution = solve_ivp(
+            euler_rhs(body.moments),
+            (0.0, row.period_s),
+            principal,
+            method="DOP853",
+            rtol=1e-13,
+            atol=1e-13 * np.linalg.norm(principal),
+        )
+        back = solution.y[:, -1]
+        assert np.linalg.norm(back - principal) <= 1e-6 * np.linalg.norm(principal)
+        # |L| two ways: the Motion's, and |I omega| of the row's spin
+        assert motion.momentum == pytest.approx(throw_momentum, rel=1e-12)
+        assert np.linalg.norm(body.moments * principal) == pytest.approx(throw_momentum, rel=1e-12)
+
+
+def test_phone_throw_nearest_three_closed_orbits(tmp_path):
+    out = tmp_path / "near.csv"
+    argv = ["catalog", "--box", "0.071", "0.147", "0.0078", "--mass", "0.17"]
+    argv += ["--omega", *map(str, PHONE_THROW_RPM), "--units", "rpm", "--nearest", "3"]
+    assert main([*argv, "--out", str(out)]) == 0
+    frame = orbits.read_catalog(out)
+    assert len(frame) == 3
+    assert list(frame.columns[-4:]) == ["omega_x", "omega_y", "omega_z", "period_s"]
+    check_nearest_rows(phone(), frame, PHONE_THROW_RPM, q_max=1)
+    # the throw is on LAM with total phase 5.52 turns: the nearest are n = 6, 5, 7
+    assert frame["branch"].tolist() == ["LAM"] * 3
+    assert frame["n"].tolist() == [6, 5, 7]
+
+
+def test_nearest_orbits_python_rational_ranked():
+    body = phone()
+    frame = orbits.nearest_orbits(body, PHONE_THROW_RPM, 4, q_max=3, units="rpm")
+    check_nearest_rows(body, frame, PHONE_THROW_RPM, q_max=3)
+    spin = Motion.from_omega(body, body.frame @ (np.array(PHONE_THROW_RPM) * RPM))
+    distance = np.abs(frame["total_phase"].to_numpy() - spin.total_phase())
+    assert np.all(np.diff(distance) >= 0.0)
+    # no orbit of the full search up to the farthest level is nearer and left out
+    full = orbits.closed_orbits(body, n_max=8, q_max=3)
+    full = full[full["branch"] == spin.branch]
+    others = np.abs(full["total_phase"].to_numpy() - spin.total_phase())
+    assert np.sort(others)[:4] == pytest.approx(distance, rel=1e-12)
+
+
+def test_nearest_orbits_refuses_bad_input():
+    with pytest.raises(orbits.InputError, match="unknown angular-velocity unit"):
+        orbits.nearest_orbits(phone(), PHONE_THROW_RPM, 3, units="rps")
+    with pytest.raises(orbits.AngleError):
+        orbits.nearest_orbits(phone(), (1.0, np.nan, 0.0), 3)
+    assert main(["catalog", "--preset", "fig6", "--nearest", "2", "--out", "-"]) == 2
+
+
+# --------------------------------------------------------------- asteroids by their periods
+APOPHIS = ("--moments", "0.61", "0.965", "1")
+
+
+def test_apophis_from_its_periods(capsys):
+    import io
+
+    import pandas as pd
+
+    argv = ["phase", *APOPHIS, "--periods", "263", "27.38", "--time-unit", "h", "--csv"]
+    assert main(argv) == 0
+    table = pd.read_csv(io.StringIO(capsys.readouterr().out))
+    sam = table[table["branch"] == "SAM"].iloc[0]
+    # Pravec et al. (2014): E/E0 = 1.024 for Apophis on SAM
+    assert round(sam["E_over_E0"], 4) == 1.0236
+    assert sam["P_psi"] == pytest.approx(263.0, rel=1e-12)
+    assert sam["P_phi"] == pytest.approx(27.38, rel=1e-9)
+    # E/E0 a second way: 2 E I3 / M^2 from the printed spin vector itself
+    body = Body((0.61, 0.965, 1.0))
+    w = sam[["w1", "w2", "w3"]].to_numpy(dtype=float)
+    two_e = float(np.sum(body.moments * w * w))
+    m_sq = float(np.sum((body.moments * w) ** 2))
+    assert two_e * 1.0 / m_sq == pytest.approx(sam["E_over_E0"], rel=1e-12)
+    # the period ratio a second way: the closed-form total phase (cel), SAM
+    total = orbits.total_phase(body, dtheta=sam["dtheta"])
+    assert total / (2 * math.pi) + 1.0 == pytest.approx(263.0 / 27.38, rel=1e-10)
+    # and the rotation period: T = P_psi at |omega0| in rad/h
+    assert Motion.from_omega(body, w).period == pytest.approx(263.0, rel=1e-12)
+    # the text table names the units of the periods and the frame of omega
+    assert main(["phase", *APOPHIS, "--periods", "263", "27.38", "--time-unit", "h"]) == 0
+    text = capsys.readouterr().out
+    assert "P_psi        [h]" in text and "[rad/h, principal axes I1<I2<I3]" in text
+
+
+def test_periods_in_other_units_agree():
+    hours = orbits.spins_with_periods((0.61, 0.965, 1.0), 263.0, 27.38)
+    days = orbits.spins_with_periods((0.61, 0.965, 1.0), 263.0 / 24, 27.38 / 24)
+    assert days["E_over_E0"].to_numpy() == pytest.approx(hours["E_over_E0"].to_numpy(), 1e-12)
+    assert 24 * days["P_about_L"].to_numpy() == pytest.approx(hours["P_about_L"].to_numpy())
+
+
+def test_time_unit_needs_periods(capsys):
+    assert main(["phase", *APOPHIS, "--theta", "0.3", "--time-unit", "h"]) == 2
+    assert "--time-unit applies to --periods" in capsys.readouterr().err
+
+
+# --------------------------------------------------------------- units and words
+def test_constants_unit_and_deprecated_unit(capsys):
+    water = ("--rotational-constants", "835840.3", "435351.7", "278138.7")
+    argv = ["phase", *water, "--defect", "flatten", "--theta", "0.3", "--csv"]
+    assert main([*argv, "--constants-unit", "MHz"]) == 0
+    new = capsys.readouterr()
+    assert "deprecated" not in new.err
+    assert main([*argv, "--unit", "MHz"]) == 0
+    old = capsys.readouterr()
+    assert old.out == new.out
+    notes = [line for line in old.err.splitlines() if "deprecated" in line]
+    assert notes == [
+        "orbits: note: --unit is deprecated; use --constants-unit (the unit of "
+        "--rotational-constants; --units is the unit of a spin)"
+    ]
+
+
+def test_phase_omega_prints_units_frame_and_flip(capsys):
+    argv = ["phase", "--box", "0.071", "0.147", "0.0078", "--mass", "0.17"]
+    assert main([*argv, "--omega", "120", "2", "1", "--units", "rpm"]) == 0
+    text = capsys.readouterr().out
+    lines = {line.split()[0]: line for line in text.splitlines() if line.strip()}
+    assert "[rad/s, principal axes I1<I2<I3]" in lines["w2"]
+    assert "[J s]" in lines["momentum"] and "[s]" in lines["period"]
+    period = float(lines["period"].split()[-1])
+    assert f"every T/2 = {0.5 * period:.6g} s" in text and "flip" in text
+    # a spin far from I2: no flip claimed
+    assert main([*argv, "--omega", "0", "0", "100", "--units", "rpm"]) == 0
+    assert "no flip is seen" in capsys.readouterr().out
+
+
+def test_singular_and_plural(capsys, tmp_path):
+    out = str(tmp_path / "c.csv")
+    assert main(["catalog", "--preset", "fig6", "--n-max", "3", "--out", out]) == 0
+    err = capsys.readouterr().err
+    assert "of 1 body written" in err and "body(ies)" not in err
+
+
+# --------------------------------------------------------------- flat limit of measured bodies
+@pytest.mark.parametrize("option", ["--point-masses", "--mesh"])
+def test_measured_bodies_pass_defect_flatten(option, tmp_path, capsys, monkeypatch):
+    """``--defect flatten`` reaches the constructor as ``defect="flatten"`` and its
+    warning (the excess removed) is printed as one line; the default passes none."""
+    import warnings
+
+    calls = []
+
+    def fake(*args, **options):
+        calls.append(options.get("defect"))
+        if options.get("defect") == "flatten":
+            warnings.warn(
+                "excess 0.13 % of I3 removed: I3 set to I1 + I2 (flat body)", stacklevel=2
+            )
+        return Body((1.0, 2.0, 3.0))
+
+    name = "from_point_masses" if option == "--point-masses" else "from_mesh"
+    monkeypatch.setattr(Body, name, fake)
+    path = tmp_path / "masses.csv"
+    path.write_text("mass,x,y,z\n1,1,0,0\n1,-1,0,0\n2,0,0.5,0\n2,0,-0.5,0.1\n")
+    argv = ["phase", option, str(path), "--theta", "0.3", "--csv"]
+    assert main(argv) == 0
+    assert main([*argv, "--defect", "flatten"]) == 0
+    assert calls == [None, "flatten"]
+    err = capsys.readouterr().err
+    assert err.count("orbits: warning: excess 0.13 % of I3 removed") == 1
+
+
+# --------------------------------------------------------------- a real throw, animated
+def test_phone_throw_animates_in_real_time(tmp_path, capsys):
+    from PIL import Image
+
+    out = tmp_path / "throw.gif"
+    argv = ["animate", "--box", "0.071", "0.147", "0.0078", "--mass", "0.17"]
+    argv += ["--omega", *map(str, PHONE_THROW_RPM), "--units", "rpm", "--fps", "4"]
+    assert main([*argv, "--out", str(out)]) == 0
+    body = phone()
+    motion = Motion.from_omega(body, body.frame @ (np.array(PHONE_THROW_RPM) * RPM))
+    frames = round(motion.period * 4) + 1  # one period T = 2.337 s at 4 frames/s
+    with Image.open(out) as image:
+        assert image.size[0] >= 960
+        assert image.n_frames == frames
+        assert image.info["duration"] == 250  # ms per frame: real time at 4 frames/s
+    err = capsys.readouterr().err
+    assert f"over {motion.period:.4g} s = 1 period at 4 frames/s (real time)" in err
+
+
+def test_real_time_library_and_clock():
+    from orbits import animate
+
+    body = phone()
+    motion = Motion.from_omega(body, body.frame @ (np.array(PHONE_THROW_RPM) * RPM))
+    drawn = animate.poinsot_animation(motion, seconds=1.0, fps=5, dpi=20)
+    assert len(drawn.times) == 6 and drawn.times[-1] == pytest.approx(1.0, rel=1e-15)
+    drawn.frame(5)
+    assert drawn._clock.get_text() == f"t = 1.000 s = {1.0 / motion.period:.3f} T"
+    assert drawn.figure.get_size_inches()[0] * animate.DEFAULT_DPI >= 960
+    with pytest.raises(orbits.InputError, match="not both"):
+        animate.poinsot_animation(motion, seconds=1.0, frames=5)
+
+
+# --------------------------------------------------------------- notebooks
+def test_html_reprs_carry_units():
+    body = phone()
+    html = body._repr_html_()
+    assert "phone" in html and "kg m^2" in html and "7.227606667e-05" in html
+    motion = Motion.from_omega(body, body.frame @ (np.array(PHONE_THROW_RPM) * RPM))
+    html = motion._repr_html_()
+    assert "LAM" in html and f"{motion.period:.10g}" in html and "J s" in html
+    assert f"{motion.total_phase():.10g}" in html and "principal axes" in html
+    periods = motion.tumbling_periods()
+    assert f"{periods.precession:.10g}" in periods._repr_html_()
+    assert isinstance(periods, tuple) and periods.rotation == motion.period
+    limits = orbits.phase_limits(body)
+    assert f"{limits.theta_zero:.10g}" in limits._repr_html_() and "rad" in limits._repr_html_()
+    report = orbits.verify(n_bodies=2, n_angles=2)
+    assert repr(report).startswith("VerifyReport(passed=True, 4 initial conditions")
+    assert "passed" in report._repr_html_()
+
+
+def test_animation_html_shown_once():
+    import matplotlib.pyplot as plt
+
+    body = phone()
+    motion = Motion.from_omega(body, body.frame @ (np.array(PHONE_THROW_RPM) * RPM))
+    drawn = orbits.poinsot_animation(motion, frames=3, dpi=20, pyplot=True)
+    number = drawn.figure.number
+    assert plt.fignum_exists(number)
+    html = drawn._repr_html_()
+    assert "<script" in html and "animation" in html.lower()
+    assert not plt.fignum_exists(number)  # no second, static figure below the player
+    assert {"poinsot_animation", "PoinsotAnimation", "flip_motion", "orbit_row"} <= set(
+        orbits.__all__
+    )
