@@ -47,6 +47,8 @@ def _cmd_animate(args):
         )
     if args.q is not None and args.p is None:
         raise InputError("orbits animate: --q needs --p")
+    if "units" in getattr(args, "given", ()) and args.omega is None and args.speed is None:
+        raise InputError("--units applies to --omega and --speed, and neither was given")
     if args.speed is not None and (args.omega is not None or args.n or args.p):
         raise InputError("orbits animate: --speed applies to --theta, --dtheta and --flip")
     if args.seconds is not None and (args.frames is not None or args.periods is not None):

@@ -64,13 +64,19 @@ class Parser(argparse.ArgumentParser):
             for action, default in saved.items():
                 action.default = default
         given = set(getattr(namespace, "given", ()))
+        # judged before any default is filled in: two spellings of one option
+        # (--unit, kept for --constants-unit) share a destination
+        typed = {
+            action.dest
+            for action in saved
+            if getattr(namespace, action.dest, _NOT_GIVEN) is not _NOT_GIVEN
+        }
+        given |= typed
         for action, default in saved.items():
-            if getattr(namespace, action.dest, _NOT_GIVEN) is _NOT_GIVEN:
+            if action.dest not in typed and getattr(namespace, action.dest) is _NOT_GIVEN:
                 if isinstance(default, str):
                     default = self._get_value(action, default)  # as argparse does
                 setattr(namespace, action.dest, default)
-            else:
-                given.add(action.dest)
         namespace.given = given
         return namespace, extras
 
@@ -465,13 +471,16 @@ def progress_bar(total, description, enabled=None, unit="orbit"):
 # "sample" is verify's region sample, chosen by giving no body option.
 SINGLE_BODIES = BODY_SELECTORS
 SELECTORS = {
-    "phase": (SINGLE_BODIES, ("theta", "dtheta", "omega", "total_phase", "period_ratio")),
-    "catalog": (SINGLE_BODIES + ("bodies",), ()),
+    "phase": (
+        SINGLE_BODIES,
+        ("theta", "dtheta", "omega", "total_phase", "period_ratio", "periods"),
+    ),
+    "catalog": (SINGLE_BODIES + ("bodies",), ("omega",)),
     "figures": (SINGLE_BODIES + ("paper", "survey"), ()),
     "survey": (("resolution", "bodies", "check"), ()),
     "verify": (SINGLE_BODIES, ()),
     "bench": ((), ()),
-    "animate": (SINGLE_BODIES, ("theta", "dtheta", "n", "p", "flip")),
+    "animate": (SINGLE_BODIES, ("theta", "dtheta", "n", "p", "flip", "omega")),
 }
 # what a command works on when none of its body selectors is given (a
 # command not listed reports the missing body itself)
@@ -500,7 +509,9 @@ class Applies:
         The subcommands that have the option (argparse refuses it elsewhere).
     bodies, spins : frozenset of str or None
         The body and spin selectors (dest names of :data:`SELECTORS`, or
-        ``"sample"``) it applies to; None: every one.
+        ``"sample"``) it applies to; None: every one.  ``spins`` may also be
+        a dict from subcommand to such a set, for an option whose meaning
+        differs between subcommands.
     """
 
     __slots__ = ("commands", "bodies", "spins")
@@ -510,6 +521,10 @@ class Applies:
 
     def __repr__(self):
         return f"Applies({self.commands!r}, bodies={self.bodies!r}, spins={self.spins!r})"
+
+    def spins_for(self, command):
+        """The spin selectors the option applies to in ``command`` (None: every one)."""
+        return self.spins.get(command) if isinstance(self.spins, dict) else self.spins
 
 
 # Every option that is not itself a selector, and where it applies.  A new
@@ -523,15 +538,31 @@ APPLIES = {
     "--name": Applies(BODY_COMMANDS, bodies=_only(*SINGLE_BODIES)),
     "--mass": Applies(BODY_COMMANDS, bodies=_only("box", "cylinder")),
     "--density": Applies(BODY_COMMANDS, bodies=_only("mesh")),
-    "--unit": Applies(BODY_COMMANDS, bodies=_only("rotational_constants")),
-    "--defect": Applies(BODY_COMMANDS, bodies=_only("rotational_constants")),
+    # (the deprecated spelling --unit has the same dest, so the same rule)
+    "--constants-unit": Applies(BODY_COMMANDS, bodies=_only("rotational_constants")),
+    "--defect": Applies(
+        BODY_COMMANDS, bodies=_only("rotational_constants", "point_masses", "mesh")
+    ),
     "--skip-invalid": Applies(("catalog", "survey"), bodies=_only("bodies")),
     # verify --bodies N: the size of the region sample (a selector elsewhere)
     "--bodies": Applies(("verify",), bodies=_only("sample")),
     # ---- spin modifiers
     "--phi": Applies(("phase", "animate"), spins=_only("theta", "dtheta")),
     "--degrees": Applies(("phase",), spins=_only("theta", "dtheta", "total_phase")),
-    "--units": Applies(("phase",), spins=_only("omega")),
+    # animate: --omega, or the --speed of --theta, --dtheta and --flip (the
+    # command refuses --units with neither --omega nor --speed)
+    "--units": Applies(
+        ("phase", "catalog", "animate"),
+        spins={
+            "phase": _only("omega"),
+            "catalog": _only("omega"),
+            "animate": _only("omega", "theta", "dtheta", "flip"),
+        },
+    ),
+    "--time-unit": Applies(("phase",), spins=_only("periods")),
+    "--nearest": Applies(("catalog",), bodies=_only(*SINGLE_BODIES), spins=_only("omega")),
+    "--speed": Applies(("animate",), spins=_only("theta", "dtheta", "flip")),
+    "--seconds": Applies(("animate",)),
     "--q": Applies(("animate",), spins=_only("p")),
     "--branch": Applies(("animate",), spins=_only("n", "p")),
     # ---- searches and outputs
@@ -635,7 +666,7 @@ def check_arguments(args):
         rule = APPLIES.get(option)
         if rule is None:
             continue  # tests/test_cli_applicability.py keeps this from happening
-        for selected, allowed in ((body, rule.bodies), (spin, rule.spins)):
+        for selected, allowed in ((body, rule.bodies), (spin, rule.spins_for(command))):
             if selected is not None and allowed is not None and selected not in allowed:
                 raise InputError(
                     f"{option} applies to {_targets(allowed, command)}, not to {_label(selected)}"

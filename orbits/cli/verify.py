@@ -113,7 +113,7 @@ def add_parser(subparsers):
         if action.dest in BODY_SELECTORS or action.dest in (
             "mass",
             "density",
-            "unit",
+            "constants_unit",
             "defect",
             "name",
         ):
