@@ -7,6 +7,8 @@ that the table prints the check.
 
 import math
 
+import pytest
+
 from orbits import bench
 
 
@@ -81,3 +83,24 @@ def test_load_check_stops_the_busy_process_on_error(monkeypatch):
     except KeyboardInterrupt:
         pass
     assert len(started) == 1 and started[0].poll() is not None
+
+
+def test_bench_device_cuda_without_a_gpu_is_one_line(capsys):
+    """``orbits bench --device cuda`` with no usable GPU: exit 2, one line, no timing."""
+    from orbits.cli import main
+    from orbits.device import cuda_kernels
+    from orbits.errors import DeviceError
+
+    try:
+        cuda_kernels()
+    except DeviceError:
+        pass
+    else:
+        pytest.skip("a GPU is usable here")
+    assert main(["bench", "--device", "cuda", "--only", "cuda_phase"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("orbits: error: "), err
+    # the CPU rows are not GPU rows: the names are checked against the device's table
+    assert main(["bench", "--device", "cuda", "--only", "phase"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "known: cuda_phase, cuda_search" in err[0], err

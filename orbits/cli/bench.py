@@ -6,13 +6,16 @@ from ..errors import InputError
 def _cmd_bench(args):
     from .. import bench
 
-    unknown = set(args.only or ()) - set(bench.BENCHMARKS)
+    known = bench.CUDA_BENCHMARKS if args.device == "cuda" else bench.BENCHMARKS
+    unknown = set(args.only or ()) - set(known)
     if unknown:
         raise InputError(
-            f"unknown benchmark(s): {', '.join(sorted(unknown))}; "
-            f"known: {', '.join(bench.BENCHMARKS)}"
+            f"unknown benchmark(s) for --device {args.device}: {', '.join(sorted(unknown))}; "
+            f"known: {', '.join(known)}"
         )
-    report = bench.run(args.only, quick=args.quick, load=not args.no_load_check)
+    report = bench.run(
+        args.only, quick=args.quick, load=not args.no_load_check, device=args.device
+    )
     print(bench.to_json(report) if args.json else bench.format_table(report))
     return 0
 
@@ -36,6 +39,14 @@ def add_parser(subparsers):
         "--quick",
         action="store_true",
         help="smaller problem sizes (a smoke test, not for the README)",
+    )
+    parser.add_argument(
+        "--device",
+        choices=["cpu", "cuda"],
+        default="cpu",
+        help="cpu (default): our kernels against SciPy; cuda: the same kernels on "
+        "an NVIDIA GPU (needs orbits[cuda]) against the CPU path, in angles/s "
+        "and bodies/s, the GPU named",
     )
     parser.add_argument(
         "--no-load-check",

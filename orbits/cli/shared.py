@@ -586,6 +586,7 @@ APPLIES = {
     "--no-progress": Applies(("verify",)),
     "--only": Applies(("bench",)),
     "--quick": Applies(("bench",)),
+    "--device": Applies(("bench",)),
     "--no-load-check": Applies(("bench",)),
     "--periods": Applies(("animate",)),
     "--frames": Applies(("animate",)),
