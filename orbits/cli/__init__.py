@@ -238,7 +238,10 @@ def main(argv=None):
 
             set_num_threads(args.threads)
         announce_compilation()
-        return args.run(args)
+        code = args.run(args)
+        for note in getattr(args, "notes", ()):
+            print(f"orbits: note: {note}", file=sys.stderr)
+        return code
     except KeyboardInterrupt:
         print("orbits: interrupted; no partial output was written", file=sys.stderr)
         return EXIT_INTERRUPTED

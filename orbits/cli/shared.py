@@ -265,14 +265,20 @@ CONSTANTS_UNITS = ["cm-1", "MHz", "GHz"]
 
 
 class _DeprecatedUnit(argparse.Action):
-    """``--unit``: the old name of ``--constants-unit`` (works, with a note on stderr)."""
+    """``--unit``: the old name of ``--constants-unit`` (works, with a note on stderr).
+
+    The note is kept in ``namespace.notes`` and printed by
+    :func:`orbits.cli.main` after a successful run, so that a refusal stays
+    one line.
+    """
 
     def __call__(self, parser, namespace, values, option_string=None):
-        print(
-            "orbits: note: --unit is deprecated; use --constants-unit (the unit of "
-            "--rotational-constants; --units is the unit of a spin)",
-            file=sys.stderr,
+        notes = list(getattr(namespace, "notes", ()))
+        notes.append(
+            "--unit is deprecated; use --constants-unit (the unit of "
+            "--rotational-constants; --units is the unit of a spin)"
         )
+        namespace.notes = notes
         setattr(namespace, self.dest, values)
 
 
