@@ -181,3 +181,19 @@ def test_a_kill_while_several_chunks_are_in_flight(tmp_path):
     for table in ("bodies", "orbits"):
         for path in sorted((reference / table).iterdir()):
             assert (target / table / path.name).read_bytes() == path.read_bytes()
+
+
+def test_the_command_line_chooses_the_layout(tmp_path, capsys):
+    for columns in ("all", "compact"):
+        out = tmp_path / columns
+        argv = ["survey", "--resolution", "8", "--n-max", "3", "--columns", columns]
+        assert main([*argv, "--out", str(out)]) == 0
+        assert load_manifest(out)["parameters"]["columns"] == columns
+    assert load_manifest(tmp_path / "compact")["parameters"] == {
+        **load_manifest(tmp_path / "all")["parameters"],
+        "columns": "compact",
+    }
+    capsys.readouterr()
+    assert main(["survey", "--check", str(tmp_path / "all"), "--columns", "all"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "not --columns" in err[0]
