@@ -434,6 +434,144 @@ def bench_cold_compile():
     }
 
 
+def _survey_command_wall(resolution, n_max, cpus, extra=()):
+    """Wall seconds of one whole ``orbits survey`` command pinned to ``cpus``.
+
+    The child runs on exactly those CPUs (as ``taskset -c``), in a fresh
+    interpreter (start-up, grid, search, tables, files, report), into a new
+    temporary directory; returns ``(wall, bodies, bytes on disk)``.
+    """
+    import shutil
+    import subprocess
+    import sys
+    import tempfile
+
+    directory = tempfile.mkdtemp(prefix="orbits-bench-")
+    out = os.path.join(directory, "s")
+    argv = [sys.executable, "-m", "orbits", "survey", "--resolution", str(resolution)]
+    argv += ["--n-max", str(n_max), "--json", "--out", out, *extra]
+    env = dict(os.environ, PYTHONPATH=os.path.dirname(os.path.dirname(__file__)))
+    try:
+        start = time.perf_counter()
+        done = subprocess.run(
+            argv,
+            check=True,
+            env=env,
+            stdin=subprocess.DEVNULL,
+            capture_output=True,
+            text=True,
+            preexec_fn=lambda: os.sched_setaffinity(0, cpus),
+        )
+        wall = time.perf_counter() - start
+        size = sum(
+            os.path.getsize(os.path.join(root, name))
+            for root, _, names in os.walk(out)
+            for name in names
+        )
+        return wall, json.loads(done.stdout)["bodies"], size
+    finally:
+        shutil.rmtree(directory, ignore_errors=True)
+
+
+def bench_survey_scaling(resolution=500, n_max=30, repeats=1):
+    """Whole-command ``orbits survey`` on one CPU and on every CPU it may use.
+
+    Issue #18's target: two CPUs >= 1.7x one (``taskset -c 0`` against
+    ``taskset -c 0,1``).  The speedup column is one CPU's time over all
+    CPUs' time.
+    """
+    cpus = sorted(os.sched_getaffinity(0))
+    one = min(_survey_command_wall(resolution, n_max, {cpus[0]})[0] for _ in range(repeats))
+    runs = [_survey_command_wall(resolution, n_max, set(cpus)) for _ in range(repeats)]
+    wall, bodies, size = min(runs)
+    return {
+        "task": f"orbits survey, grid {resolution}, n <= {n_max}: {len(cpus)} CPUs vs 1",
+        "ours_s": wall,
+        "baseline": "the same command pinned to one CPU",
+        "baseline_s": one,
+        "speedup": one / wall,
+        "bodies_per_s": bodies / wall,
+        "bytes_per_body": size / bodies,
+        "note": f"{bodies} bodies: {bodies / wall:.0f} bodies/s on CPUs {cpus}, "
+        f"{bodies / one:.0f} on CPU {cpus[0]}; {size / bodies:.0f} bytes per body "
+        "(whole command: start-up, search, tables, files, report)",
+    }
+
+
+def bench_survey_threads(resolution=300, n_max=30):
+    """The same survey in-process on one numba thread and on all of them."""
+    import shutil
+    import tempfile
+
+    from .survey import Survey
+    from .threads import get_num_threads, set_num_threads
+
+    def once(threads):
+        directory = tempfile.mkdtemp(prefix="orbits-bench-")
+        before = get_num_threads()
+        try:
+            set_num_threads(threads)
+            start = time.perf_counter()
+            survey = Survey.grid(os.path.join(directory, "s"), resolution, n_max)
+            survey.run()
+            return time.perf_counter() - start, survey.moments.shape[0]
+        finally:
+            set_num_threads(before)
+            shutil.rmtree(directory, ignore_errors=True)
+
+    top = numba.config.NUMBA_NUM_THREADS
+    once(top)  # compile and warm the caches first
+    single, bodies = once(1)
+    every, _ = once(top)
+    return {
+        "_ours": (lambda: once(top), 1),
+        "task": f"survey {bodies} bodies, n <= {n_max}: {top} threads vs 1",
+        "ours_s": every,
+        "baseline": "the same survey on one numba thread (one table thread)",
+        "baseline_s": single,
+        "speedup": single / every,
+        "bodies_per_s": bodies / every,
+        "note": f"{bodies / every:.0f} bodies/s on {top} threads, "
+        f"{bodies / single:.0f} on one (search, tables, files, ledger, report)",
+    }
+
+
+def bench_survey_bytes(resolution=300, n_max=30):
+    """Bytes per body on disk: the compact layout (default) against ``columns="all"``."""
+    import shutil
+    import tempfile
+
+    from .survey import Survey
+
+    sizes, times = {}, {}
+    for columns in ("compact", "all"):
+        directory = tempfile.mkdtemp(prefix="orbits-bench-")
+        try:
+            start = time.perf_counter()
+            survey = Survey.grid(os.path.join(directory, "s"), resolution, n_max, columns=columns)
+            survey.run()
+            times[columns] = time.perf_counter() - start
+            sizes[columns] = sum(
+                os.path.getsize(os.path.join(root, name))
+                for root, _, names in os.walk(directory)
+                for name in names
+            )
+        finally:
+            shutil.rmtree(directory, ignore_errors=True)
+    bodies = survey.moments.shape[0]
+    return {
+        "task": f"survey bytes per body, n <= {n_max} (grid {resolution}), Parquet",
+        "ours_s": times["compact"],
+        "baseline": "the same survey with every catalog column (--columns all)",
+        "baseline_s": times["all"],
+        "speedup": times["all"] / times["compact"],
+        "bytes_per_body": sizes["compact"] / bodies,
+        "baseline_bytes_per_body": sizes["all"] / bodies,
+        "note": f"{sizes['compact'] / bodies:.0f} bytes per body compact (target <= 1,200), "
+        f"{sizes['all'] / bodies:.0f} with every column; {bodies} bodies",
+    }
+
+
 BENCHMARKS = {
     "startup": bench_startup,
     "cold_compile": bench_cold_compile,
@@ -446,6 +584,9 @@ BENCHMARKS = {
     "search": bench_search,
     "search_evaluations": bench_search_evaluations,
     "survey": bench_survey,
+    "survey_scaling": bench_survey_scaling,
+    "survey_threads": bench_survey_threads,
+    "survey_bytes": bench_survey_bytes,
 }
 
 
@@ -633,7 +774,7 @@ def run(names=None, quick=False, load=True, device="cpu"):
         kwargs = {}
         if quick and name in ("phase", "motion_rate"):
             kwargs = {"points": 100_000}
-        if quick and name == "survey":
+        if quick and name in ("survey", "survey_scaling", "survey_threads", "survey_bytes"):
             kwargs = {"resolution": 60}
         if quick and name == "startup":
             kwargs = {"repeats": 2}

@@ -26,7 +26,9 @@ def _cmd_survey(args):
         raise InputError("--skip-invalid applies to a --bodies file")
     if args.scheduler is not None and not args.scheduler.strip():
         raise InputError("--scheduler is empty; give tcp://HOST:PORT")
-    options = dict(q_max=args.q_max, fmt=args.format, chunk=args.chunk)
+    options = dict(
+        q_max=args.q_max, fmt=args.format, chunk=args.chunk, columns=args.columns or "compact"
+    )
     from ..survey import survey_estimate
 
     announced = False
@@ -110,7 +112,7 @@ def _check_survey_directory(args, check_survey):
 
     given = [
         name
-        for name in ("resolution", "bodies", "n_max", "scheduler", "out")
+        for name in ("resolution", "bodies", "n_max", "scheduler", "out", "columns")
         if getattr(args, name) is not None
     ]
     if given:
@@ -190,6 +192,14 @@ def add_parser(subparsers):
     )
     parser.add_argument(
         "--chunk", type=positive_int, default=20_000, help="bodies per chunk (default 20000)"
+    )
+    parser.add_argument(
+        "--columns",
+        choices=["compact", "all"],
+        default=None,
+        help="orbit columns kept on disk: compact (default: body, branch, n, q, "
+        "dtheta; reading the survey derives the other catalog columns, the "
+        "same bits) or all (every catalog column, about 7x the size)",
     )
     parser.add_argument(
         "--scheduler",

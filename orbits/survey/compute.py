@@ -70,12 +70,37 @@ class ChunkSearch:
         The search's per-body information (minima, widths, unreached).
     body, code, level, offset : ndarray
         One entry per root: body index in the chunk, branch (0 SAM, 1 LAM),
-        level index, ``dtheta`` (rad); by body, then by ``dtheta``.
+        level index, ``dtheta`` (rad); by body, then by ``dtheta``.  Made
+        on first use (:func:`chunk_tables`, on the thread that builds the
+        tables) from the search's per-body arrays.
     """
 
-    def __init__(self, moments, p, q, levels, info, rows):
+    def __init__(self, moments, p, q, levels, info, per_body):
         self.moments, self.p, self.q, self.levels, self.info = moments, p, q, levels, info
-        self.body, self.code, self.level, self.offset = rows
+        self._per_body = per_body
+        self._rows = None
+
+    def _flat(self):
+        if self._rows is None:
+            self._rows = _flatten(self.moments, self.levels, *self._per_body, self.info)
+            self._per_body = None
+        return self._rows
+
+    @property
+    def body(self):
+        return self._flat()[0]
+
+    @property
+    def code(self):
+        return self._flat()[1]
+
+    @property
+    def level(self):
+        return self._flat()[2]
+
+    @property
+    def offset(self):
+        return self._flat()[3]
 
 
 def search_chunk(moments, n_max, q_max=1):
@@ -98,8 +123,7 @@ def search_chunk(moments, n_max, q_max=1):
     offset = np.empty((count, capacity))
     found = np.empty(count, dtype=np.int64)
     _kernels.search_many(moments, levels, branch, level, offset, found, info)
-    rows = _flatten(moments, levels, branch, level, offset, found, info)
-    return ChunkSearch(moments, p, q, levels, info, rows)
+    return ChunkSearch(moments, p, q, levels, info, (branch, level, offset, found))
 
 
 def compute_chunk(moments, n_max, q_max=1, first_id=0, columns="all"):
