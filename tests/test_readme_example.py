@@ -80,7 +80,10 @@ def test_command_line_example(ran, capsys):
     words = shlex.split(bash)
     assert words[0] == "orbits"
     assert main(words[1:]) == 0
-    rows = dict(line.split(None, 1) for line in capsys.readouterr().out.splitlines())
+    # rows: name, [unit], value (issue #21: every printed quantity has its unit)
+    lines = {line.split()[0]: line for line in capsys.readouterr().out.splitlines()}
+    assert "[s]" in lines["period"] and "[kg m^2]" in lines["D"]
+    rows = {name: line.split()[-1] for name, line in lines.items()}
     motion = ran[0]["motion"]
     assert float(rows["D"]) == pytest.approx(motion.D, rel=1e-14)
     assert float(rows["period"]) == pytest.approx(motion.period, rel=1e-14)

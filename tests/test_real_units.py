@@ -59,7 +59,8 @@ def check_nearest_rows(body, frame, throw_rpm, q_max):
             atol=1e-13 * np.linalg.norm(principal),
         )
         back = solution.y[:, -1]
-        assert np.linalg.norm(back - principal) <= 1e-6 * np.linalg.norm(principal)
+        # (measured <= 1e-11 of |omega| on these rows; DOP853 at rtol 1e-13)
+        assert np.linalg.norm(back - principal) <= 1e-9 * np.linalg.norm(principal)
         # |L| two ways: the Motion's, and |I omega| of the row's spin
         assert motion.momentum == pytest.approx(throw_momentum, rel=1e-12)
         assert np.linalg.norm(body.moments * principal) == pytest.approx(throw_momentum, rel=1e-12)

@@ -48,5 +48,8 @@ orbits.verify(n_bodies=3, n_angles=2)
 
 # %%
 # The throw in motion, one period in real time (frames at 6 per second):
-# the player below is the animation's own HTML view, shown once.
-orbits.poinsot_animation(motion, seconds=motion.period, fps=6, dpi=60, pyplot=True)
+# the player below is the animation's own HTML view, shown once.  Its
+# figure is drawn off-screen (the default ``pyplot=False``), so no static
+# copy of it appears; built with ``pyplot=True``, the view closes the
+# figure once the player is made, for the same effect in Jupyter.
+orbits.poinsot_animation(motion, seconds=motion.period, fps=6, dpi=60)
