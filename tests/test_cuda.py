@@ -379,3 +379,61 @@ def test_bench_rows_under_simulator():
         assert row["device"] and row["ours_s"] > 0 and row["baseline_s"] > 0
     assert phase["angles_per_s"] > 0 and "max relative difference" in phase["note"]
     assert search["bodies_per_s"] > 0 and "root counts equal" in search["note"]
+
+
+@needs_numba_cuda
+def test_survey_cli_device_cuda_simulator_writes_the_cpu_orbits(tmp_path):
+    """``orbits survey --device cuda --resolution 10 --n-max 4`` (simulator)
+    writes the same orbits, in the same files, as the CPU run."""
+    out = _run(
+        f"""
+        import hashlib, json, sys
+        from pathlib import Path
+        from orbits.cli import main
+        from orbits.survey import read_survey
+        root = Path({str(tmp_path)!r})
+        codes = [
+            main(["survey", "--resolution", "10", "--n-max", "4", "--device", device,
+                  "--out", str(root / device)])
+            for device in ("cpu", "cuda")
+        ]
+        cpu, gpu = (read_survey(root / device) for device in ("cpu", "cuda"))
+        parts = {{}}
+        for device in ("cpu", "cuda"):
+            parts[device] = {{
+                str(p.relative_to(root / device)): hashlib.sha256(p.read_bytes()).hexdigest()
+                for p in sorted((root / device).glob("*/part-*"))
+            }}
+        print(json.dumps({{
+            "codes": codes,
+            "rows": [len(cpu[1]), len(gpu[1])],
+            "equal": bool(cpu[0].equals(gpu[0]) and cpu[1].equals(gpu[1])),
+            "parts_equal": parts["cpu"] == parts["cuda"],
+            "parts": len(parts["cpu"]),
+            "kernels_loaded": "orbits.core.cuda" in sys.modules,
+        }}))
+        """
+    )
+    assert out["codes"] == [0, 0]
+    assert out["rows"][0] == out["rows"][1] > 0
+    assert out["equal"] and out["parts_equal"] and out["parts"] >= 2
+    assert out["kernels_loaded"]  # the search did run through orbits.core.cuda
+
+
+def test_survey_device_cuda_without_a_gpu_is_one_line(tmp_path, capsys):
+    """No usable GPU: exit 2 with one line, and nothing written."""
+    from orbits.cli import main
+
+    try:
+        device_module.cuda_kernels()
+    except DeviceError:
+        pass
+    else:
+        pytest.skip("a GPU is usable here")
+    target = tmp_path / "s"
+    code = main(
+        ["survey", "--resolution", "10", "--n-max", "4", "--device", "cuda", "--out", str(target)]
+    )
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and err[0].startswith("orbits: error: "), err
+    assert not target.exists()

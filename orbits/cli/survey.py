@@ -27,7 +27,11 @@ def _cmd_survey(args):
     if args.scheduler is not None and not args.scheduler.strip():
         raise InputError("--scheduler is empty; give tcp://HOST:PORT")
     options = dict(
-        q_max=args.q_max, fmt=args.format, chunk=args.chunk, columns=args.columns or "compact"
+        q_max=args.q_max,
+        fmt=args.format,
+        chunk=args.chunk,
+        columns=args.columns or "compact",
+        device=args.device,
     )
     from ..survey import survey_estimate
 
@@ -192,6 +196,14 @@ def add_parser(subparsers):
     )
     parser.add_argument(
         "--chunk", type=positive_int, default=20_000, help="bodies per chunk (default 20000)"
+    )
+    parser.add_argument(
+        "--device",
+        choices=["cpu", "cuda"],
+        default="cpu",
+        help="where the search runs: cpu (default, every core) or cuda (an NVIDIA "
+        "GPU through numba-cuda: pip install 'orbits[cuda]'; the tables are "
+        "built and written on the CPU; not with --scheduler)",
     )
     parser.add_argument(
         "--columns",

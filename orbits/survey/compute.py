@@ -24,7 +24,7 @@ from ..limits import (
     short_number,
 )
 from ..phases import phase_limits
-from ..search import catalog_rows, phase_levels, searched
+from ..search import catalog_rows, phase_levels, search_bodies, searched
 
 BODY_COLUMNS = (
     "body",
@@ -103,8 +103,12 @@ class ChunkSearch:
         return self._flat()[3]
 
 
-def search_chunk(moments, n_max, q_max=1):
-    """Search every body of a chunk (the parallel kernel, all cores).
+def search_chunk(moments, n_max, q_max=1, device="cpu"):
+    """Search every body of a chunk (the parallel kernel, all cores, or the GPU).
+
+    ``device="cuda"`` runs the search on an NVIDIA GPU
+    (:func:`orbits.search.search_bodies`); the tables are built on the CPU
+    either way.
 
     Returns
     -------
@@ -117,6 +121,10 @@ def search_chunk(moments, n_max, q_max=1):
     keep = np.flatnonzero(searched(p, q))
     p, q, levels = p[keep], q[keep], np.ascontiguousarray(all_levels[keep])
     capacity = 2 * levels.size + 8
+    if device == "cuda":
+        rows = search_bodies(moments, levels, capacity=capacity, device="cuda")
+        branch, level, offset, found, info = rows
+        return ChunkSearch(moments, p, q, levels, info, (branch, level, offset, found))
     info = np.empty((count, _kernels.INFO_SIZE))
     branch = np.empty((count, capacity), dtype=np.int8)
     level = np.empty((count, capacity), dtype=np.int64)

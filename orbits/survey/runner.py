@@ -17,6 +17,7 @@ import numpy as np
 from .._args import integer, path_argument, real_array
 from .._version import __version__
 from ..bodies import as_moments, region_grid
+from ..device import check_device, cuda_kernels
 from ..errors import ArgumentTypeError, InputError
 from ..limits import check_resolution
 from . import compute
@@ -56,7 +57,13 @@ class Survey:
         names=None,
         skipped=(),
         columns="compact",
+        device="cpu",
     ):
+        # the search's device: results agree between devices (the last bits
+        # of dtheta may differ on a GPU), so it is no parameter of the survey
+        self.device = check_device(device)
+        if self.device == "cuda":
+            cuda_kernels()  # DeviceError now, before anything is written
         if fmt not in FORMATS:
             raise InputError(f"format must be one of {', '.join(FORMATS)}, got {fmt!r}")
         if columns not in LAYOUTS:
@@ -208,6 +215,11 @@ class Survey:
         """
         if scheduler is not None:
             _check_scheduler(scheduler)
+            if self.device == "cuda":
+                raise InputError(
+                    "device='cuda' searches on this machine's GPU; a dask scheduler's "
+                    "workers search on their CPUs: use one or the other"
+                )
         # refusals first, touching nothing: a foreign directory, another
         # survey's parameters, then an unusable scheduler
         self.ledger.refuse_foreign_directory()
@@ -270,7 +282,9 @@ class Survey:
         workers, pool, pending = None, None, set()
         try:
             for index in todo:
-                found = compute.search_chunk(self.chunk_moments(index), self.n_max, self.q_max)
+                found = compute.search_chunk(
+                    self.chunk_moments(index), self.n_max, self.q_max, device=self.device
+                )
                 if workers is None:  # numba's threading layer is known after a search
                     workers = table_workers(self.n_max, self.q_max, self.chunk)
                     if workers:
