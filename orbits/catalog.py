@@ -159,8 +159,8 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
         (:data:`orbits.CATALOG_COLUMNS`, for ``|I| = 1`` and
         ``|omega0| = 1`` as in every catalog) and :data:`NEAREST_COLUMNS`:
         ``omega_x, omega_y, omega_z``, the orbit's starting spin in the
-        body's own axes in ``units`` (``Motion.from_omega(body, body.frame @
-        omega)`` is the orbit, with the throw's ``|L|``), and ``period_s``,
+        body's own axes in ``units`` (``Motion(body, body.frame @ omega)``,
+        omega in rad/s, is the orbit, with the throw's ``|L|``), and ``period_s``,
         its period T (eqn:TK) in seconds for moments in any unit (the
         period does not depend on their scale).  ``attrs`` holds the spin's
         ``total_phase``, ``branch``, ``momentum`` (in the moments' unit
@@ -190,7 +190,8 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
     if given is None or given.shape != (3,) or not np.all(np.isfinite(given)):
         raise AngleError(f"omega must be a finite 3-vector, got {omega!r}")
     own = given * factor
-    spin = Motion.from_omega(body, body.frame @ own)
+    # the constructor takes omega along the principal axes (as from_omega)
+    spin = Motion(body, body.frame @ own)
     alpha = spin.total_phase()
     norm = float(np.linalg.norm(body.moments))
     d_spin = spin.D / norm
