@@ -20,11 +20,11 @@ phone
 
 # %%
 # The throw, in the phone's own axes (x along the 71 mm edge), in rpm;
-# :attr:`orbits.Body.frame` turns it to the principal axes ``I1 < I2 < I3``,
-# the axes ``Motion(body, omega0)`` takes.
+# ``axes="body"`` says so (:attr:`orbits.Body.frame` turns it to the
+# principal axes ``I1 < I2 < I3``).
 rpm = 2 * np.pi / 60
 throw = np.array([120.0, 2.0, 1.0]) * rpm
-motion = orbits.Motion(phone, phone.frame @ throw)
+motion = orbits.Motion.from_omega(phone, throw, axes="body")
 motion
 
 # %%
