@@ -16,13 +16,8 @@ PHONE_THROW_RPM = (120.0, 2.0, 1.0)
 
 
 def principal_motion(body, omega):
-    """``Motion.from_omega`` of a spin along the principal axes (``axes="principal"``
-    where from_omega has that keyword, to say so)."""
-    import inspect
-
-    if "axes" in inspect.signature(Motion.from_omega).parameters:
-        return Motion.from_omega(body, omega, axes="principal")
-    return Motion.from_omega(body, omega)
+    """``Motion.from_omega`` of a spin along the principal axes."""
+    return Motion.from_omega(body, omega, axes="principal")
 
 
 def phone():
