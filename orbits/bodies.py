@@ -358,25 +358,36 @@ class Body:
         return cls(moments, name=name)
 
     @classmethod
-    def from_inertia_tensor(cls, tensor, *, name=None):
+    def from_inertia_tensor(cls, tensor, *, name=None, defect="error"):
         """Body from a symmetric 3x3 inertia tensor in the caller's frame.
 
         The principal axes (eigenvectors) are kept in :attr:`frame`.
+
+        Parameters
+        ----------
+        tensor : array_like, shape (3, 3)
+        name : str, optional
+        defect : {"error", "flatten"}
+            What to do with a measured or computed body a hair beyond the
+            flat limit, ``I3 > I1 + I2`` (see :func:`remove_flat_excess`).
 
         Raises
         ------
         NonPhysicalBodyError
             Not a finite symmetric 3x3 matrix, or its eigenvalues are not
-            the moments of a rigid body.
+            the moments of a rigid body (``I3 > I1 + I2`` with
+            ``defect="error"``).
+        SymmetricTopError
+            Two eigenvalues closer than the eigen-solver's rounding
+            (:func:`symmetric_within_rounding`): a symmetric top whose
+            rounding noise would otherwise decide its phases.
+
+        Warns
+        -----
+        InertialDefectWarning
+            With ``defect="flatten"`` when the excess was removed.
         """
-        tensor = np.asarray(tensor, dtype=float)
-        if tensor.shape != (3, 3) or not np.all(np.isfinite(tensor)):
-            raise NonPhysicalBodyError("an inertia tensor must be a finite 3x3 matrix")
-        scale = np.max(np.abs(tensor))
-        if not np.allclose(tensor, tensor.T, rtol=0.0, atol=1e-12 * scale):
-            raise NonPhysicalBodyError("an inertia tensor must be symmetric")
-        values, vectors = np.linalg.eigh(0.5 * (tensor + tensor.T))
-        return cls(values, name=name, frame=vectors.T)
+        return _from_tensor(cls, tensor, name, defect, 0.0, "inertia tensor")
 
     @classmethod
     def from_semi_axes(cls, a, b, c, *, name=None):
@@ -558,7 +569,7 @@ class Body:
         return body
 
     @classmethod
-    def from_point_masses(cls, masses, positions, *, name=None):
+    def from_point_masses(cls, masses, positions, *, name=None, defect="error"):
         """Rigid set of point masses, about its centre of mass.
 
         ``I = sum_k m_k (|r_k|^2 1 - r_k r_k^T)`` with ``r_k`` measured from
@@ -570,12 +581,18 @@ class Body:
         ----------
         masses : array_like, shape (n,)
         positions : array_like, shape (n, 3)
+        defect : {"error", "flatten"}
+            As :meth:`from_inertia_tensor` (a planar set computed in
+            floating point can land a hair past ``I3 = I1 + I2``).
 
         Raises
         ------
         NonPhysicalBodyError
             Shapes that do not match, masses not positive, non-finite
             values, or collinear masses (a zero moment).
+        SymmetricTopError
+            Two moments closer than the rounding of the sums that built
+            them (e.g. three equal masses on an equilateral triangle).
         """
         masses = np.asarray(masses, dtype=float)
         positions = np.asarray(positions, dtype=float)
@@ -597,10 +614,16 @@ class Body:
                 "the point masses lie on a line: the moment about that line is "
                 "zero, which is no rigid body of this library"
             )
-        return cls.from_inertia_tensor(tensor, name=name)
+        # rounding of the construction: each entry is a sum of n products
+        # (n + 4 roundings each, relative to the sum of magnitudes), and the
+        # positions relative to the centre of mass carry eps |x| each
+        reach = np.sqrt(np.einsum("ki,ki->k", relative, relative))
+        extent = np.sqrt(np.einsum("ki,ki->k", positions, positions))
+        rounding = 4.0 * (masses.size + 4) * _EPS * float(masses @ ((reach + extent) ** 2))
+        return _from_tensor(cls, tensor, name, defect, rounding, "point masses")
 
     @classmethod
-    def from_mesh(cls, path, *, density=1.0, name=None):
+    def from_mesh(cls, path, *, density=1.0, name=None, defect="error"):
         """Uniform solid bounded by a closed triangle mesh (STL, OBJ, PLY...).
 
         Volume integrals over the mesh by trimesh (exact for the polyhedron:
@@ -609,6 +632,9 @@ class Body:
         ``density`` in kg/m^3 give kg m^2.  Needs the optional extra
         ``orbits[mesh]`` (trimesh).
 
+        ``defect`` as :meth:`from_inertia_tensor` (a thin plate's mesh can
+        land a hair past the flat limit).
+
         Raises
         ------
         InputError
@@ -616,6 +642,9 @@ class Body:
             (not watertight) or inside out.
         NonPhysicalBodyError
             ``density`` not finite and positive.
+        SymmetricTopError
+            Two moments closer than the rounding of the sums over the
+            faces that built them (e.g. a sphere or a cube as a mesh).
         """
         from .errors import InputError
 
@@ -637,7 +666,16 @@ class Body:
                 f"mesh {path} is inside out or inconsistently wound (its volume is not positive)"
             )
         mesh.density = density
-        body = cls.from_inertia_tensor(np.asarray(mesh.moment_inertia, dtype=float), name=name)
+        tensor = np.asarray(mesh.moment_inertia, dtype=float)
+        # rounding of the construction: the vertices as the file stores them
+        # (moving each by delta moves I by at most ~2 M R delta; 8 M R delta
+        # is the bound used), and one sum over the faces per entry, bounded
+        # by 16 (faces + 4) eps |I|
+        reach = float(np.max(np.linalg.norm(mesh.vertices - mesh.center_mass, axis=1)))
+        rounding = 8.0 * vertex_rounding(mesh.vertices) * float(mesh.mass) * reach + 16.0 * (
+            len(mesh.faces) + 4
+        ) * _EPS * float(np.abs(np.trace(tensor)))
+        body = _from_tensor(cls, tensor, name, defect, rounding, f"mesh {path}")
         body.shape = (
             "mesh",
             np.asarray(mesh.vertices - mesh.center_mass, dtype=float),
@@ -679,8 +717,6 @@ class Body:
         InertialDefectWarning
             With ``defect="flatten"`` when the defect was removed.
         """
-        import warnings
-
         from scipy import constants as codata
 
         factors = {"cm-1": 100.0 * codata.c, "MHz": 1e6, "GHz": 1e9}
@@ -693,31 +729,175 @@ class Body:
         values = _positive_lengths("rotational constant", A=a, B=b, C=c)
         hertz = np.sort(np.array(values)) * factors[unit]  # C <= B <= A
         i_c, i_b, i_a = codata.h / (8.0 * math.pi**2 * hertz)
-        excess = i_c - (i_a + i_b)
-        if excess > FLAT_SLACK * i_c:
-            amu_a2 = codata.physical_constants["atomic mass constant"][0] * 1e-20
-            text = (
+        amu_a2 = codata.physical_constants["atomic mass constant"][0] * 1e-20
+        i_a, i_b, i_c = remove_flat_excess(
+            i_a,
+            i_b,
+            i_c,
+            defect,
+            what=f"rotational constants ({a:.10g}, {b:.10g}, {c:.10g}) {unit}",
+            labels=("I_A", "I_B", "I_C"),
+            describe=lambda excess: (
                 f"inertial defect Delta = I_C - I_A - I_B = "
                 f"{excess / amu_a2:.6g} u A^2 ({excess / i_c:.3%} of I_C)"
-            )
-            if defect == "error":
-                raise NonPhysicalBodyError(
-                    f"rotational constants ({a:.10g}, {b:.10g}, {c:.10g}) {unit} violate "
-                    f"I_C <= I_A + I_B by the {text}; pass defect='flatten' "
-                    "(CLI: --defect flatten) to put the body on the flat edge "
-                    "I_C = I_A + I_B"
-                )
-            warnings.warn(
-                f"{text} removed: I_C set to I_A + I_B (flat body)",
-                InertialDefectWarning,
-                stacklevel=2,
-            )
-            i_c = i_a + i_b
+            ),
+            stacklevel=2,
+        )
         return cls((i_a, i_b, i_c), name=name)
 
 
 class InertialDefectWarning(UserWarning):
-    """Rotational constants whose inertial defect was removed (defect="flatten")."""
+    """A body whose excess over the flat limit was removed (``defect="flatten"``).
+
+    Rotational constants (the inertial defect of a planar molecule), point
+    masses, meshes and inertia tensors.
+    """
+
+
+_EPS = float(np.finfo(float).eps)
+# eigen-solver backward error of a symmetric 3x3 tensor, in eps |I|
+# (LAPACK's syevd: a small multiple of eps ||T||_2 for n = 3)
+_EIGEN_ROUNDING = 32.0
+
+
+def remove_flat_excess(
+    i1, i2, i3, defect, *, what, labels=("I1", "I2", "I3"), describe=None, stacklevel=2
+):
+    """The one rule for bodies a hair past the flat limit ``I3 = I1 + I2``.
+
+    Parameters
+    ----------
+    i1, i2, i3 : float
+        Moments with ``i3`` the largest.
+    defect : {"error", "flatten"}
+        ``"error"`` raises when ``i3 - i1 - i2`` exceeds the rounding slack
+        ``8 eps i3``; ``"flatten"`` sets ``i3 = i1 + i2`` (the flat edge of
+        the physical region) and warns with the excess.
+    what : str
+        The body, for the messages.
+    labels : tuple of str
+        Names of the three moments in the messages.
+    describe : callable, optional
+        ``describe(excess)``: the excess in words (the molecules give it in
+        u A^2 as the inertial defect); by default in the moments' units and
+        relative to ``i3``.
+
+    Returns
+    -------
+    i1, i2, i3 : float
+        ``i3`` replaced by ``i1 + i2`` when flattened.
+
+    Raises
+    ------
+    NonPhysicalBodyError
+        ``defect`` not one of the two names, or an excess with ``"error"``.
+
+    Warns
+    -----
+    InertialDefectWarning
+        With ``"flatten"`` when the excess was removed.
+    """
+    import warnings
+
+    if defect not in ("error", "flatten"):
+        raise NonPhysicalBodyError(f"defect must be 'error' or 'flatten', got {defect!r}")
+    excess = i3 - (i1 + i2)
+    if not excess > FLAT_SLACK * i3:
+        return i1, i2, i3
+    a, b, c = labels
+    if describe is None:
+        text = f"excess {c} - {a} - {b} = {excess:.6g} ({excess / i3:.3%} of {c})"
+    else:
+        text = describe(excess)
+    if defect == "error":
+        raise NonPhysicalBodyError(
+            f"{what} violate {c} <= {a} + {b} by the {text}; pass defect='flatten' "
+            f"(CLI: --defect flatten) to put the body on the flat edge {c} = {a} + {b}"
+        )
+    warnings.warn(
+        f"{text} removed: {c} set to {a} + {b} (flat body)",
+        InertialDefectWarning,
+        stacklevel=stacklevel + 1,
+    )
+    # fl(i1 + i2) may round below the edge; rounded up instead, the body
+    # lies within the slack and Body moves it exactly onto the edge
+    # (canonical_moments), so that it is flat in exact arithmetic
+    edge, error = _two_sum(i1, i2)
+    if error > 0.0:
+        edge = math.nextafter(edge, math.inf)
+    return i1, i2, edge
+
+
+def vertex_rounding(vertices):
+    """Absolute rounding of vertex coordinates as a mesh file stores them.
+
+    STL keeps float32 (relative ``2^-24``); text formats keep a fixed number
+    of decimals (``0.5 10^-d`` absolute, the fewest ``d`` that reproduce every
+    coordinate to a few ulps); otherwise the coordinates are taken as full
+    doubles (relative ``eps``).
+    """
+    v = np.asarray(vertices, dtype=float)
+    big = float(np.max(np.abs(v))) if v.size else 0.0
+    if np.array_equal(v.astype(np.float32).astype(float), v):
+        return big * 2.0**-24
+    slack = 4.0 * _EPS * np.maximum(np.abs(v), np.finfo(float).tiny)
+    for digits in range(16):
+        if np.all(np.abs(np.round(v, digits) - v) <= slack):
+            return 0.5 * 10.0**-digits
+    return big * _EPS
+
+
+def symmetric_within_rounding(values, rounding, what):
+    """Refuse sorted moments closer than the rounding of their construction.
+
+    Parameters
+    ----------
+    values : ndarray, shape (3,)
+        Moments computed from geometry, ascending.
+    rounding : float
+        A bound on the rounding error of each moment from its construction
+        (the eigen-solver's backward error ``32 eps |I|`` plus that of the
+        sums that built the tensor), in the moments' units.
+    what : str
+        The body, for the message.
+
+    Raises
+    ------
+    SymmetricTopError
+        ``I2 - I1`` or ``I3 - I2`` at most ``2 rounding``: the body is a
+        symmetric top within rounding, and its phases would be decided by
+        the noise.  The message gives the relative difference and the bound.
+    """
+    gaps = (values[1] - values[0], values[2] - values[1])
+    k = 0 if gaps[0] <= gaps[1] else 1
+    if gaps[k] <= 2.0 * rounding:
+        pair = ("I1", "I2") if k == 0 else ("I2", "I3")
+        raise SymmetricTopError(
+            f"the moments ({values[0]:.17g}, {values[1]:.17g}, {values[2]:.17g}) "
+            f"computed from the {what} have {pair[1]} - {pair[0]} = "
+            f"{gaps[k] / values[2]:.2g} I3, within the rounding of their "
+            f"construction (bound {2.0 * rounding / values[2]:.2g} I3): a symmetric "
+            "top, which has no separatrix and no total-phase formula"
+        )
+
+
+def _from_tensor(cls, tensor, name, defect, rounding, what):
+    """A Body from a tensor computed with ``rounding`` (see ``from_inertia_tensor``)."""
+    tensor = np.asarray(tensor, dtype=float)
+    if tensor.shape != (3, 3) or not np.all(np.isfinite(tensor)):
+        raise NonPhysicalBodyError("an inertia tensor must be a finite 3x3 matrix")
+    scale = np.max(np.abs(tensor))
+    if not np.allclose(tensor, tensor.T, rtol=0.0, atol=1e-12 * scale):
+        raise NonPhysicalBodyError("an inertia tensor must be symmetric")
+    values, vectors = np.linalg.eigh(0.5 * (tensor + tensor.T))
+    if values[0] > 0.0 and np.all(np.isfinite(values)):
+        symmetric_within_rounding(
+            values, rounding + _EIGEN_ROUNDING * _EPS * float(np.max(np.abs(values))), what
+        )
+        values = np.array(
+            remove_flat_excess(*values, defect, what=f"the moments of the {what}", stacklevel=3)
+        )
+    return cls(values, name=name, frame=vectors.T)
 
 
 def _positive_lengths(what, **values):

@@ -1122,6 +1122,34 @@ API_CASES = [
         lambda d, s: lambda: _animation(d, dpi=-80),
     ),
     ("poinsot_animation-frames-1e8", lambda d, s: lambda: _animation(d, frames=10**8)),
+    # --- issue 20: symmetric bodies from geometry ---
+    (
+        "Body.from_point_masses-equilateral-turned",
+        call(
+            orbits.Body.from_point_masses,
+            [1.0, 1.0, 1.0],
+            np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 3**0.5 / 2, 0.0]])
+            @ np.array([[0.36, 0.48, -0.8], [-0.8, 0.6, 0.0], [0.48, 0.64, 0.6]]).T
+            + [3.0, -1.0, 2.0],
+        ),
+    ),
+    (
+        "Body.from_inertia_tensor-rotated-symmetric",
+        call(
+            orbits.Body.from_inertia_tensor,
+            (lambda r: r @ np.diag([1.0, 1.0, 1.5]) @ r.T)(
+                np.array([[0.36, 0.48, -0.8], [-0.8, 0.6, 0.0], [0.48, 0.64, 0.6]])
+            ),
+        ),
+    ),
+    (
+        "Body.from_inertia_tensor-past-flat",
+        call(orbits.Body.from_inertia_tensor, np.diag([1.0, 2.0, 3.01])),
+    ),
+    (
+        "Body.from_inertia_tensor-defect-unknown",
+        call(orbits.Body.from_inertia_tensor, np.diag([1.0, 2.0, 2.5]), defect="ignore"),
+    ),
 ]
 
 

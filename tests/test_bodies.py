@@ -189,3 +189,90 @@ class TestValidation:
     def test_wrong_shape(self):
         with pytest.raises(NonPhysicalBodyError, match="exactly 3"):
             Body((1.0, 2.0))
+
+
+# ---------------------------------------------------------------------------
+# Symmetric bodies built with rounding noise (issue 20, item 3) and the flat
+# limit for computed bodies (issue 21, item 4)
+# ---------------------------------------------------------------------------
+TURN = np.array(
+    [
+        [0.36, 0.48, -0.8],
+        [-0.8, 0.6, 0.0],
+        [0.48, 0.64, 0.6],
+    ]
+)  # an exact rotation in decimals (rounded in binary)
+
+
+HALF_ROOT3 = math.sqrt(3.0) / 2.0
+
+
+def equilateral(shift=(10.0, -4.0, 2.0), height=HALF_ROOT3):
+    corners = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, height, 0.0]])
+    return corners @ TURN.T + shift
+
+
+def test_equilateral_point_masses_are_a_symmetric_top():
+    """Turned and moved, the triangle's two in-plane moments differ by rounding only."""
+    with pytest.raises(SymmetricTopError, match=r"within the rounding of their construction"):
+        Body.from_point_masses([2.0, 2.0, 2.0], equilateral())
+
+
+def test_nearly_equilateral_point_masses_are_accepted():
+    """One corner moved by 1e-6: I2 - I1 ~ 1e-6 I3, far above the rounding (~1e-13)."""
+    body = Body.from_point_masses([2.0, 2.0, 2.0], equilateral(height=HALF_ROOT3 + 1e-6))
+    gap = (body.moments[1] - body.moments[0]) / body.moments[2]
+    assert 1e-7 < gap < 1e-5
+
+
+def rotated(diagonal):
+    rotation = TURN @ np.array([[0.6, 0.0, 0.8], [0.0, 1.0, 0.0], [-0.8, 0.0, 0.6]])
+    return rotation @ np.diag(diagonal) @ rotation.T
+
+
+@pytest.mark.parametrize("diagonal", [(1.0, 1.0, 1.5), (1.0, 2.0, 2.0), (3.0, 3.0, 3.0)])
+def test_rotated_symmetric_tensor_is_a_symmetric_top(diagonal):
+    with pytest.raises(SymmetricTopError, match=r"bound [0-9.e-]+ I3"):
+        Body.from_inertia_tensor(rotated(diagonal))
+
+
+def test_rotated_nearly_symmetric_tensor_is_accepted():
+    """I2 - I1 = 1e-10 I3 (rounding bound ~1.4e-14): a genuine asymmetric top."""
+    body = Body.from_inertia_tensor(rotated((1.0, 1.0 + 1.5e-10, 1.5)))
+    assert body.moments[1] - body.moments[0] == pytest.approx(1.5e-10, rel=1e-3)
+
+
+def test_moments_given_directly_keep_exact_comparisons():
+    body = Body((1.0, 1.0 + 2 * EPS, 1.5))  # 2 ulps apart: accepted as before
+    assert body.moments[0] < body.moments[1]
+    with pytest.raises(SymmetricTopError):
+        Body((1.0, 1.0, 1.5))
+
+
+def test_tensor_past_the_flat_limit_error_and_flatten():
+    """A measured plate 0.1 % past I3 = I1 + I2: refused, or flattened with the excess."""
+    tensor = rotated((1.0, 2.0, 3.003))
+    with pytest.raises(NonPhysicalBodyError, match=r"defect='flatten'.*--defect flatten"):
+        Body.from_inertia_tensor(tensor)
+    from orbits import InertialDefectWarning
+
+    with pytest.warns(
+        InertialDefectWarning, match=r"excess I3 - I1 - I2 = 0\.003\d* \(0\.1\d*% of I3\)"
+    ):
+        body = Body.from_inertia_tensor(tensor, defect="flatten")
+    assert body.is_flat
+    np.testing.assert_allclose(body.moments, (1.0, 2.0, 3.0), rtol=1e-13)
+    # the principal axes are kept
+    np.testing.assert_allclose(
+        body.frame @ tensor @ body.frame.T, np.diag((1.0, 2.0, 3.003)), atol=1e-12
+    )
+
+
+def test_point_masses_take_the_defect_choice():
+    masses, points = [1.0, 2.0, 3.0], [[0.0, 0.0, 0.0], [1.0, 0.2, 0.0], [0.3, 1.4, 0.0]]
+    body = Body.from_point_masses(masses, points, defect="flatten")  # planar: on the edge already
+    assert body == Body.from_point_masses(masses, points)
+    with pytest.raises(NonPhysicalBodyError, match="defect must be"):
+        Body.from_point_masses(masses, points, defect="ignore")
+    with pytest.raises(NonPhysicalBodyError, match="defect must be"):
+        Body.from_inertia_tensor(np.diag([1.0, 2.0, 2.5]), defect="ignore")

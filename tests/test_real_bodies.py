@@ -278,3 +278,41 @@ def test_non_planar_molecule_needs_no_flattening():
     hertz = codata.h / (8 * math.pi**2 * body.moments)
     again = Body.from_rotational_constants(*hertz / 1e9, unit="GHz")
     np.testing.assert_allclose(again.moments, body.moments, rtol=1e-14)
+
+
+@pytest.mark.parametrize("suffix", ["stl", "obj", "ply", "off"])
+def test_sphere_mesh_is_a_symmetric_top(tmp_path, suffix):
+    """An icosphere has an isotropic inertia tensor; each file format rounds it.
+
+    (Before, the STL sphere was accepted with moments equal to 2e-16 and a
+    total phase of 3.8e16.)  The rounding bound takes the vertex precision
+    the file keeps (float32 in STL and this PLY, 8 decimals in OBJ).
+    """
+    mesh = trimesh.creation.icosphere(subdivisions=3)
+    mesh.apply_translation([0.3, -0.2, 0.1])
+    path = tmp_path / f"sphere.{suffix}"
+    mesh.export(path)
+    with pytest.raises(SymmetricTopError, match="within the rounding of their construction"):
+        Body.from_mesh(path)
+
+
+def test_cube_mesh_is_a_symmetric_top(tmp_path):
+    mesh = trimesh.creation.box(extents=(1.0, 1.0, 1.0))
+    mesh.apply_transform(
+        trimesh.transformations.random_rotation_matrix(np.random.default_rng(4).uniform(size=3))
+    )
+    path = tmp_path / "cube.stl"
+    mesh.export(path)
+    with pytest.raises(SymmetricTopError):
+        Body.from_mesh(path)
+
+
+def test_nearly_cubic_mesh_is_accepted(tmp_path):
+    """Edges 1 : 1.001 : 0.999 -- moments 1e-3 apart, far above the float32 bound (~2e-6)."""
+    mesh = trimesh.creation.box(extents=(1.0, 1.001, 0.999))
+    path = tmp_path / "brick.stl"
+    mesh.export(path)
+    body = Body.from_mesh(path)
+    np.testing.assert_allclose(
+        body.moments, Body.box(1.0, 1.001, 0.999, 1.0 * 1.001 * 0.999).moments, rtol=1e-6
+    )
