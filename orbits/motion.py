@@ -19,12 +19,13 @@ Units: the body's moments as given and omega as given (rad per unit time);
 
 Accuracy of the start: ``omega(0)`` reproduces ``omega0`` to a few ulps in
 every component, for every spin, down to ``dtheta = 1e-300`` and for
-spins within 1e-150 of the unstable I2 axis (the start argument is kept
+spins within 1e-300 of the unstable I2 axis (the start argument is kept
 as a whole number of quarter periods plus an offset formed through
-Carlson's ``R_F``, :func:`orbits.core.motion.start_offset`).  A component
-below about ``1e-154 |omega0|`` has a subnormal square; the orbit's
-separatrix gap then loses its relative precision, and such a component is
-reproduced only to an absolute ``1e-161 |omega0|``.
+Carlson's ``R_F``, :func:`orbits.core.motion.start_offset`; the separatrix
+gap of a spin whose small components have subnormal squares is formed
+from them scaled by a power of two, and the ``R_J`` of ``phi(t)`` near the
+saddle from ``cn`` and ``dn`` themselves,
+:func:`orbits.core.elliptic.carlson_rj_roots`).
 """
 
 import math
@@ -92,6 +93,36 @@ def as_body(body_or_moments):
     if moments.ndim == 2 and moments.shape[-1] == 3 and moments.shape[0] != 1:
         raise InputError("the motion is computed for one body at a time")
     return Body(moments.reshape(-1) if moments.shape == (1, 3) else moments)
+
+
+def _separatrix_gap(i1, i2, i3, omega):
+    """``M^2 - 2 E I2`` of a unit spin as the factors ``(scale, offset, closing)``.
+
+    :func:`orbits.core.phase.vector_gap` evaluates ``I3 (I3-I2) w3^2 - I1
+    (I2-I1) w1^2`` exactly and rounds it once, but where ``w1`` and ``w3``
+    are below ~1e-150 their squares are subnormal and the gap loses its
+    relative precision (and with it ``kc``: a spin within 1e-161 of the I2
+    axis started 23 % off in its smallest component).  There ``w1, w3``
+    are scaled by ``2^k`` (exact), and the factor ``2^-2k`` is carried by
+    ``scale`` and ``closing`` with ``|offset| <= 1e-200``, so that
+    :func:`orbits.core.phase.orbit_constants` takes the square roots factor
+    by factor and nothing underflows.
+    """
+    w1, w2, w3 = (float(v) for v in omega)
+    small = max(abs(w1), abs(w3))
+    if small == 0.0 or small >= 2.0**-480:
+        return _phase.vector_gap(i1, i2, i3, w1, w2, w3)
+    k = -math.frexp(small)[1]
+    _, offset, _ = _phase.vector_gap(i1, i2, i3, math.ldexp(w1, k), w2, math.ldexp(w3, k))
+    if offset == 0.0:
+        return 1.0, 0.0, 1.0
+    shift = max(0, math.frexp(offset)[1] + 700)  # |offset| 2^-shift near 2^-700
+    rest = 2 * k - shift  # the gap is offset 2^-(shift + rest)
+    return (
+        math.ldexp(1.0, -(rest // 2)),
+        math.ldexp(offset, -shift),
+        math.ldexp(1.0, rest // 2 - rest),
+    )
 
 
 def _does_not_fit(what):
@@ -176,7 +207,7 @@ class Motion:
         unit_omega = np.ldexp(omega0, -speed)
         i1, i2, i3 = body.unit_moments
         if _gap is None:
-            _gap = _phase.vector_gap(i1, i2, i3, *unit_omega)
+            _gap = _separatrix_gap(i1, i2, i3, unit_omega)
         orbit = np.zeros(_kernels.ORBIT_SIZE)
         branch = _kernels.orbit_setup(i1, i2, i3, *unit_omega, *_gap, orbit)
         if branch == _phase.BRANCH_SEPARATRIX:

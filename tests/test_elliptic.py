@@ -277,3 +277,21 @@ def test_jacobi_quarters_keep_relative_accuracy(rng, quarters):
                         assert ulps(got, ref) <= 8, (kc, w, kind)
                 # u = 2 j K + r, |r| <= K
                 assert abs(float(u - 2 * j * mp.ellipk(m)) - r) <= 1e-15 * float(mp.ellipk(m))
+
+
+def test_carlson_rj_from_roots_below_the_normal_squares():
+    """R_J(sx^2, sy^2, 1, p) with sx, sy down to 1e-300 (squares not doubles)."""
+    rng = np.random.default_rng(23)
+    with mp.workdps(700):
+        for k in range(40):
+            sx, sy = 10.0 ** rng.uniform(-300.0, -100.0, 2)
+            if k % 4 == 0:
+                sx = 0.0
+            p = 1.0 + 10.0 ** rng.uniform(-3.0, 2.0)
+            ref = mp.elliprj(mp.mpf(sx) ** 2, mp.mpf(sy) ** 2, 1, p)
+            assert ulps(ek.carlson_rj_roots(sx, sy, p), ref) <= 16, (sx, sy, p)
+        # and the complete Pi for kc below 1e-154 (kc^2 subnormal)
+        for kc in (1e-141, 1e-160, 1e-200, 1e-300):
+            n = -2.5
+            ref = mp.ellippi(n, 1 - mp.mpf(kc) ** 2)
+            assert ulps(ek.ellippi_complete_carlson(n, kc), ref) <= 16, kc

@@ -369,14 +369,44 @@ def carlson_rj(x, y, z, p):
 
 
 @njit(cache=True, nogil=True)
+def carlson_rj_roots(sx, sy, p):
+    """``R_J(sx^2, sy^2, 1, p)`` from ``sx, sy >= 0`` (not both 0), ``p >= 1``.
+
+    Near the separatrix saddle of the motion, ``sx = |cn|`` and ``sy = dn``
+    can both be below 1e-154, where their squares leave the normal doubles
+    (and ``R_J`` of two zeros diverges).  The first duplication step of
+    :func:`carlson_rj` needs only the square roots: ``lambda = sx sy + sx +
+    sy``, ``d = (sp + sx)(sp + sy)(sp + 1)``, ``e = r_x r_y r_1`` with
+    ``r = (sp - s)/(sp + s) >= 0``, and ``R_J(x, y, 1, p) = R_J(x_1, y_1,
+    z_1, p_1) / 4 + 6 R_C(1, 1 + e) / d`` with ``x_1 = (x + lambda)/4`` etc.
+    (DLMF 19.26.17-19.26.20), whose arguments are at least ``lambda/4``.
+    """
+    sp = math.sqrt(p)
+    lam = sx * sy + sx + sy
+    e = ((sp - sx) / (sp + sx)) * ((sp - sy) / (sp + sy)) * ((sp - 1.0) / (sp + 1.0))
+    d = (sp + sx) * (sp + sy) * (sp + 1.0)
+    rest = carlson_rj(
+        0.25 * (sx * sx + lam), 0.25 * (sy * sy + lam), 0.25 * (1.0 + lam), 0.25 * (p + lam)
+    )
+    return 0.25 * rest + 6.0 * _rc_unit(e, 1.0 + e) / d
+
+
+@njit(cache=True, nogil=True)
 def ellippi_complete_carlson(n, kc):
     """Complete ``Pi(n|m)`` from Carlson's forms, for ``n < 1``.
 
     ``Pi = R_F(0, kc^2, 1) + (n/3) R_J(0, kc^2, 1, 1 - n)`` (DLMF 19.25.2).
     Independent of ``cel``; the exact-motion layer uses it so that the
     check of ``phi(T)`` against the closed form compares two algorithms.
+    Valid for every ``kc`` down to the smallest normal double (below
+    1e-140 the first duplication step is taken from ``kc`` itself).
     """
     k2 = kc * kc
+    if kc < 1.0e-140:
+        # kc^2 may leave the normal doubles: one duplication step by hand
+        # (lambda = kc for the roots 0, kc, 1), see carlson_rj_roots
+        first = carlson_rf(0.25 * kc, 0.25 * (k2 + kc), 0.25 * (1.0 + kc))
+        return first + n / 3.0 * carlson_rj_roots(0.0, kc, 1.0 - n)
     return carlson_rf(0.0, k2, 1.0) + n / 3.0 * carlson_rj(0.0, k2, 1.0, 1.0 - n)
 
 

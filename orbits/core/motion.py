@@ -38,6 +38,7 @@ from .elliptic import (
     AGM_LEVELS,
     agm_table,
     carlson_rj,
+    carlson_rj_roots,
     ellipf_sincos,
     ellippi_complete_carlson,
     jacobi_quarters,
@@ -48,6 +49,8 @@ from .trig import sincos
 
 HALF_PI = 0.5 * math.pi
 TWO_PI = 2.0 * math.pi
+# below this |cn| and dn the R_J of phi(t) is taken from them, not their squares
+_TINY_ROOT = 1.0e-140
 
 (
     SLOT_BRANCH,
@@ -100,12 +103,14 @@ def pi_of_u(orbit, w):
     s = parity * sn  # sin and cos of am(r), |am(r)| <= pi/2
     c = parity * cn
     n = orbit[SLOT_N]
-    # DLMF 19.25.14 with F(am(r)) = r
-    value = (
-        2.0 * j * orbit[SLOT_PI_COMPLETE]
-        + r
-        + n / 3.0 * s * s * s * carlson_rj(c * c, dn * dn, 1.0, 1.0 - n * s * s)
-    )
+    # DLMF 19.25.14 with F(am(r)) = r; near the saddle c and dn may both be
+    # below 1e-154, whose squares leave the normal doubles
+    p = 1.0 - n * s * s
+    if abs(c) < _TINY_ROOT and dn < _TINY_ROOT:
+        rj = carlson_rj_roots(abs(c), dn, p)
+    else:
+        rj = carlson_rj(c * c, dn * dn, 1.0, p)
+    value = 2.0 * j * orbit[SLOT_PI_COMPLETE] + r + n / 3.0 * s * s * s * rj
     return value, sn, cn, dn, j
 
 
