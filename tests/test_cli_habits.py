@@ -52,7 +52,7 @@ class TestOmega:
         unit_row = orbits.phases(body, theta, math.atan2(principal[1], principal[0]))
         assert row.D_normalised == pytest.approx(unit_row.D.iloc[0], rel=1e-13)
         # the period in seconds: the unit-spin period over |omega| in rad/s
-        unit = Motion.from_omega(body, principal / np.linalg.norm(principal))
+        unit = Motion.from_omega(body, principal / np.linalg.norm(principal), axes="principal")
         assert row.period == pytest.approx(unit.period / np.linalg.norm(omega), rel=1e-12)
 
     @pytest.mark.parametrize(

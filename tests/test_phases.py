@@ -599,7 +599,7 @@ def test_phone_energy_is_one_convention():
     phone = Body.box(0.071, 0.147, 0.0078, mass=0.17)
     omega = np.array([0.2, 0.1, 3.0])
     row = orbits.spin_phases(phone, omega).iloc[0]
-    motion = orbits.Motion.from_omega(phone, omega)
+    motion = orbits.Motion.from_omega(phone, omega, axes="principal")
     i = phone.moments
     # the definitions, eqn:E and eqn:J, in plain NumPy
     energy = 0.5 * np.sum(i * omega**2)

@@ -190,7 +190,7 @@ def test_plots_take_a_motion_in_real_units():
     the drawn curves are its own motion in s, rad/s and J s."""
     phone = Body.box(0.071, 0.147, 0.0078, mass=0.17)
     omega = np.array([0.3, 0.2, 120 * 2 * np.pi / 60])  # rad/s, principal frame
-    motion = orbits.Motion.from_omega(phone, omega)
+    motion = orbits.Motion.from_omega(phone, omega, axes="principal")
     ax = new_figure().add_subplot()
     line = plotting.plot_herpolhode(ax, motion, points=801)
     xy = line.get_xydata()

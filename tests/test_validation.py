@@ -116,8 +116,12 @@ CALLS = {
     "Motion.from_spin.dtheta": lambda x: orbits.Motion.from_spin(BODY, dtheta=x).period,
     "Motion.from_spin.phi": lambda x: orbits.Motion.from_spin(BODY, 0.3, phi=x).period,
     "Motion.from_spin.speed": lambda x: orbits.Motion.from_spin(BODY, 0.3, speed=x).energy,
-    "Motion.from_omega.body": lambda x: orbits.Motion.from_omega(x, [0.3, 0.2, 0.9]).period,
-    "Motion.from_omega.omega": lambda x: orbits.Motion.from_omega(BODY, x).period,
+    "Motion.from_omega.body": lambda x: (
+        orbits.Motion.from_omega(x, [0.3, 0.2, 0.9], axes="principal").period
+    ),
+    "Motion.from_omega.omega": lambda x: (
+        orbits.Motion.from_omega(BODY, x, axes="principal").period
+    ),
     "Motion.state": lambda x: tuple(MOTION.state(x)),
     "Motion.omega": lambda x: MOTION.omega(x),
     "Motion.angular_momentum": lambda x: MOTION.angular_momentum(x),
