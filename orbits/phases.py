@@ -303,8 +303,6 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0, device="cp
         _spin_inputs(moments, theta, dtheta, phi)  # raises
         raise AssertionError("the reference checks accept inputs the fast checks refused")
     from_offset, angle, phi_folded, shape = inputs
-    if gpu and not from_offset:
-        angle = fold_angle(angle)  # np.fmod has no CUDA form: folded here
     out = np.empty(shape)
     status = np.empty(shape, dtype=np.int8)
     if moments.ndim == 1 and phi_folded.ndim == 0:
@@ -324,10 +322,11 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0, device="cp
             _flat(angle, shape),
         )
         kernel = gpu.total_phase_many if gpu else _kernels.total_phase_many
+    args = (*args, from_offset, FOLD_LIMIT, out.reshape(-1), status.reshape(-1))
     if gpu:
-        run_cuda(kernel, *args, from_offset, out.reshape(-1), status.reshape(-1))
+        run_cuda(kernel, *args)
     else:
-        kernel(*args, from_offset, FOLD_LIMIT, out.reshape(-1), status.reshape(-1))
+        kernel(*args)
     if status.any():  # the rare case: the reference path names the error
         _raise_for(status, moments, theta, dtheta, phi)
     return out
@@ -412,8 +411,6 @@ def phases_of_unit_moments(moments, theta=None, phi=0.0, *, dtheta=None, device=
         _spin_inputs(moments, theta, dtheta, phi)  # raises
         raise AssertionError("the reference checks accept inputs the fast checks refused")
     from_offset, angle, phi_folded, shape = inputs
-    if gpu and not from_offset:
-        angle = fold_angle(angle)  # np.fmod has no CUDA form: folded here
     # one body or one azimuth: length-1 arrays, broadcast inside the kernel
     i1, i2, i3 = (
         moments[k : k + 1] if moments.ndim == 1 else _flat(moments[..., k], shape)
@@ -425,11 +422,11 @@ def phases_of_unit_moments(moments, theta=None, phi=0.0, *, dtheta=None, device=
     columns = np.empty((len(_table.COLUMNS), n))
     branch = np.empty(n, dtype=np.int8)
     status = np.empty(n, dtype=np.int8)
-    args = (i1, i2, i3, phi_flat, angle_flat, from_offset)
+    args = (i1, i2, i3, phi_flat, angle_flat, from_offset, FOLD_LIMIT, columns, branch, status)
     if gpu:
-        run_cuda(gpu.phases_columns, *args, columns, branch, status)
+        run_cuda(gpu.phases_columns, *args)
     else:
-        _table.phases_columns(*args, FOLD_LIMIT, columns, branch, status)
+        _table.phases_columns(*args)
     if status.any():  # the rare case: the reference path names the error
         _raise_for(status.reshape(shape), moments, theta, dtheta, phi)
     # every column computed in the kernel (phase_table.phases_row): the

@@ -231,8 +231,11 @@ def search_bodies(moments, levels, *, capacity=None, device="cpu"):
     -------
     SearchRows
         ``(branch, level, offset, counts, info)``, see :class:`SearchRows`;
-        roots of a body are ordered by branch (SAM first), then ascending
-        level within the branch.
+        a body's SAM roots come first, then its LAM roots, each branch by
+        ascending level (by monotone piece, then level, where the rare
+        bracketing search ran), as :func:`orbits.core.search.search_many`.
+        The rows are not sorted by ``dtheta``
+        (:func:`orbits.core.search.flatten_roots` does that).
 
     Raises
     ------

@@ -325,8 +325,8 @@ def test_kernels_compile_to_ptx():
         from numba import boolean, cuda, float64, int8, int64
         try:
             from orbits.core import cuda as kernels
-            one = (float64, float64, float64, float64, float64[::1], boolean)
-            many = (float64[::1],) * 5 + (boolean,)
+            one = (float64, float64, float64, float64, float64[::1], boolean, float64)
+            many = (float64[::1],) * 5 + (boolean, float64)
             sigs = {
                 "_total_phase_one_body_kernel": one + (float64[::1], int8[::1]),
                 "_total_phase_many_kernel": many + (float64[::1], int8[::1]),

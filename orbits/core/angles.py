@@ -9,7 +9,6 @@ it, so the result is correctly rounded (not off by ``k ulp(pi)``).
 
 import math
 
-import numpy as np
 from numba import njit
 
 HALF_PI = 0.5 * math.pi
@@ -25,8 +24,12 @@ def fold_one(x):
     size = abs(x)
     if size <= HALF_PI:
         return size  # bit for bit
-    high = np.fmod(size, math.pi)  # exact: size - k fl(pi)
-    low = -np.rint((size - high) / math.pi) * PI_LOW  # size - k pi = high + low
+    # exact: size - k fl(pi) (for positive operands % is C's fmod, and it
+    # compiles for CUDA, where np.fmod does not)
+    high = size % math.pi
+    # (size - high) / pi is the whole number k to a few ulps: rounding it
+    # half up is np.rint's answer, without NumPy
+    low = -math.floor((size - high) / math.pi + 0.5) * PI_LOW  # size - k pi = high + low
     below = high + low
     if below < 0.0:  # just below a multiple of pi
         return -below

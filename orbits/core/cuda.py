@@ -9,8 +9,10 @@ One source of truth: every kernel here is a thin launcher, one thread per
 point or per body, that calls the ``@njit`` scalar functions of
 :mod:`orbits.core.phase`, :mod:`orbits.core.phase_table` and
 :mod:`orbits.core.search` (numba-cuda compiles them as device functions).
-Device code allocates nothing: per-thread scratch is a fixed-size
-``cuda.local.array``, the output rows are arrays the caller provides.
+``theta`` is folded and checked in the kernels too
+(:func:`orbits.core.phase.given_angle`).  Device code allocates nothing:
+per-thread scratch is a fixed-size ``cuda.local.array``, the output rows are
+arrays the caller provides.
 
 With ``NUMBA_ENABLE_CUDASIM=1`` the kernels run in numba's CUDA simulator
 (slow: Python per thread), which is how the tests check them without a GPU.
@@ -24,7 +26,7 @@ import time
 import numpy as np
 from numba import config, cuda, float64, int64
 
-from .phase import STATUS_OK, body_constants, spin_from_angle, total_from_spin
+from .phase import STATUS_OK, body_constants, given_angle, spin_from_angle, total_from_spin
 from .phase_table import N_COLUMNS, phases_row
 from .search import SCRATCH_FLOATS, SCRATCH_INTS, search_body_with
 
@@ -39,9 +41,12 @@ def _blocks(n, per_block):
 
 
 @cuda.jit(device=True)
-def _total_one(i1, i2, i3, phi, angle, from_offset):
-    """``(total phase >= 2 pi, status)`` of one point: the scalar path of
-    :func:`orbits.core.phase.total_phase_many_scalar`."""
+def _total_one(i1, i2, i3, phi, angle, from_offset, fold_limit):
+    """``(total phase >= 2 pi, status)`` of one point, ``theta`` folded here: the
+    scalar path of :func:`orbits.core.phase.total_phase_many_scalar`."""
+    angle, code = given_angle(angle, from_offset, fold_limit)
+    if code != STATUS_OK:
+        return math.inf, code
     code, _, _, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
         body_constants(i1, i2, i3, phi), angle, from_offset
     )
@@ -52,28 +57,36 @@ def _total_one(i1, i2, i3, phi, angle, from_offset):
 
 
 @cuda.jit
-def _total_phase_one_body_kernel(i1, i2, i3, phi, angles, from_offset, out, status):
+def _total_phase_one_body_kernel(i1, i2, i3, phi, angles, from_offset, fold_limit, out, status):
     k = cuda.grid(1)
     if k < angles.shape[0]:
-        out[k], status[k] = _total_one(i1, i2, i3, phi, angles[k], from_offset)
+        out[k], status[k] = _total_one(i1, i2, i3, phi, angles[k], from_offset, fold_limit)
 
 
 @cuda.jit
-def _total_phase_many_kernel(i1, i2, i3, phi, angles, from_offset, out, status):
+def _total_phase_many_kernel(i1, i2, i3, phi, angles, from_offset, fold_limit, out, status):
     k = cuda.grid(1)
     if k < angles.shape[0]:
-        out[k], status[k] = _total_one(i1[k], i2[k], i3[k], phi[k], angles[k], from_offset)
+        out[k], status[k] = _total_one(
+            i1[k], i2[k], i3[k], phi[k], angles[k], from_offset, fold_limit
+        )
 
 
 @cuda.jit
-def _phases_kernel(i1, i2, i3, phi, angles, from_offset, columns, branch, status):
-    """:func:`orbits.core.phase_table.phases_columns` per thread (``theta``
-    already folded on the host)."""
+def _phases_kernel(i1, i2, i3, phi, angles, from_offset, fold_limit, columns, branch, status):
+    """:func:`orbits.core.phase_table.phases_columns` per thread."""
     k = cuda.grid(1)
     if k < angles.shape[0]:
         j = 0 if i1.shape[0] == 1 else k
         a = 0 if phi.shape[0] == 1 else k
-        code, lam, row = phases_row(i1[j], i2[j], i3[j], phi[a], angles[k], from_offset)
+        angle, code = given_angle(angles[k], from_offset, fold_limit)
+        if code != STATUS_OK:
+            status[k] = code
+            branch[k] = 0
+            for c in range(N_COLUMNS):
+                columns[c, k] = math.nan
+            return
+        code, lam, row = phases_row(i1[j], i2[j], i3[j], phi[a], angle, from_offset)
         status[k] = code
         branch[k] = lam
         for c in range(N_COLUMNS):
@@ -144,10 +157,9 @@ def search_many(moments, levels, root_branch, root_level, root_offset, counts, i
     return seconds
 
 
-def total_phase_one_body(i1, i2, i3, phi, angles, from_offset, out, status):
+def total_phase_one_body(i1, i2, i3, phi, angles, from_offset, fold_limit, out, status):
     """The GPU twin of :func:`orbits.core.phase.total_phase_one_body` (host
-    arrays in and out); ``theta`` already folded (``np.fmod`` does not
-    compile for CUDA: the caller folds on the host)."""
+    arrays in and out)."""
     n = angles.shape[0]
     if n == 0:
         return
@@ -155,13 +167,14 @@ def total_phase_one_body(i1, i2, i3, phi, angles, from_offset, out, status):
     d_out = cuda.device_array(n, dtype=np.float64)
     d_status = cuda.device_array(n, dtype=np.int8)
     _total_phase_one_body_kernel[_blocks(n, THREADS_PER_BLOCK), THREADS_PER_BLOCK](
-        float(i1), float(i2), float(i3), float(phi), d_angles, bool(from_offset), d_out, d_status
+        float(i1), float(i2), float(i3), float(phi), d_angles, bool(from_offset),
+        float(fold_limit), d_out, d_status,
     )  # fmt: skip
     d_out.copy_to_host(out)
     d_status.copy_to_host(status)
 
 
-def total_phase_many(i1, i2, i3, phi, angles, from_offset, out, status):
+def total_phase_many(i1, i2, i3, phi, angles, from_offset, fold_limit, out, status):
     """The GPU twin of :func:`orbits.core.phase.total_phase_many`."""
     n = angles.shape[0]
     if n == 0:
@@ -170,22 +183,22 @@ def total_phase_many(i1, i2, i3, phi, angles, from_offset, out, status):
     d_out = cuda.device_array(n, dtype=np.float64)
     d_status = cuda.device_array(n, dtype=np.int8)
     _total_phase_many_kernel[_blocks(n, THREADS_PER_BLOCK), THREADS_PER_BLOCK](
-        *args, bool(from_offset), d_out, d_status
+        *args, bool(from_offset), float(fold_limit), d_out, d_status
     )
     d_out.copy_to_host(out)
     d_status.copy_to_host(status)
 
 
-def phases_columns(i1, i2, i3, phi, angles, from_offset, columns, branch, status):
+def phases_columns(i1, i2, i3, phi, angles, from_offset, fold_limit, columns, branch, status):
     """The GPU twin of :func:`orbits.core.phase_table.phases_columns` (host
-    arrays in and out; ``theta`` already folded)."""
+    arrays in and out)."""
     n = angles.shape[0]
     if n == 0:
         return
     args = [cuda.to_device(np.ascontiguousarray(a)) for a in (i1, i2, i3, phi, angles)]
     outputs = [cuda.device_array(a.shape, dtype=a.dtype) for a in (columns, branch, status)]
     _phases_kernel[_blocks(n, THREADS_PER_BLOCK), THREADS_PER_BLOCK](
-        *args, bool(from_offset), *outputs
+        *args, bool(from_offset), float(fold_limit), *outputs
     )
     for device_array, host in zip(outputs, (columns, branch, status)):
         device_array.copy_to_host(host)
@@ -200,7 +213,7 @@ def total_phase_kernel_seconds(i1, i2, i3, angles, repeats):
     d_out = cuda.device_array(n, dtype=np.float64)
     d_status = cuda.device_array(n, dtype=np.int8)
     launch = _total_phase_one_body_kernel[_blocks(n, THREADS_PER_BLOCK), THREADS_PER_BLOCK]
-    args = (float(i1), float(i2), float(i3), 0.0, d_angles, False, d_out, d_status)
+    args = (float(i1), float(i2), float(i3), 0.0, d_angles, False, 2.0**21, d_out, d_status)
     launch(*args)
     best = math.inf
     for _ in range(repeats):

@@ -583,20 +583,6 @@ def total_phase_many_scalar(i1, i2, i3, phi, angles, from_offset, out, status):
         )
 
 
-PARTS_COLUMNS = (
-    "theta",
-    "dtheta",
-    "theta_crit",
-    "two_e",
-    "m_sq",
-    "m",
-    "branch",
-    "period",
-    "dynamic_phase",
-    "total_phase",
-)
-
-
 @njit(cache=True, nogil=True)
 def _store_parts(out, k, first, parts):
     """Write the seven values of :func:`parts_from_spin` from column ``first``."""
@@ -608,26 +594,6 @@ def _store_parts(out, k, first, parts):
     out[k, first + 4] = period
     out[k, first + 5] = dynamic
     out[k, first + 6] = total
-
-
-@njit(cache=True, nogil=True, parallel=True)
-def phase_parts_many(i1, i2, i3, phi, angles, from_offset, out, status):
-    """All closed-form quantities; ``out[k]`` follows :data:`PARTS_COLUMNS`."""
-    for k in prange(angles.shape[0]):
-        code, theta, dtheta, theta_c, w1, w2, w3, scale, offset, closing = spin_from_angle(
-            body_constants(i1[k], i2[k], i3[k], phi[k]), angles[k], from_offset
-        )
-        status[k] = code
-        out[k, 0] = theta
-        out[k, 1] = dtheta
-        out[k, 2] = theta_c
-        if code != STATUS_OK:
-            for j in range(3, 10):
-                out[k, j] = np.nan
-            continue
-        _store_parts(
-            out, k, 3, parts_from_spin(i1[k], i2[k], i3[k], w1, w2, w3, scale, offset, closing)
-        )
 
 
 @njit(cache=True, nogil=True, parallel=True)

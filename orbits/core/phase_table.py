@@ -29,9 +29,7 @@ def table_values(i1, i2, i3, phi, angle, from_offset):
     Omega)`` for ``theta`` already in ``[0, pi/2]`` (or ``dtheta``).
 
     ``Delta alpha`` is clamped to ``>= 2 pi`` (``orbits.phases.at_least_two_pi``);
-    NaN from ``2E`` on when ``code`` is not OK.  The CUDA kernel calls this
-    one (the fold needs ``np.fmod``, which device code lacks: the GPU path
-    folds on the host).
+    NaN from ``2E`` on when ``code`` is not OK.
     """
     code, theta, dtheta, theta_c, w1, w2, w3, scale, offset, closing = spin_from_angle(
         body_constants(i1, i2, i3, phi), angle, from_offset
