@@ -436,24 +436,8 @@ def phases_of_unit_moments(moments, theta=None, phi=0.0, *, dtheta=None, device=
     return pd.DataFrame({name: table[name] for name in PHASES_COLUMNS}, copy=False)
 
 
-PHASES_COLUMNS = (
-    "I1",
-    "I2",
-    "I3",
-    "theta",
-    "dtheta",
-    "phi",
-    "theta_crit",
-    "branch",
-    "energy",
-    "momentum",
-    "D",
-    "m",
-    "period",
-    "dynamic_phase",
-    "total_phase",
-    "geometric_phase",
-)
+# the columns of phases(): the kernel's float columns, with "branch" after theta_crit
+PHASES_COLUMNS = _table.COLUMNS[:7] + ("branch",) + _table.COLUMNS[7:]
 
 
 def _parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total, geometric):

@@ -74,7 +74,12 @@ def _total_phase_many_kernel(i1, i2, i3, phi, angles, from_offset, fold_limit, o
 
 @cuda.jit
 def _phases_kernel(i1, i2, i3, phi, angles, from_offset, fold_limit, columns, branch, status):
-    """:func:`orbits.core.phase_table.phases_columns` per thread."""
+    """:func:`orbits.core.phase_table.phases_columns` per thread.
+
+    The per-point step is written out here as there: the scalar functions are
+    shared, but an ``@njit`` helper taking arrays cannot be called from a
+    kernel under the CUDA simulator (it cannot unbox the simulator's arrays).
+    """
     k = cuda.grid(1)
     if k < angles.shape[0]:
         j = 0 if i1.shape[0] == 1 else k

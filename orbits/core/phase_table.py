@@ -73,7 +73,7 @@ COLUMNS = (
     "total_phase",
     "geometric_phase",
 )
-N_COLUMNS = 15
+N_COLUMNS = len(COLUMNS)
 
 
 @njit(cache=True, nogil=True)
