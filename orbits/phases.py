@@ -41,7 +41,6 @@ import math
 from collections import namedtuple
 
 import numpy as np
-import pandas as pd
 
 from ._args import broadcast, finite_array, real_array
 from ._args import flat_broadcast as _flat
@@ -405,6 +404,8 @@ def phases_of_unit_moments(moments, theta=None, phi=0.0, *, dtheta=None, device=
     """:func:`phases` for moments already in the canonical form of
     :func:`orbits.bodies.unit_moments` (no second normalisation: the
     catalog and survey pass their roots here)."""
+    import pandas as pd
+
     gpu = cuda_kernels() if check_device(device) == "cuda" else None
     inputs = _fast_inputs(moments, theta, dtheta, phi)
     if inputs is None:
@@ -442,6 +443,8 @@ PHASES_COLUMNS = _table.COLUMNS[:7] + ("branch",) + _table.COLUMNS[7:]
 
 def _parts_columns(norm, two_e, m_sq, m_param, branch, period, dynamic, total, geometric):
     """The columns shared by :func:`phases` and :func:`spin_phases`."""
+    import pandas as pd
+
     return {
         "branch": pd.Categorical.from_codes(
             (branch < 0).astype(np.int8), categories=["SAM", "LAM"]
@@ -535,6 +538,8 @@ def spin_phases(body_or_moments, omega):
     near it this path is ill-conditioned (as the ``theta`` path of
     :func:`total_phase`); use ``dtheta`` there.
     """
+    import pandas as pd
+
     moments, exponent = unit_moments(body_or_moments)
     omega = real_array("omega", omega, AngleError)
     if omega.ndim == 0 or omega.shape[-1] != 3:

@@ -13,7 +13,6 @@ from collections import namedtuple
 from fractions import Fraction
 
 import numpy as np
-import pandas as pd
 
 from ._args import integer
 from .bodies import Body, unit_moments
@@ -396,6 +395,8 @@ def _text_column(names, codes):
     Taking from the few distinct texts is ~20x faster than converting a
     categorical or object column (1.6 ms against 28 ms for 346,000 rows).
     """
+    import pandas as pd
+
     return pd.Series(pd.Series(names, dtype=object).astype(str).array.take(codes))
 
 
@@ -418,6 +419,8 @@ def catalog_rows(body, moments, level, offset, p, q, levels):
         A root misses its level by more than ``RESIDUAL_TOLERANCE`` (the
         search guarantees it does not: this would be a bug).
     """
+    import pandas as pd
+
     # moments are canonical here (unit_moments): no second normalisation
     table = phases_of_unit_moments(moments, dtheta=offset)
     target = levels[level]

@@ -7,7 +7,6 @@ same on a dask worker as here), so every engine writes the same bytes.
 import math
 
 import numpy as np
-import pandas as pd
 
 from ..bodies import unit_moments
 from ..core import rows as _rows
@@ -167,6 +166,8 @@ def chunk_tables(found, first_id, columns="all"):
     Runs on one thread (the survey runs chunks side by side); see
     :func:`compute_chunk` for the arguments and the result.
     """
+    import pandas as pd
+
     if columns not in LAYOUTS:
         raise InputError(f"columns must be one of {', '.join(LAYOUTS)}, got {columns!r}")
     ids = first_id + np.arange(found.moments.shape[0])
@@ -279,6 +280,8 @@ def _flatten(moments, levels, branch, level, offset, found, info):
 
 
 def _body_rows(found, ids, n, q):
+    import pandas as pd
+
     moments, info = found.moments, found.info
     norm = np.linalg.norm(moments, axis=1)
     limits = phase_limits(moments)

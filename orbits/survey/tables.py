@@ -10,7 +10,6 @@ joins them.
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from ..atomic import FLOAT_FORMAT, atomic_path, csv_float_options, read_bytes_nofollow
 from ..cells import neutralize, unneutralize
@@ -76,6 +75,8 @@ _CSV_DTYPES = _csv_dtypes()
 def read_part(path):
     import io
 
+    import pandas as pd
+
     data = io.BytesIO(read_bytes_nofollow(path))  # never through a link
     if path.suffix == ".parquet":
         return pd.read_parquet(data)
@@ -103,6 +104,8 @@ def read_table(out_dir, table, verify=True):
         Not a survey directory, incomplete, or (with ``verify``) a part that
         is missing or does not match its SHA-256.
     """
+    import pandas as pd
+
     if table not in ("bodies", "orbits"):
         raise InputError(f"table must be 'bodies' or 'orbits', got {table!r}")
     document = load_manifest(out_dir)
