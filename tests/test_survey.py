@@ -333,3 +333,55 @@ def test_a_failure_mid_run_leaves_whole_chunks(tmp_path, monkeypatch, failure):
     monkeypatch.undo()
     Survey.grid(target, 40, 4, chunk=60).run()
     assert read_bytes(target) == read_bytes(reference)
+
+
+@pytest.mark.parametrize("fmt", ["parquet", "csv"])
+@pytest.mark.parametrize("columns", ["compact", "all"])
+def test_run_report_equals_the_report_read_back(tmp_path, fmt, columns, monkeypatch):
+    # a run reports from the summaries of the chunks it wrote (it reads no
+    # part back); read back from the verified parts, the report is the same
+    from orbits.survey import report as report_module
+
+    def no_reading(*args, **kwargs):
+        raise AssertionError("the run read its parts back")
+
+    survey = Survey.grid(tmp_path / "s", 30, 5, chunk=70, fmt=fmt, columns=columns)
+    with monkeypatch.context() as patch:
+        patch.setattr(report_module, "read_table", no_reading)
+        report = survey.run()
+    assert survey.chunks > 3
+    written = (tmp_path / "s" / "report.json").read_bytes()
+    again = survey.report()  # reads every bodies part, checks the SHA-256s
+    assert again == report
+    assert (tmp_path / "s" / "report.json").read_bytes() == written
+    assert report["bodies"] == len(orbits.region_grid(30))
+
+
+def test_chunk_summaries_combine_as_the_whole_table():
+    from orbits.survey.report import bodies_summary, combined_summary
+
+    bodies, _ = compute_chunk(orbits.region_sample(60), 6, first_id=7)
+    # counterexamples in two chunks, a 2 pi orbit and unresolved bodies,
+    # so that every figure of the summary is exercised
+    bodies.loc[[3, 40, 41], "min_at_end"] = False
+    bodies.loc[[5, 50], "n_smallest"] = 1
+    bodies.loc[[2, 33, 59], "unresolved"] = [1, 2, 1]
+    bodies.loc[12, "min_total_phase"] = np.nan  # skipped, as on the whole column
+    whole = bodies_summary(bodies)
+    parts = [bodies.iloc[:25], bodies.iloc[25:26], bodies.iloc[26:]]
+    combined = combined_summary([bodies_summary(part) for part in parts])
+    assert combined == whole
+    assert [row["body"] for row in whole["counterexamples"]] == [10, 47, 48]
+    assert (whole["two_pi"], whole["unresolved"], whole["bodies"]) == (2, 3, 60)
+    finite = bodies["min_total_phase"].dropna()
+    assert (whole["min"], whole["max"]) == (finite.min(), finite.max())
+
+
+def test_a_resumed_run_reports_on_every_chunk(tmp_path):
+    # chunks written by an earlier run have no summary in this one: the
+    # report reads the bodies table and still counts every body
+    survey = Survey.grid(tmp_path / "s", 30, 5, chunk=70)
+    first = survey.run()
+    (tmp_path / "s" / "bodies" / "part-00002.parquet").unlink()
+    again = Survey.grid(tmp_path / "s", 30, 5, chunk=70)
+    assert again.run() == first

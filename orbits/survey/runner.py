@@ -23,7 +23,7 @@ from ..limits import check_resolution
 from . import compute
 from .compute import LAYOUTS, check_survey_bounds
 from .ledger import FORMATS, Ledger, one_line, part_name, sha256_file
-from .report import survey_report
+from .report import bodies_summary, survey_report
 from .tables import require_pyarrow, write_part
 
 DEFAULT_CHUNK = 20_000
@@ -108,6 +108,8 @@ class Survey:
         }
         self.ledger = Ledger(self.out_dir, self.parameters, source, skipped)
         self._record_lock = threading.Lock()
+        # bodies_summary of each chunk written by the current run
+        self._summaries = {}
 
     @classmethod
     def grid(cls, out_dir, resolution, n_max, **kwargs):
@@ -181,8 +183,10 @@ class Survey:
                 "rows": int(len(frame)),
                 "sha256": sha256_file(self.out_dir / name),
             }
+        summary = bodies_summary(bodies)  # for the report: no reading back
         with self._record_lock:  # chunks finish on several threads
             self.ledger.record(index, entry)
+            self._summaries[index] = summary
 
     def run(self, scheduler=None, progress=None, notify=None, status=None):
         """Compute and write every missing chunk; then the report.
@@ -239,6 +243,7 @@ class Survey:
         except OSError as error:
             raise InputError(f"cannot create {self.out_dir}: {error.strerror}") from None
         with self.lock():
+            self._summaries = {}
             self.prepare()
             self.ledger.clean_partial()
             damaged = self.verify()
@@ -261,7 +266,12 @@ class Survey:
             if self.missing():
                 raise InputError(f"{self.out_dir} is incomplete ({len(self.missing())} chunks)")
             return survey_report(
-                self.out_dir, self.n_max, self.q_max, len(self.skipped), verify=False
+                self.out_dir,
+                self.n_max,
+                self.q_max,
+                len(self.skipped),
+                verify=False,
+                summaries=self._summaries,
             )
 
     def _run_local(self, todo, progress):
