@@ -979,13 +979,20 @@ def region_grid(resolution):
         ``resolution`` not an integer >= 2, or a grid larger than half the
         machine's memory (:func:`orbits.limits.check_resolution`).
     """
+    from .core import region
+
     resolution = check_resolution(resolution)
     (lo1, hi1), (lo2, hi2) = REGION_BOX
-    axis1 = lo1 + (np.arange(resolution) + 0.5) * (hi1 - lo1) / resolution
-    axis2 = lo2 + (np.arange(resolution) + 0.5) * (hi2 - lo2) / resolution
-    g1, g2 = np.meshgrid(axis1, axis2, indexing="ij")
-    moments, inside = region_moments(g1.ravel(), g2.ravel())
-    return moments[inside]
+    box = (resolution, lo1, hi1, lo2, hi2, FLAT_SLACK)
+    # the compiled, parallel twin of region_moments on the meshgrid of cell
+    # centres (the same bits, row by row; orbits.core.region)
+    counts = np.empty(resolution, dtype=np.int64)
+    region.row_counts(*box, counts)
+    starts = np.zeros(resolution, dtype=np.int64)
+    np.cumsum(counts[:-1], out=starts[1:])
+    moments = np.empty((int(counts.sum()), 3))
+    region.fill_rows(*box, starts, moments)
+    return moments
 
 
 # Halton draws (about 2.6 per body kept), moments and masks, per body
