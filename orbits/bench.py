@@ -484,6 +484,9 @@ def bench_survey_scaling(resolution=500, n_max=30, repeats=1):
     one = min(_survey_command_wall(resolution, n_max, {cpus[0]})[0] for _ in range(repeats))
     runs = [_survey_command_wall(resolution, n_max, set(cpus)) for _ in range(repeats)]
     wall, bodies, size = min(runs)
+    # the fixed cost of a survey command (interpreter, NumPy, numba and its
+    # first kernel, pandas, pyarrow, the files): a grid of 2, on one CPU
+    fixed = min(_survey_command_wall(2, 1, {cpus[0]})[0] for _ in range(repeats))
     return {
         "task": f"orbits survey, grid {resolution}, n <= {n_max}: {len(cpus)} CPUs vs 1",
         "ours_s": wall,
@@ -492,9 +495,12 @@ def bench_survey_scaling(resolution=500, n_max=30, repeats=1):
         "speedup": one / wall,
         "bodies_per_s": bodies / wall,
         "bytes_per_body": size / bodies,
+        "fixed_s": fixed,
         "note": f"{bodies} bodies: {bodies / wall:.0f} bodies/s on CPUs {cpus}, "
         f"{bodies / one:.0f} on CPU {cpus[0]}; {size / bodies:.0f} bytes per body "
-        "(whole command: start-up, search, tables, files, report)",
+        "(whole command: start-up, search, tables, files, report); "
+        f"a grid-2 survey takes {fixed:.2f} s on one CPU ({fixed / one:.0%} of the "
+        "one-CPU run), a fixed cost that more CPUs cannot shorten",
     }
 
 

@@ -984,7 +984,7 @@ def region_grid(resolution):
     resolution = check_resolution(resolution)
     (lo1, hi1), (lo2, hi2) = REGION_BOX
     box = (resolution, lo1, hi1, lo2, hi2, FLAT_SLACK)
-    # the compiled, parallel twin of region_moments on the meshgrid of cell
+    # the compiled twin of region_moments on the meshgrid of cell
     # centres (the same bits, row by row; orbits.core.region)
     counts = np.empty(resolution, dtype=np.int64)
     region.row_counts(*box, counts)
