@@ -473,20 +473,25 @@ def _survey_command_wall(resolution, n_max, cpus, extra=()):
         shutil.rmtree(directory, ignore_errors=True)
 
 
-def bench_survey_scaling(resolution=500, n_max=30, repeats=1):
+def bench_survey_scaling(resolution=500, n_max=30, repeats=3):
     """Whole-command ``orbits survey`` on one CPU and on every CPU it may use.
 
     Issue #18's target: two CPUs >= 1.7x one (``taskset -c 0`` against
     ``taskset -c 0,1``).  The speedup column is one CPU's time over all
-    CPUs' time.
+    CPUs' time, each the best of ``repeats`` runs taken in turns (one CPU,
+    all CPUs, the fixed cost), so that a drift of the machine's speed
+    touches all three alike.
     """
     cpus = sorted(os.sched_getaffinity(0))
-    one = min(_survey_command_wall(resolution, n_max, {cpus[0]})[0] for _ in range(repeats))
-    runs = [_survey_command_wall(resolution, n_max, set(cpus)) for _ in range(repeats)]
+    ones, runs, fixeds = [], [], []
+    for _ in range(repeats):
+        ones.append(_survey_command_wall(resolution, n_max, {cpus[0]})[0])
+        runs.append(_survey_command_wall(resolution, n_max, set(cpus)))
+        # the fixed cost of a survey command (interpreter, NumPy, numba and
+        # its first kernel, pandas, pyarrow, the files): a grid of 2, one CPU
+        fixeds.append(_survey_command_wall(2, 1, {cpus[0]})[0])
+    one, fixed = min(ones), min(fixeds)
     wall, bodies, size = min(runs)
-    # the fixed cost of a survey command (interpreter, NumPy, numba and its
-    # first kernel, pandas, pyarrow, the files): a grid of 2, on one CPU
-    fixed = min(_survey_command_wall(2, 1, {cpus[0]})[0] for _ in range(repeats))
     return {
         "task": f"orbits survey, grid {resolution}, n <= {n_max}: {len(cpus)} CPUs vs 1",
         "ours_s": wall,
