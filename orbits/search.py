@@ -234,7 +234,7 @@ def search_bodies(moments, levels, *, capacity=None, device="cpu"):
         ascending level (by monotone piece, then level, where the rare
         bracketing search ran), as :func:`orbits.core.search.search_many`.
         The rows are not sorted by ``dtheta``
-        (:func:`orbits.core.search.flatten_roots` does that).
+        (:func:`orbits.core.rows.flat_rows` does that).
 
     Raises
     ------

@@ -174,24 +174,6 @@ def test_separatrix_expansion(moments, sign):
     assert slope * math.log(1e300) + intercept == pytest.approx(float(exact), rel=1e-13)
 
 
-def test_flatten_roots_matches_a_stable_lexsort():
-    """The survey's compaction: rows by body, then dtheta, ties in stored order."""
-    rng = np.random.default_rng(5)
-    n, capacity = 3000, 12
-    level = rng.integers(0, 9, (n, capacity))
-    offset = rng.normal(size=(n, capacity))
-    offset[5, :4] = 0.5  # ties
-    found = rng.integers(0, capacity + 1, n)
-    found[7] = -1  # an overflowed row is skipped
-    body, rows_level, rows_offset = kernels.flatten_roots(level, offset, found)
-    mask = np.arange(capacity)[None, :] < np.maximum(found, 0)[:, None]
-    want_body, want_level, want_offset = np.nonzero(mask)[0], level[mask], offset[mask]
-    order = np.lexsort((want_offset, want_body))
-    assert np.array_equal(body, want_body[order])
-    assert np.array_equal(rows_level, want_level[order])
-    assert np.array_equal(rows_offset, want_offset[order])
-
-
 def test_newton_only_kernel_equals_the_full_one():
     """search_body_newton (what a catalog compiles first) gives search_body's
     roots and info bit for bit wherever it needs no bracketing fallback."""

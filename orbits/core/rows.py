@@ -41,9 +41,8 @@ def flat_rows(branch, level, offset, counts):
     -------
     body, code, level, offset : ndarray
         Flat rows ordered by body, then by ``offset`` (a stable insertion
-        sort within each body's roots: ties keep the search's order, as
-        :func:`orbits.core.search.flatten_roots`); ``code`` is 0 for SAM and
-        1 for LAM.
+        sort within each body's roots: ties keep the search's order);
+        ``code`` is 0 for SAM and 1 for LAM.
     """
     total = 0
     for b in range(counts.shape[0]):

@@ -918,35 +918,3 @@ def search_many(moments, levels, root_branch, root_level, root_offset, counts, i
                 floats,
                 ints,
             )
-
-
-@njit(cache=True, nogil=True)
-def flatten_roots(level, offset, counts):
-    """Rows ``[b, :counts[b]]`` of the per-body root arrays, as flat arrays.
-
-    Returns ``body, level, offset`` ordered by body, then by ``offset``
-    (``dtheta``, a stable insertion sort within each body's few roots).
-    Rows with ``counts[b] < 0`` (overflowed) are skipped.
-    """
-    total = 0
-    for b in range(counts.shape[0]):
-        total += max(counts[b], 0)
-    body_out = np.empty(total, dtype=np.int64)
-    level_out = np.empty(total, dtype=np.int64)
-    offset_out = np.empty(total)
-    k = 0
-    for b in range(counts.shape[0]):
-        start = k
-        for j in range(max(counts[b], 0)):
-            value = offset[b, j]
-            index = level[b, j]
-            i = k
-            while i > start and offset_out[i - 1] > value:
-                offset_out[i] = offset_out[i - 1]
-                level_out[i] = level_out[i - 1]
-                i -= 1
-            offset_out[i] = value
-            level_out[i] = index
-            body_out[k] = b
-            k += 1
-    return body_out, level_out, offset_out
