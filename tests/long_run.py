@@ -26,10 +26,12 @@ def _cpu_seconds(pid):
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-def interrupted_catalog(tmp_path, signum, module="orbits"):
+def interrupted_catalog(tmp_path, signum, module="orbits", cache_dir=None):
     """Start a long catalog over a previous good file and send ``signum`` mid-run.
 
-    Returns ``(returncode, stderr lines, out path)``.
+    ``cache_dir``: an empty directory for numba's cache (``NUMBA_CACHE_DIR``),
+    so that the child compiles every kernel and the signal comes while
+    numba compiles.  Returns ``(returncode, stderr lines, out path)``.
     """
     bodies = tmp_path / "bodies.csv"
     pd.DataFrame(orbits.region_grid(60), columns=["I1", "I2", "I3"]).to_csv(bodies, index=False)
@@ -37,7 +39,8 @@ def interrupted_catalog(tmp_path, signum, module="orbits"):
     out.write_text("previous good catalog\n")
     argv = [sys.executable, "-m", module, "catalog", "--bodies", str(bodies)]
     argv += ["--n-max", "300", "--q-max", "5", "--out", str(out)]
-    proc = subprocess.Popen(argv, stderr=subprocess.PIPE, text=True)
+    env = None if cache_dir is None else dict(os.environ, NUMBA_CACHE_DIR=str(cache_dir))
+    proc = subprocess.Popen(argv, stderr=subprocess.PIPE, text=True, env=env)
     deadline = time.monotonic() + 120
     while proc.poll() is None and time.monotonic() < deadline:
         if _cpu_seconds(proc.pid) >= BUSY_CPU_SECONDS:

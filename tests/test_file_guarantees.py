@@ -195,6 +195,29 @@ def test_termination_leaves_no_partial_file(tmp_path, signum, code, message):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bodies.csv", "out.csv"]
 
 
+@pytest.mark.parametrize(
+    "signum, code, message",
+    [
+        (signal.SIGTERM, 143, "orbits: stopped by SIGTERM; no partial output was written"),
+        (signal.SIGINT, 130, "orbits: interrupted; no partial output was written"),
+    ],
+)
+def test_a_stop_while_numba_compiles_is_one_line(tmp_path, signum, code, message):
+    # with an empty kernel cache the child spends its first seconds
+    # compiling; an exception raised inside llvmlite's ctypes callbacks was
+    # dropped there and the run ended in a traceback with exit 1: the stop
+    # now waits until the kernel being compiled is done
+    cache = tmp_path / "numba-cache"
+    cache.mkdir()
+    work = tmp_path / "work"
+    work.mkdir()
+    returncode, err, out = interrupted_catalog(work, signum, cache_dir=cache)
+    assert any(cache.rglob("*.nbi"))  # it was compiling when stopped
+    assert (returncode, err) == (code, [message])
+    assert out.read_text() == "previous good catalog\n"
+    assert sorted(p.name for p in work.iterdir()) == ["bodies.csv", "out.csv"]
+
+
 def test_stale_temporaries_of_the_same_name_only(tmp_path):
     target = tmp_path / "c.csv"
     stale = tmp_path / f".c.csv.{DEAD_PID}.abc.part"

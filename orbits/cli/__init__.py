@@ -15,6 +15,7 @@ One module per subcommand (:mod:`~orbits.cli.phase`,
 arguments, progress, exit codes) is in :mod:`orbits.cli.shared`.
 """
 
+import signal
 import sys
 
 from .._version import __version__
@@ -111,14 +112,73 @@ def _ignore_signal(signum, frame):
     """A stop signal after the first: the run is already ending."""
 
 
+# a stop signal that came while numba was compiling: (signal, SIGALRM's
+# handler before), until the main thread is back in code of ours
+_DEFERRED = []
+# how often a deferred stop looks again (s)
+_RETRY_SECONDS = 0.02
+
+
+def _in_compiler(frame):
+    """Whether the main thread is inside numba or llvmlite (compiling or loading a kernel)."""
+    while frame is not None:
+        if frame.f_globals.get("__name__", "").partition(".")[0] in (
+            "numba",
+            "numba_cuda",
+            "llvmlite",
+        ):
+            return True
+        frame = frame.f_back
+    return False
+
+
+def _defer(signum, frame):
+    """Put off a stop signal that comes while numba compiles; True when put off.
+
+    An exception raised there can land in one of llvmlite's ctypes
+    callbacks, where Python prints it and drops it: the compiler is left
+    broken and the run ends in a traceback (exit 1) instead of the one-line
+    stop.  The stop is raised as soon as the main thread is out of numba and
+    llvmlite again, looked at every :data:`_RETRY_SECONDS` by ``SIGALRM``;
+    a kernel compiles in a few seconds at most.
+    """
+    if not hasattr(signal, "setitimer") or not _in_compiler(frame):
+        return False
+    if not _DEFERRED:
+        _DEFERRED.append((signum, signal.signal(signal.SIGALRM, _retry_deferred)))
+    signal.setitimer(signal.ITIMER_REAL, _RETRY_SECONDS)
+    return True
+
+
+def _retry_deferred(_alarm, frame):
+    signum = _DEFERRED[0][0]
+    if signum == signal.SIGINT:
+        _raise_interrupt(signum, frame)
+    else:
+        _raise_terminated(signum, frame)
+
+
+def _end_deferral():
+    """Cancel a deferred stop's timer and give SIGALRM its handler back."""
+    if _DEFERRED:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, _DEFERRED.pop()[1])
+
+
 def _raise_terminated(signum, frame):
     from ..atomic import Terminated
 
+    if _defer(signum, frame):
+        return
+    _end_deferral()
     _hold_signals()
     raise Terminated(signum)
 
 
 def _raise_interrupt(signum, frame):
+    if _defer(signum, frame):
+        return
+    _end_deferral()
     _hold_signals()
     raise KeyboardInterrupt
 
@@ -268,6 +328,7 @@ def main(argv=None):
         return EXIT_USAGE
     finally:
         warnings.showwarning = shown
+        _end_deferral()
         for number, handler in previous.items():
             if handler is not None:  # None: a handler not installed from Python
                 signal.signal(number, handler)
