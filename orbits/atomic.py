@@ -272,8 +272,11 @@ def refuse_link(path):
         )
 
 
-def read_bytes_nofollow(path):
-    """The bytes of a regular file, never through a symbolic link.
+def open_nofollow(path):
+    """A regular file opened for reading in binary, never through a symbolic link.
+
+    The checks are made on the open descriptor, so a file swapped for a
+    link or a FIFO after a caller's ``lstat`` is still refused.
 
     Raises
     ------
@@ -288,9 +291,16 @@ def read_bytes_nofollow(path):
         if error.errno == errno.ELOOP:
             refuse_link(path)
         raise
-    with os.fdopen(handle, "rb") as stream:
-        if not stat.S_ISREG(os.fstat(stream.fileno()).st_mode):
-            raise InputError(f"{path} is not a regular file")
+    stream = os.fdopen(handle, "rb")
+    if not stat.S_ISREG(os.fstat(stream.fileno()).st_mode):
+        stream.close()
+        raise InputError(f"{path} is not a regular file")
+    return stream
+
+
+def read_bytes_nofollow(path):
+    """The bytes of a regular file, never through a symbolic link (:func:`open_nofollow`)."""
+    with open_nofollow(path) as stream:
         return stream.read()
 
 

@@ -15,7 +15,13 @@ import json
 from pathlib import Path
 
 from .._args import path_argument
-from ..atomic import read_bytes_nofollow, refuse_link, remove_stale_temporaries, write_text_atomic
+from ..atomic import (
+    open_nofollow,
+    read_bytes_nofollow,
+    refuse_link,
+    remove_stale_temporaries,
+    write_text_atomic,
+)
 from ..errors import InputError
 
 FORMATS = ("csv", "parquet")
@@ -29,18 +35,13 @@ TABLES = ("bodies", "orbits")
 
 
 def sha256_file(path):
-    """SHA-256 of a regular file, never through a symbolic link."""
-    import errno
-    import os
+    """SHA-256 of a regular file, never through a symbolic link.
 
+    Opened by :func:`orbits.atomic.open_nofollow` (a link or a non-regular
+    file raises :class:`~orbits.errors.InputError`).
+    """
     digest = hashlib.sha256()
-    try:
-        descriptor = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC | os.O_NONBLOCK)
-    except OSError as error:
-        if error.errno == errno.ELOOP:
-            refuse_link(path)
-        raise
-    with os.fdopen(descriptor, "rb") as handle:
+    with open_nofollow(path) as handle:
         for block in iter(lambda: handle.read(1 << 20), b""):
             digest.update(block)
     return digest.hexdigest()
