@@ -473,6 +473,18 @@ def _survey_command_wall(resolution, n_max, cpus, extra=()):
         shutil.rmtree(directory, ignore_errors=True)
 
 
+def amdahl_bound(one, fixed, cpus):
+    """The most ``cpus`` CPUs can speed up a run of ``one`` s with ``fixed`` s serial.
+
+    Amdahl's law: the fixed part stays on one core, the rest is shared
+    perfectly, ``one / (fixed + (one - fixed) / cpus)``; 1 when the fixed
+    part is the whole run (or more, as measured on a noisy machine).
+    """
+    if not one > fixed:
+        return 1.0
+    return one / (fixed + (one - fixed) / cpus)
+
+
 def bench_survey_scaling(resolution=500, n_max=30, repeats=3):
     """Whole-command ``orbits survey`` on one CPU and on every CPU it may use.
 
@@ -492,6 +504,7 @@ def bench_survey_scaling(resolution=500, n_max=30, repeats=3):
         fixeds.append(_survey_command_wall(2, 1, {cpus[0]})[0])
     one, fixed = min(ones), min(fixeds)
     wall, bodies, size = min(runs)
+    bound = amdahl_bound(one, fixed, len(cpus))
     return {
         "task": f"orbits survey, grid {resolution}, n <= {n_max}: {len(cpus)} CPUs vs 1",
         "ours_s": wall,
@@ -501,11 +514,62 @@ def bench_survey_scaling(resolution=500, n_max=30, repeats=3):
         "bodies_per_s": bodies / wall,
         "bytes_per_body": size / bodies,
         "fixed_s": fixed,
+        "bound": bound,
         "note": f"{bodies} bodies: {bodies / wall:.0f} bodies/s on CPUs {cpus}, "
         f"{bodies / one:.0f} on CPU {cpus[0]}; {size / bodies:.0f} bytes per body "
         "(whole command: start-up, search, tables, files, report); "
         f"a grid-2 survey takes {fixed:.2f} s on one CPU ({fixed / one:.0%} of the "
-        "one-CPU run), a fixed cost that more CPUs cannot shorten",
+        "one-CPU run), a fixed cost that more CPUs cannot shorten: with it, "
+        f"{len(cpus)} CPUs can be at most {bound:.2f}x one (Amdahl)",
+    }
+
+
+def bench_search_scaling(resolution=500, n_max=30, repeats=3):
+    """The survey's search kernel alone on one numba thread and on all of them.
+
+    The same bodies as :func:`bench_survey_scaling` (the grid, in the
+    survey's chunks, each through :func:`orbits.survey.compute.search_chunk`),
+    in this process: no start-up, no tables, no files.  Each figure is the
+    best of ``repeats``, taken in turns.
+    """
+    from .bodies import region_grid
+    from .survey.compute import search_chunk
+    from .survey.runner import DEFAULT_CHUNK
+    from .threads import get_num_threads, set_num_threads
+
+    moments = region_grid(resolution)
+    chunks = [moments[i : i + DEFAULT_CHUNK] for i in range(0, len(moments), DEFAULT_CHUNK)]
+    top = numba.config.NUMBA_NUM_THREADS
+    search_chunk(chunks[0][:64], n_max)  # load the kernels first
+
+    def once(threads):
+        before = get_num_threads()
+        try:
+            set_num_threads(threads)
+            start = time.perf_counter()
+            for chunk in chunks:
+                search_chunk(chunk, n_max)
+            return time.perf_counter() - start
+        finally:
+            set_num_threads(before)
+
+    singles, everys = [], []
+    for _ in range(repeats):
+        singles.append(once(1))
+        everys.append(once(top))
+    single, every = min(singles), min(everys)
+    bodies = len(moments)
+    return {
+        "_ours": (lambda: once(top), 1),
+        "task": f"search kernel, grid {resolution}, n <= {n_max}: {top} threads vs 1",
+        "ours_s": every,
+        "baseline": "the same search on one numba thread",
+        "baseline_s": single,
+        "speedup": single / every,
+        "bodies_per_s": bodies / every,
+        "note": f"{bodies} bodies: {bodies / every:.0f} bodies/s on {top} threads, "
+        f"{bodies / single:.0f} on one; the parallel part of the survey_scaling "
+        "command (no start-up, tables or files)",
     }
 
 
@@ -597,6 +661,7 @@ BENCHMARKS = {
     "survey": bench_survey,
     "survey_scaling": bench_survey_scaling,
     "survey_threads": bench_survey_threads,
+    "search_scaling": bench_search_scaling,
     "survey_bytes": bench_survey_bytes,
 }
 
@@ -785,7 +850,13 @@ def run(names=None, quick=False, load=True, device="cpu"):
         kwargs = {}
         if quick and name in ("phase", "motion_rate"):
             kwargs = {"points": 100_000}
-        if quick and name in ("survey", "survey_scaling", "survey_threads", "survey_bytes"):
+        if quick and name in (
+            "survey",
+            "survey_scaling",
+            "survey_threads",
+            "search_scaling",
+            "survey_bytes",
+        ):
             kwargs = {"resolution": 60}
         if quick and name == "startup":
             kwargs = {"repeats": 2}

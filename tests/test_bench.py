@@ -104,3 +104,23 @@ def test_bench_device_cuda_without_a_gpu_is_one_line(capsys):
     assert main(["bench", "--device", "cuda", "--only", "phase"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "known: cuda_phase, cuda_search" in err[0], err
+
+
+def test_amdahl_bound():
+    # 1 s serial of a 4 s run: two CPUs give at most 4 / (1 + 3/2) = 1.6x
+    assert bench.amdahl_bound(4.0, 1.0, 2) == pytest.approx(1.6, rel=1e-15)
+    assert bench.amdahl_bound(4.0, 1.0, 1) == pytest.approx(1.0, rel=1e-15)
+    assert bench.amdahl_bound(4.0, 0.0, 16) == pytest.approx(16.0, rel=1e-15)
+    # no parallel part (a noisy fixed cost above the run): no speed-up
+    assert bench.amdahl_bound(1.0, 1.2, 2) == 1.0
+
+
+def test_search_scaling_row_counts_the_grid():
+    from orbits.bodies import region_grid
+
+    row = bench.bench_search_scaling(resolution=12, n_max=5, repeats=1)
+    bodies = len(region_grid(12))
+    assert row["bodies_per_s"] == pytest.approx(bodies / row["ours_s"], rel=1e-12)
+    assert row["ours_s"] > 0 and row["baseline_s"] > 0
+    assert row["speedup"] == pytest.approx(row["baseline_s"] / row["ours_s"], rel=1e-12)
+    assert f"{bodies} bodies" in row["note"]
