@@ -8,6 +8,7 @@ of a TypeError or ValueError from inside NumPy or numba.
 
 import numbers
 import os
+import sys
 
 import numpy as np
 
@@ -31,6 +32,13 @@ def real_array(name, value, error=InputError):
     """
     if isinstance(value, (str, bytes)) or value is None:
         raise ArgumentTypeError(f"{name} must be real numbers, got {_describe(value)}")
+    masked = sys.modules.get("numpy.ma")  # no masked array exists before it is imported
+    if masked is not None and isinstance(value, masked.MaskedArray) and masked.is_masked(value):
+        # np.asarray would drop the mask and compute the hidden values
+        raise ArgumentTypeError(
+            f"{name} is a masked array with masked entries, which would be computed "
+            f"as if unmasked; pass {name}.compressed() or {name}.filled(value)"
+        )
     try:
         array = np.asarray(value)
     except (ValueError, TypeError):

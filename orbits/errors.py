@@ -33,10 +33,12 @@ class AngleError(OrbitsError):
 
 
 class SeparatrixError(OrbitsError):
-    """An initial spin exactly on the separatrix ``M^2 = 2 E I2``.
+    """An initial spin on the separatrix ``M^2 = 2 E I2``.
 
     There the period is infinite and the total phase diverges; pass an
-    offset ``dtheta`` from the critical angle instead.
+    offset ``dtheta`` from the critical angle instead.  Also raised for a
+    ``theta`` within the rounding error of the critical angle, whose side
+    of the separatrix (SAM or LAM) double precision cannot tell.
     """
 
 

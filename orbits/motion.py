@@ -351,7 +351,10 @@ class Motion:
         if status == _phase.STATUS_OUT_OF_RANGE:
             raise AngleError(f"theta = {theta_!r} is outside [0, pi/2]")
         if status == _phase.STATUS_SEPARATRIX:
-            raise SeparatrixError("the spin lies on the separatrix; pass a nonzero dtheta")
+            raise SeparatrixError(
+                "the spin lies on the separatrix, or theta is within the rounding "
+                "error of theta_c (too near to tell SAM from LAM); pass a nonzero dtheta"
+            )
         omega = [speed * w1, speed * w2, speed * w3]
         if not all(math.isfinite(v) for v in omega):
             raise AngleError(f"speed {speed!r} is too large for a double omega0")

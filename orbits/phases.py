@@ -171,17 +171,26 @@ def _check_status(status, moments, angle, phi, shape, from_offset):
     if code == _kernels.STATUS_NOT_FINITE:
         raise AngleError(f"{name} must be finite, got {value}")
     i1, i2, i3 = (float(_flat(moments[..., j], shape)[k]) for j in range(3))
-    theta_c = _kernels.critical_angle(i1, i2, i3, float(_flat(phi, shape)[k]))
+    constants = _kernels.body_constants(i1, i2, i3, float(_flat(phi, shape)[k]))
+    theta_c = constants[2]
     if code == _kernels.STATUS_OUT_OF_RANGE:
         raise AngleError(
             f"theta_c + dtheta = {theta_c:.17g} + {value:.17g} is outside "
             "[0, pi/2]; dtheta is an offset from theta_c and is not folded "
             "(pass theta, which is folded by the top's symmetries)"
         )
+    if not from_offset:
+        slack = _kernels.side_slack(theta_c, constants[3])
+        raise SeparatrixError(
+            f"theta = {value:.17g} is within the rounding error of theta_c = "
+            f"{theta_c:.17g} (|theta - theta_c| <= {slack:.3g} rad): on the "
+            "separatrix M^2 = 2 E I2 or too near it to tell its side (SAM or LAM) "
+            "in double precision; pass the offset dtheta = theta - theta_crit instead"
+        )
     raise SeparatrixError(
-        f"{name} = {value:.17g} puts the spin on the separatrix M^2 = 2 E I2 "
+        f"dtheta = {value:.17g} puts the spin on the separatrix M^2 = 2 E I2 "
         f"(theta_c = {theta_c:.17g}), where the period and the total phase "
-        "are infinite; pass a nonzero dtheta = theta - theta_crit instead"
+        "are infinite; pass a nonzero dtheta"
     )
 
 
@@ -268,7 +277,10 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0, device="cp
         Angles NaN or infinite, both or neither of theta/dtheta given, or
         ``theta_c + dtheta`` outside [0, pi/2].
     SeparatrixError
-        ``theta`` exactly on the separatrix (``dtheta == 0``).
+        ``dtheta == 0``, or a ``theta`` within the rounding error of
+        ``theta_c`` (``|theta - theta_c| <= 16 * 2**-53 * min(theta_c,
+        pi/2 - theta_c)``): on the separatrix, or too near it for double
+        precision to tell its branch; pass ``dtheta`` there.
     DeviceError
         ``device`` not ``"cpu"``/``"cuda"``, or ``"cuda"`` unavailable (no
         GPU, no numba-cuda, or a numba-cuda that does not compile here).

@@ -29,8 +29,17 @@ def _positive_finite(name, value):
     return value
 
 
-def _solve(moments, targets):
-    """Roots for per-branch targets ``{"SAM": X or None, "LAM": X or None}``."""
+# the search's smallest offset: roots nearer the separatrix are unresolved
+_SMALLEST_OFFSET = 2.2250738585072014e-308
+
+
+def _solve(moments, targets, what):
+    """Roots for per-branch targets ``{"SAM": X or None, "LAM": X or None}``.
+
+    ``what`` names the request in the errors.  Raises InputError when no
+    spin has it: below the body's minimum, or (a different message) only
+    closer to the separatrix than a double can hold.
+    """
     from .core import search as _kernels
     from .search import UnresolvedOrbitsWarning, find_roots
 
@@ -46,6 +55,9 @@ def _solve(moments, targets):
         found.append(offsets[branches == sign])
         slot = _kernels.INFO_UNREACHED_SAM if sign == 1 else _kernels.INFO_UNREACHED_LAM
         unreached += int(info[slot])
+    offsets = np.sort(np.concatenate(found)) if found else np.empty(0)
+    if offsets.size == 0:
+        raise _too_near(moments, what) if unreached else _no_spin(moments, what)
     if unreached:
         warnings.warn(
             f"{plural(unreached, 'spin')} with this total phase "
@@ -55,8 +67,7 @@ def _solve(moments, targets):
             UnresolvedOrbitsWarning,
             stacklevel=3,
         )
-    offsets = np.sort(np.concatenate(found)) if found else np.empty(0)
-    return offsets, info
+    return offsets
 
 
 def _table(moments, offsets, targets):
@@ -84,6 +95,18 @@ def _no_spin(moments, what):
     )
 
 
+def _too_near(moments, what):
+    from .phases import total_phase
+
+    sam, lam = total_phase(moments, dtheta=[-_SMALLEST_OFFSET, _SMALLEST_OFFSET])
+    return InputError(
+        f"every spin of this body with {what} lies closer than |dtheta| = "
+        f"{_SMALLEST_OFFSET:.2g} rad to the separatrix, nearer than a double can "
+        f"hold: the largest total phase a double reaches is {sam:.6f} rad on SAM "
+        f"and {lam:.6f} rad on LAM"
+    )
+
+
 def spins_with_total_phase(body_or_moments, total_phase):
     """Every spin (``phi = 0``, both branches) whose total phase is ``total_phase``.
 
@@ -104,9 +127,12 @@ def spins_with_total_phase(body_or_moments, total_phase):
     Raises
     ------
     InputError
-        ``total_phase`` not finite and positive, or below the smallest
+        ``total_phase`` not finite and positive, below the smallest
         total phase of the body (no spin has it: the message gives the
-        minimum).
+        minimum), or so large that every spin with it lies closer to the
+        separatrix than ``|dtheta| = 2.2e-308`` (the message gives the
+        largest total phase a double reaches on each branch: about 2,400 rad
+        for the Fig. 6 body).
 
     Warns
     -----
@@ -132,9 +158,7 @@ def spins_with_total_phase(body_or_moments, total_phase):
     if moments.shape != (3,):
         raise InputError("spins_with_total_phase takes one body")
     target = _positive_finite("total_phase", total_phase)
-    offsets, _ = _solve(moments, {"SAM": target, "LAM": target})
-    if offsets.size == 0:
-        raise _no_spin(moments, f"total phase {target:.17g} rad")
+    offsets = _solve(moments, {"SAM": target, "LAM": target}, f"total phase {target:.17g} rad")
     return _table(moments, offsets, {"SAM": target, "LAM": target})
 
 
@@ -183,9 +207,7 @@ def spins_with_period_ratio(body_or_moments, ratio):
         "SAM": TWO_PI * (ratio - 1.0) if ratio > 1.0 else None,
         "LAM": TWO_PI * (ratio + 1.0),
     }
-    offsets, _ = _solve(moments, targets)
-    if offsets.size == 0:
-        raise _no_spin(moments, f"period ratio P_psi/P_phi = {ratio:.17g}")
+    offsets = _solve(moments, targets, f"period ratio P_psi/P_phi = {ratio:.17g}")
     return _table(moments, offsets, targets)
 
 

@@ -50,8 +50,12 @@ def test_shape_mismatch_named():
 def test_separatrix_theta_named():
     theta_c = orbits.critical_angle(BODY)
     for function in (orbits.total_phase, orbits.phases):
-        with pytest.raises(SeparatrixError, match=f"theta = {theta_c:.17g} puts the spin"):
+        with pytest.raises(
+            SeparatrixError, match=f"theta = {theta_c:.17g} is within the rounding error"
+        ):
             function(BODY, [0.1, theta_c])
+        with pytest.raises(SeparatrixError, match="dtheta = 0 puts the spin"):
+            function(BODY, dtheta=[0.1, 0.0])
 
 
 def test_folded_in_kernel_equals_folded_first():

@@ -445,6 +445,85 @@ def test_theta_exactly_on_the_separatrix():
         orbits.phases(FIG6, orbits.critical_angle(FIG6))
 
 
+def mp_side(moments, phi, theta):
+    """Sign of theta - theta_c for the exact doubles given (mpmath, 60 digits)."""
+    with mp.workdps(60):
+        i1, i2, i3 = (mp.mpf(float(v)) for v in sorted(moments))
+        c = mp.cos(mp.mpf(phi))
+        theta_c = mp.atan2(mp.sqrt(i3 * (i3 - i2)), mp.sqrt(i1 * (i2 - i1) * c * c))
+        gap = mp.mpf(theta) - theta_c
+        return "LAM" if gap > 0 else "SAM", float(gap), float(min(theta_c, mp.pi / 2 - theta_c))
+
+
+# found by an adversarial probe: theta == critical_angle at phi = 0.9 came
+# back on SAM, 1 ulp from the separatrix, while the exact offset is +2e-18
+PROBE_BODY = [
+    float.fromhex(h)
+    for h in ("0x1.05c1f869bf1cep-3", "0x1.c3b921e2826aep-3", "0x1.3e7a8a3cd1a43p-2")
+]
+
+
+def test_theta_within_the_rounding_of_theta_c_is_refused_not_guessed():
+    """Near theta_c a given theta is either refused or put on the right branch.
+
+    theta_c is computed with a rounding error of a few ulps, so the side of
+    the separatrix of a theta that close cannot be told in double precision.
+    Every theta within 3 ulps of the computed theta_c, over bodies and phi,
+    is either refused (SeparatrixError, naming dtheta) or given the branch
+    of the exact sign of theta - theta_c (mpmath, 60 digits); and every
+    theta 64 units of 2**-53 x min(theta_c, pi/2 - theta_c) away is accepted
+    with the right branch (the refusal reaches at most 16).
+    """
+    rng = np.random.default_rng(7)
+    cases = [(PROBE_BODY, 0.9)]
+    while len(cases) < 60:
+        moments = np.sort(rng.uniform(0.05, 1.0, 3))
+        if moments[2] < moments[0] + moments[1] and np.diff(moments).min() > 1e-3:
+            cases.append((moments, float(rng.choice([0.0, rng.uniform(0, 1.5707)]))))
+    refused = 0
+    for moments, phi in cases:
+        theta_c = float(orbits.critical_angle(moments, phi))
+        _, _, small = mp_side(moments, phi, theta_c)
+        near = [theta_c]
+        for _ in range(3):
+            near = [np.nextafter(near[0], 0.0), *near, np.nextafter(near[-1], 2.0)]
+        far = [theta_c - 64 * EPS / 2 * small, theta_c + 64 * EPS / 2 * small]
+        for theta in [*near, *far]:
+            side, gap, _ = mp_side(moments, phi, theta)
+            try:
+                row = orbits.phases(moments, theta, phi=phi).iloc[0]
+            except SeparatrixError as error:
+                assert theta in near, (moments, phi, theta, gap)
+                assert "dtheta" in str(error) and "rounding error" in str(error)
+                refused += 1
+                continue
+            assert row.branch == side, (moments, phi, theta, gap)
+            assert math.copysign(1.0, row.dtheta) == math.copysign(1.0, gap)
+    assert refused >= 60  # theta == theta_c at least is refused (it was not, at phi != 0)
+
+
+def test_the_probe_body_from_its_exact_offset():
+    """The refused theta's spin, given as its exact offset, is on LAM."""
+    side, gap, _ = mp_side(PROBE_BODY, 0.9, float(orbits.critical_angle(PROBE_BODY, 0.9)))
+    assert side == "LAM" and 1e-18 < gap < 3e-18
+    row = orbits.phases(PROBE_BODY, dtheta=gap, phi=0.9).iloc[0]
+    assert row.branch == "LAM"
+    expected = mp_total_phase_from_dtheta_phi(PROBE_BODY, gap, 0.9)
+    assert row.total_phase == pytest.approx(expected, rel=1e-13)
+
+
+def mp_total_phase_from_dtheta_phi(moments, dtheta, phi, dps=60):
+    with mp.workdps(dps):
+        i1, i2, i3 = (mp.mpf(float(v)) for v in sorted(moments))
+        c, s = mp.cos(mp.mpf(phi)), mp.sin(mp.mpf(phi))
+        theta_c = mp.atan2(mp.sqrt(i3 * (i3 - i2)), mp.sqrt(i1 * (i2 - i1) * c * c))
+        theta = theta_c + mp.mpf(dtheta)
+        w1, w2, w3 = mp.sin(theta) * c, mp.sin(theta) * s, mp.cos(theta)
+        two_e = i1 * w1**2 + i2 * w2**2 + i3 * w3**2
+        m_sq = i1**2 * w1**2 + i2**2 * w2**2 + i3**2 * w3**2
+        return float(period_and_total_phase(i1, i2, i3, two_e, m_sq)[1])
+
+
 def test_bad_bodies_through_arrays():
     with pytest.raises(SymmetricTopError, match=r"body #1"):
         orbits.total_phase([[1, 2, 2.5], [1, 1, 1.5]], 0.3)

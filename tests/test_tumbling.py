@@ -136,6 +136,31 @@ def test_total_phase_below_the_minimum_is_an_error_with_the_minimum():
             spins_with_total_phase(FIG6, bad)
 
 
+def test_total_phase_beyond_what_a_double_reaches_says_so():
+    """Above the phase at |dtheta| = 2.2e-308 the spins exist but cannot be stored.
+
+    The largest phases are those at the smallest normal offset on each branch
+    (about 2,424 rad on SAM and 2,430 rad on LAM for this body); between them
+    the LAM spin is returned with a warning, above both the error says why
+    (it used to claim that no spin has that phase).
+    """
+    tiny = 2.2250738585072014e-308
+    sam, lam = orbits.total_phase(FIG6, dtheta=[-tiny, tiny])
+    assert 2400 < sam < lam < 2440
+    with pytest.warns(orbits.UnresolvedOrbitsWarning, match="2.2e-308"):
+        spins = spins_with_total_phase(FIG6, 0.5 * (sam + lam))
+    assert spins["branch"].astype(str).tolist() == ["LAM"]
+    for target in (lam * (1 + 1e-9), 1e5, 1e300):
+        with pytest.raises(InputError, match="closer than") as error:
+            spins_with_total_phase(FIG6, target)
+        assert "at least" not in str(error.value)
+        assert f"{sam:.6f} rad on SAM" in str(error.value)
+        assert f"{lam:.6f} rad on LAM" in str(error.value)
+    # a ratio whose SAM and LAM phases are both out of reach, the same
+    with pytest.raises(InputError, match="closer than"):
+        spins_with_period_ratio(FIG6, lam / (2 * math.pi) + 2.0)
+
+
 # ---------------------------------------------------------------- SciPy hand-off
 def test_rotation_object_is_the_rotation_with_scalar_last_quaternions():
     motion = Motion.from_spin(FIG6, 0.7)

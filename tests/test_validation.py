@@ -216,6 +216,26 @@ def test_type_faults_are_argument_type_errors_naming_the_argument():
     assert issubclass(ArgumentTypeError, InputError)
 
 
+def test_masked_entries_are_refused_not_computed():
+    """np.asarray drops a mask: the hidden values would be computed silently."""
+    hidden = np.ma.array([0.5, 1.2], mask=[False, True])
+    cases = [
+        (lambda: orbits.total_phase(FIG6, hidden), "theta"),
+        (lambda: orbits.phases(FIG6, dtheta=hidden - 1.0), "dtheta"),
+        (lambda: orbits.total_phase(np.ma.array([1.0, 2.0, 2.5], mask=[0, 1, 0]), 0.3), "moments"),
+        (lambda: orbits.Body(np.ma.array([1.0, 2.0, 2.5], mask=[0, 1, 0])), "moments"),
+        (lambda: orbits.Motion.from_spin(FIG6, theta=0.5).omega(hidden), "t"),
+    ]
+    for call, name in cases:
+        with pytest.raises(ArgumentTypeError, match=f"{name} is a masked array"):
+            call()
+    # nothing masked: the values are the array's
+    clear = np.ma.array([0.5, 1.2], mask=[False, False])
+    np.testing.assert_array_equal(
+        orbits.total_phase(FIG6, clear), orbits.total_phase(FIG6, [0.5, 1.2])
+    )
+
+
 def test_shapes_that_do_not_broadcast_are_refused():
     with pytest.raises(InputError, match="broadcast"):
         orbits.total_phase([FIG6, FIG6, FIG6], [0.1, 0.2])
