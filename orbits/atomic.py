@@ -8,13 +8,15 @@ directory, is flushed and fsync'ed, and then replaces the target with
   the command line turns into :class:`Terminated`, the temporary file is
   removed and an existing target is left untouched.
 * A target that exists and is not a regular file (a device such as
-  ``/dev/null``, a FIFO, a socket, or a symlink to one) is refused: it is
-  never replaced by a regular file.  A symlink to a regular file has its
-  target replaced (the link stays), unless the write is made with
-  ``follow_links=False`` (every write inside a survey directory): then a
-  symlink at the target is refused, and one planted after the check is
-  replaced itself (``os.replace`` never follows it), never written through.
-* Temporary names are ``.NAME.PID.RANDOM.part``.  A process killed with
+  ``/dev/null``, a FIFO, a socket) is refused: it is never replaced by a
+  regular file.  A symbolic link at the target is refused too, whatever it
+  points to: nothing is written through a link, so nothing is written
+  outside the path given; one planted after the check is replaced itself
+  (``os.replace`` never follows it), never written through.  (Links in the
+  directories above the target are the user's own layout and are used.)
+* Temporary names are ``.NAME.PID.RANDOM.part`` (NAME shortened, with a
+  hash of the whole, when the name is too long to take the suffix).  A
+  process killed with
   SIGKILL cannot clean up, so every later write to the same directory
   removes the leftovers of ``.NAME.*.part`` whose process is gone; the
   temporaries of a live process are never touched.
@@ -165,7 +167,8 @@ def remove_stale_temporaries(directory, name, regex=False):
         How many were removed.  Temporaries of live processes (including
         this one) and files of any other pattern are never touched.
     """
-    pattern = re.compile(r"^\." + (name if regex else re.escape(name)) + r"\.(\d+)\.[^/]*\.part$")
+    stem = name if regex else re.escape(temporary_stem(name))
+    pattern = re.compile(r"^\." + stem + r"\.(\d+)\.[^/]*\.part$")
     removed = 0
     try:
         entries = list(os.scandir(directory))
@@ -189,8 +192,8 @@ def remove_stale_temporaries(directory, name, regex=False):
 def atomic_path(path, follow_links=True):
     """Yield a temporary path; on success move it onto ``path``.
 
-    With ``follow_links=False`` a symbolic link at ``path`` is refused
-    instead of written through.
+    A symbolic link at ``path`` is always refused (:func:`refuse_link`);
+    ``follow_links`` is kept for old callers and no longer follows one.
 
     Raises
     ------
@@ -199,18 +202,14 @@ def atomic_path(path, follow_links=True):
         is not a regular file, or the write failed (the message names the
         path and the reason, e.g. no space left on device).
     """
-    if not follow_links:
-        refuse_link(path)
     ensure_writable(path)
+    refuse_link(path)
     path = Path(path)
-    if follow_links and path.is_symlink():
-        # replace the regular file the link points to, keep the link
-        path = Path(os.path.realpath(path))
     directory = path.parent if str(path.parent) else Path(".")
     remove_stale_temporaries(directory, path.name)
     try:
         handle, temporary = tempfile.mkstemp(
-            prefix=f".{path.name}.{os.getpid()}.", suffix=".part", dir=directory
+            prefix=f".{temporary_stem(path.name)}.{os.getpid()}.", suffix=".part", dir=directory
         )
     except OSError as error:
         raise InputError(f"cannot write {path}: {error.strerror}") from None
@@ -237,6 +236,87 @@ def atomic_path(path, follow_links=True):
         ):
             raise InputError(f"cannot write {path}: {os.strerror(error.errno)}") from None
         raise
+
+
+# set while file_set moves its files into place (see committing)
+_COMMITTING = []
+
+
+def committing():
+    """Whether a :func:`file_set` is moving its files into place right now.
+
+    The command line puts a stop signal off until it is done, so that a set
+    is written whole or not at all.
+    """
+    return bool(_COMMITTING)
+
+
+_SET_PREFIX = ".orbits-set."
+
+
+@contextmanager
+def file_set(directory, names):
+    """Write the files ``names`` into ``directory``: all of them, or none.
+
+    Every target is checked before anything is made (:func:`ensure_writable`,
+    no symbolic link).  Yields a staging directory (a private
+    ``.orbits-set.PID.RANDOM.part`` in ``directory``) to write the files
+    into under the same names.  When the block ends normally each staged
+    file replaces its target (checked again, ``os.replace``) while stop
+    signals wait (:func:`committing`), and the staging directory is removed;
+    on any exception, including a stop signal, it is removed and no target
+    is touched.  A staging directory left by a killed process is removed by
+    the next set written to the same directory.
+
+    Raises
+    ------
+    InputError
+        A target that cannot be written, or a missing file at the end.
+    """
+    import shutil
+
+    directory = Path(directory)
+    names = list(dict.fromkeys(names))
+    for name in names:
+        ensure_writable(directory / name)
+        refuse_link(directory / name)
+    _remove_stale_sets(directory)
+    try:
+        stage = Path(
+            tempfile.mkdtemp(prefix=f"{_SET_PREFIX}{os.getpid()}.", suffix=".part", dir=directory)
+        )
+    except OSError as error:
+        raise InputError(f"cannot write into {directory}: {error.strerror}") from None
+    try:
+        yield stage
+        missing = [name for name in names if not (stage / name).is_file()]
+        if missing:
+            raise InputError(f"{directory}: {missing[0]} was not made")
+        _COMMITTING.append(True)
+        try:
+            for name in names:
+                target = directory / name
+                refuse_link(target)
+                _refuse_special(target)
+                os.replace(stage / name, target)
+        finally:
+            _COMMITTING.clear()
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+
+
+def _remove_stale_sets(directory):
+    import shutil
+
+    pattern = re.compile(r"^" + re.escape(_SET_PREFIX) + r"(\d+)\.[^/]*\.part$")
+    try:
+        entries = list(os.scandir(directory))
+    except OSError:
+        return
+    for entry in entries:
+        match = pattern.match(entry.name)
+        if match and entry.is_dir(follow_symlinks=False) and not _pid_alive(int(match.group(1))):
+            shutil.rmtree(entry.path, ignore_errors=True)
 
 
 _WRITE_ERRNOS = {
@@ -267,9 +347,30 @@ def refuse_link(path):
     """Raise :class:`InputError` if ``path`` is a symbolic link (it is not followed)."""
     if os.path.islink(path):
         raise InputError(
-            f"{path} is a symbolic link; orbits never follows links inside "
-            "its output directories (remove it)"
+            f"{path} is a symbolic link; orbits never writes through a link "
+            "(give the real path, or remove the link)"
         )
+
+
+# a file name's longest stem in a temporary name: NAME + ".PID.RANDOM.part"
+# (up to ~40 bytes) must stay within the 255 bytes of a file name
+_STEM_BYTES = 200
+
+
+def temporary_stem(name):
+    """``name`` as it appears in its temporaries: shortened, with a hash, when long.
+
+    The same for every call with the same name, so that the temporaries
+    left by a killed process are found again (:func:`remove_stale_temporaries`).
+    """
+    raw = os.fsencode(name)
+    if len(raw) <= _STEM_BYTES:
+        return name
+    import hashlib
+
+    digest = hashlib.sha256(raw).hexdigest()[:16]
+    head = raw[:100].decode("utf-8", "ignore") if isinstance(name, str) else raw[:100]
+    return f"{head}~{digest}"
 
 
 def open_nofollow(path):

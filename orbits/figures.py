@@ -15,7 +15,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from . import plotting
-from .atomic import atomic_path
+from .atomic import atomic_path, file_set
 from .bodies import Body
 from .cells import literal_text
 from .errors import InputError
@@ -44,7 +44,7 @@ def save_figure(figure, stem, formats=("png", "svg")):
     Returns the list of paths written.
     """
     written = []
-    for fmt in formats:
+    for fmt in dict.fromkeys(formats):  # each format once
         if fmt not in FORMATS:
             raise InputError(f"unknown figure format {fmt!r}; use {', '.join(FORMATS)}")
         path = Path(f"{stem}.{fmt}")
@@ -58,6 +58,19 @@ def save_figure(figure, stem, formats=("png", "svg")):
 def _stem(row):
     multiple = f"n{row.n:03d}" if row.q == 1 else f"p{row.n:03d}q{row.q}"
     return f"herpolhode_{row.branch}_{multiple}"
+
+
+def set_file_names(orbits, formats=("png", "svg")):
+    """The files :func:`herpolhode_set` writes for the closed orbits ``orbits``.
+
+    One ``herpolhode_<branch>_n<NNN>`` (or ``..._p<NNN>q<Q>``) per orbit in
+    the paper's order, then ``contact_sheet``, each in every format (each
+    format once); none for no orbits.
+    """
+    stems = [_stem(row) for row in _paper_order(orbits).itertuples()]
+    if stems:
+        stems.append("contact_sheet")
+    return [f"{stem}.{fmt}" for stem in stems for fmt in dict.fromkeys(formats)]
 
 
 def _paper_order(orbits):
@@ -101,19 +114,21 @@ def herpolhode_set(
     orbits = _paper_order(orbits)
     check_figure_set(len(orbits), formats)
     name = body.name or "body"
-    radii = [plotting.herpolhode_radii(body, dtheta=row.dtheta) for row in orbits.itertuples()]
-    limit = _common_limit(radii) if radii else None
-    written = []
-    for row, bounds in zip(orbits.itertuples(), radii):
-        figure = closed_herpolhode_figure(body, row, name, limit=limit, radii=bounds)
-        written += save_figure(figure, out_dir / _stem(row), formats)
+    files = set_file_names(orbits, formats)
+    # all or none: a stop or an error leaves the directory as it was
+    with file_set(out_dir, files) as stage:
+        radii = [plotting.herpolhode_radii(body, dtheta=row.dtheta) for row in orbits.itertuples()]
+        limit = _common_limit(radii) if radii else None
+        for row, bounds in zip(orbits.itertuples(), radii):
+            figure = closed_herpolhode_figure(body, row, name, limit=limit, radii=bounds)
+            save_figure(figure, stage / _stem(row), formats)
+            if progress is not None:
+                progress(1)
+        if len(orbits):
+            save_figure(contact_sheet(body, orbits), stage / "contact_sheet", formats)
         if progress is not None:
             progress(1)
-    if len(orbits):
-        written += save_figure(contact_sheet(body, orbits), out_dir / "contact_sheet", formats)
-    if progress is not None:
-        progress(1)
-    return written
+    return [out_dir / name for name in files]
 
 
 def closed_herpolhode_figure(body, row, name=None, *, limit=None, radii=None):
@@ -536,11 +551,15 @@ def paper_figures(out_dir, *, formats=("png", "svg"), survey_grid=None, progress
     ``survey_grid``: optional (i1, i2, minimum) for Fig. 2 (from a survey).
     """
     out_dir = _directory(out_dir)
-    written = []
-    for name in names or PAPER_FIGURES:
-        build = PAPER_FIGURES[name]
-        figure = build(survey_grid) if (name == "fig2" and survey_grid is not None) else build()
-        written += save_figure(figure, out_dir / name, formats)
-        if progress is not None:
-            progress(1)
-    return written
+    names = list(names or PAPER_FIGURES)
+    files = [f"{name}.{fmt}" for name in names for fmt in dict.fromkeys(formats)]
+    with file_set(out_dir, files) as stage:  # all or none
+        for name in names:
+            build = PAPER_FIGURES[name]
+            figure = (
+                build(survey_grid) if (name == "fig2" and survey_grid is not None) else build()
+            )
+            save_figure(figure, stage / name, formats)
+            if progress is not None:
+                progress(1)
+    return [out_dir / name for name in files]

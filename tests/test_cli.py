@@ -123,3 +123,50 @@ def test_phase_folds_theta_and_phi(capsys):
     assert row.phi == pytest.approx(math.pi - 3, abs=1e-15)
     assert row.total_phase == pytest.approx(want.total_phase, rel=1e-15)
     assert row.D == pytest.approx(want.D, rel=1e-15)
+
+
+@pytest.mark.parametrize("stop", ["interrupt", "terminated"])
+def test_a_stop_raised_inside_a_callback_is_not_lost(monkeypatch, capsys, stop):
+    """A stop signal's exception raised in a weakref callback is raised again.
+
+    Python drops exceptions raised in weakref callbacks (and ``__del__``,
+    ctypes callbacks) after printing "Exception ignored"; an adversarial
+    probe saw Ctrl-C during ``orbits figures`` land there: the run went on
+    to exit 0, ignoring later signals.  Here the handler's exception is
+    raised in such a callback on purpose; the run must still end as stopped,
+    with one line.
+    """
+    import gc
+    import signal
+    import time
+    import weakref
+
+    import orbits.cli as cli
+
+    def raise_stop(_reference):
+        if stop == "interrupt":
+            cli._raise_interrupt(signal.SIGINT, None)
+        cli._raise_terminated(signal.SIGTERM, None)
+
+    def run(args):
+        class Thing:
+            pass
+
+        thing = Thing()
+        holder = weakref.ref(thing, raise_stop)
+        del thing  # the callback runs here; its exception is dropped by Python
+        gc.collect()
+        deadline = time.monotonic() + 5.0
+        while time.monotonic() < deadline:  # our own code: the stop comes back here
+            sum(range(100))
+        assert holder() is None
+        return 0
+
+    monkeypatch.setattr(cli, "check_arguments", lambda args: setattr(args, "run", run))
+    start = time.monotonic()
+    code = main(["phase", "--preset", "fig6", "--theta", "0.5"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == (130 if stop == "interrupt" else 128 + signal.SIGTERM)
+    assert time.monotonic() - start < 2.0  # raised again within the retry interval
+    assert len(err) == 1 and ("interrupted" in err[0] or "stopped by SIGTERM" in err[0]), err
+    assert "Exception ignored" not in "".join(err)

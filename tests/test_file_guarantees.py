@@ -243,15 +243,46 @@ def test_out_dash_writes_a_checked_catalog_to_stdout(tmp_path, capsys, monkeypat
     pd.testing.assert_frame_equal(frame[expected.columns], expected)
 
 
-def test_a_symlink_to_a_regular_file_keeps_the_link(tmp_path):
-    real = tmp_path / "real.csv"
-    real.write_text("old\n")
-    (tmp_path / "link.csv").symlink_to(real)
-    orbits.write_catalog(
-        orbits.closed_orbits(orbits.Body.preset("fig6"), n_max=2), tmp_path / "link.csv"
-    )
-    assert (tmp_path / "link.csv").is_symlink()
-    assert len(orbits.read_catalog(real)) > 0
+def test_no_output_is_written_through_a_symlink(tmp_path, capsys):
+    """--out naming a link is refused (exit 2, one line); the file it points to is untouched.
+
+    An adversarial probe had ``--out link`` with the link to ``/etc/passwd``
+    replace that file; a link inside a figure directory was written through.
+    """
+    outside = tmp_path / "elsewhere"
+    outside.mkdir()
+    victim = outside / "victim.txt"
+    victim.write_text("not yours\n")
+    link = tmp_path / "link.csv"
+    link.symlink_to(victim)
+    table = orbits.closed_orbits(orbits.Body.preset("fig6"), n_max=2)
+    with pytest.raises(orbits.InputError, match="symbolic link"):
+        orbits.write_catalog(table, link)
+    figures = tmp_path / "figs"
+    figures.mkdir()
+    (figures / "contact_sheet.png").symlink_to(victim)
+    runs = [
+        ["catalog", "--preset", "fig6", "--n-max", "2", "--out", str(link)],
+        ["figures", "--preset", "fig6", "--n-max", "2", "--formats", "png", "--out", str(figures)],
+    ]
+    for argv in runs:
+        capsys.readouterr()
+        assert main(argv) == 2, argv
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "symbolic link" in err[-1], err
+    assert victim.read_text() == "not yours\n"
+    assert link.is_symlink() and (figures / "contact_sheet.png").is_symlink()
+    assert not [p for p in tmp_path.rglob("*.part")]
+
+
+def test_a_file_name_of_255_bytes_can_be_written(tmp_path):
+    """The temporary name (NAME.PID.RANDOM.part) must not push it past the limit."""
+    table = orbits.closed_orbits(orbits.Body.preset("fig6"), n_max=2)
+    for length in (200, 236, 251):
+        path = tmp_path / ("c" * (length - 4) + ".csv")
+        orbits.write_catalog(table, path)
+        assert len(orbits.read_catalog(path)) == len(table)
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []
 
 
 # ------------------------------------------------- issue 20: survey ledger and links

@@ -133,7 +133,8 @@ def _in_compiler(frame):
 
 
 def _defer(signum, frame):
-    """Put off a stop signal that comes while numba compiles; True when put off.
+    """Put off a stop signal that comes while numba compiles, or while a set of
+    files is moved into place (:func:`orbits.atomic.committing`); True when put off.
 
     An exception raised there can land in one of llvmlite's ctypes
     callbacks, where Python prints it and drops it: the compiler is left
@@ -142,12 +143,46 @@ def _defer(signum, frame):
     llvmlite again, looked at every :data:`_RETRY_SECONDS` by ``SIGALRM``;
     a kernel compiles in a few seconds at most.
     """
-    if not hasattr(signal, "setitimer") or not _in_compiler(frame):
+    from ..atomic import committing
+
+    if not hasattr(signal, "setitimer") or not (_in_compiler(frame) or committing()):
         return False
+    _arm_retry(signum)
+    return True
+
+
+def _arm_retry(signum):
+    """Raise the stop ``signum`` in :data:`_RETRY_SECONDS` (SIGALRM), or later if put off again."""
     if not _DEFERRED:
         _DEFERRED.append((signum, signal.signal(signal.SIGALRM, _retry_deferred)))
     signal.setitimer(signal.ITIMER_REAL, _RETRY_SECONDS)
-    return True
+
+
+def _swallowed_stop(unraisable):
+    """``sys.unraisablehook`` of a run: a stop raised where Python drops exceptions.
+
+    A signal handler raises in whatever Python code runs at that moment; in a
+    weakref callback, a ``__del__`` or a ctypes callback the exception is
+    printed ("Exception ignored in ...") and dropped, and the run went on to
+    exit 0 with the stop signals ignored.  Such a stop is raised again
+    :data:`_RETRY_SECONDS` later, in the main thread's own code; any other
+    unraisable exception goes to the previous hook.
+    """
+    import threading
+
+    from ..atomic import Terminated
+
+    stop = unraisable.exc_value
+    if isinstance(stop, (KeyboardInterrupt, Terminated)) and (
+        threading.current_thread() is threading.main_thread() and hasattr(signal, "setitimer")
+    ):
+        _arm_retry(getattr(stop, "signum", signal.SIGINT))
+        return
+    _PREVIOUS_HOOK[-1](unraisable)
+
+
+# sys.unraisablehook before main installed _swallowed_stop
+_PREVIOUS_HOOK = [sys.__unraisablehook__]
 
 
 def _retry_deferred(_alarm, frame):
@@ -287,6 +322,8 @@ def main(argv=None):
     previous = _install_signal_handlers()
     shown = warnings.showwarning
     warnings.showwarning = _show_warning
+    _PREVIOUS_HOOK.append(sys.unraisablehook)
+    sys.unraisablehook = _swallowed_stop
     args = None
     try:
         args = build_parser().parse_args(argv)
@@ -328,6 +365,7 @@ def main(argv=None):
         return EXIT_USAGE
     finally:
         warnings.showwarning = shown
+        sys.unraisablehook = _PREVIOUS_HOOK.pop()
         _end_deferral()
         for number, handler in previous.items():
             if handler is not None:  # None: a handler not installed from Python

@@ -14,10 +14,22 @@ from .shared import (
 )
 
 
-def _output_directory(path):
+def _output_directory(path, names=()):
+    """Create (or check) the output directory and every file to be written in it.
+
+    Done before the long part, so that a bad target is one line at once.
+    """
     from pathlib import Path
 
+    from ..atomic import ensure_writable, refuse_link
+
+    if str(path) == "-":
+        raise InputError(
+            "orbits figures writes a directory of files; --out - (standard output) "
+            "cannot take them: give a directory"
+        )
     directory = Path(path)
+    refuse_link(directory)
     if directory.exists() and not directory.is_dir():
         raise InputError(f"output path {directory} exists and is not a directory")
     try:
@@ -26,9 +38,10 @@ def _output_directory(path):
         raise InputError(f"cannot create output directory {directory}: {error.strerror}") from None
     if not directory.is_dir():
         raise InputError(f"output path {directory} is not a directory")
-    from ..atomic import ensure_writable
-
     ensure_writable(directory / "probe")
+    for name in names:
+        ensure_writable(directory / name)
+        refuse_link(directory / name)
     return directory
 
 
@@ -55,8 +68,10 @@ def _cmd_figures(args):
             from ..survey import survey_grid
 
             grid = survey_grid(args.survey)
-        out = _output_directory(args.out)
         names = ["fig2"] if args.survey else list(figures.PAPER_FIGURES)
+        out = _output_directory(
+            args.out, [f"{name}.{fmt}" for name in names for fmt in dict.fromkeys(args.formats)]
+        )
         with progress_bar(len(names), "figures", unit="figure") as bar:
             written = figures.paper_figures(
                 out, formats=args.formats, survey_grid=grid, progress=bar.update, names=names
@@ -72,12 +87,22 @@ def _cmd_figures(args):
             *reversed(check_search_bounds(args.n_max, args.q_max, 1, "the figures' search")),
         )
         orbits_table = closed_orbits(body, n_max=args.n_max, q_max=args.q_max)
+        if len(orbits_table) == 0:
+            from ..search import minimum_phase
+
+            low, _ = minimum_phase(body)
+            raise InputError(
+                f"orbits figures: this body has no closed orbit with n <= {args.n_max}"
+                + (f" (q <= {args.q_max})" if args.q_max > 1 else "")
+                + f", nothing to draw: its smallest total phase is {low / 6.283185307179586:.4g} "
+                "turns; raise --n-max"
+            )
         # drawing is the long part: estimated (and refused) before any file
         memory, seconds = figures.check_figure_set(
             len(orbits_table), args.formats, "lower --n-max or --q-max"
         )
+        out = _output_directory(args.out, figures.set_file_names(orbits_table, args.formats))
         announce("figures", seconds, memory)
-        out = _output_directory(args.out)
         with progress_bar(len(orbits_table) + 1, "figures", unit="figure") as bar:
             written = figures.herpolhode_set(
                 body,
