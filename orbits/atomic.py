@@ -399,6 +399,28 @@ def open_nofollow(path):
     return stream
 
 
+def read_limited(path, limit):
+    """The bytes of an input file (links, pipes and devices allowed), at most ``limit``.
+
+    Raises
+    ------
+    InputError
+        More than ``limit`` bytes (``/dev/zero``, an endless pipe, a file too
+        large for this machine's memory budget), naming the limit.
+    OSError
+        As ``open``.
+    """
+    with open(path, "rb") as handle:
+        data = handle.read(limit + 1)
+    if len(data) > limit:
+        raise InputError(
+            f"{path} holds more than {limit / 2**20:.0f} MiB (or never ends: a device "
+            "or a pipe), more than an input file of this machine may (1/16 of the "
+            "memory budget)"
+        )
+    return data
+
+
 def read_bytes_nofollow(path):
     """The bytes of a regular file, never through a symbolic link (:func:`open_nofollow`)."""
     with open_nofollow(path) as stream:

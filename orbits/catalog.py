@@ -521,9 +521,12 @@ def read_bodies_csv(path, skip_invalid=False):
         ``skip_invalid``) the first bad row, named by its row number, with
         the count of further bad rows.
     """
+    from .atomic import read_limited
+    from .limits import memory_budget
+
     try:
-        with open(path, newline="", encoding="utf-8") as handle:
-            text = handle.read()
+        # a device or an endless pipe (/dev/zero) must not fill the memory
+        text = read_limited(path, memory_budget() // 16).decode("utf-8")
     except FileNotFoundError:
         raise InputError(f"no bodies file at {path}") from None
     except IsADirectoryError:

@@ -150,10 +150,20 @@ def test_every_combination_is_judged_by_the_table():
                     return [extra[0], extra[1], command, *base]
                 return [command, *base, *extra]
 
-            args = _parse(argv(_option_args(option, action, argv)))
+            if option in base:  # a required option: given once already (twice is refused)
+                args = _parse([command, *base])
+            else:
+                args = _parse(argv(_option_args(option, action, argv)))
             rule = APPLIES[option]
+            spins = rule.spins_for(command)
+            if spin is None and spins is not None and SELECTORS[command][1]:
+                # a spin modifier with no spin to modify (catalog --units, no --omega)
+                with pytest.raises(InputError, match=f"^{option} applies only with "):
+                    check_arguments(args)
+                refused += 1
+                continue
             applies = (rule.bodies is None or body is None or body in rule.bodies) and (
-                rule.spins_for(command) is None or spin is None or spin in rule.spins_for(command)
+                spins is None or spin is None or spin in spins
             )
             if applies:
                 check_arguments(args)

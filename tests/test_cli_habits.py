@@ -322,3 +322,46 @@ def test_first_run_on_a_terminal_says_it_compiles(tmp_path):
     lines = err.decode().splitlines()
     assert len(lines) == 1 and "compiling" in lines[0], lines
     assert b"total_phase" in result.stdout
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        # argparse let the last one win silently
+        (
+            ["phase", "--preset", "fig6", "--theta", "0.5", "--theta", "0.7"],
+            "--theta is given more",
+        ),
+        (["phase", "--preset", "fig6", "--preset", "t-handle", "--theta", "0.5"], "--preset is"),
+        (
+            ["phase", "--moments", "1", "2", "3", "--moments", "3", "4", "5", "--theta", "1"],
+            "once",
+        ),
+        # two spellings of one option: MHz against GHz moved every moment 1000x
+        (
+            ["phase", "--rotational-constants", "3", "2", "1.5", "--unit", "MHz"]
+            + ["--constants-unit", "GHz", "--theta", "0.5"],
+            "--unit and --constants-unit set the same thing",
+        ),
+        # --units with no spin to apply to was ignored
+        (["catalog", "--preset", "fig6", "--n-max", "3", "--units", "rpm", "--out", "-"], "only"),
+    ],
+)
+def test_repeated_conflicting_or_idle_options_are_refused(argv, message, capsys):
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0], err
+
+
+def test_an_endless_input_file_is_refused_within_the_memory_budget(monkeypatch, capsys):
+    """``--bodies /dev/zero`` read until the machine ran out of memory (killed, 137)."""
+    import orbits.limits
+
+    monkeypatch.setattr(orbits.limits, "memory_budget", lambda: 16 * 2**20)
+    for argv in (
+        ["catalog", "--bodies", "/dev/zero", "--n-max", "3", "--out", "-"],
+        ["phase", "--point-masses", "/dev/zero", "--theta", "0.5"],
+    ):
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "holds more than 1 MiB" in err[0], err

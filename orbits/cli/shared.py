@@ -51,6 +51,8 @@ class Parser(argparse.ArgumentParser):
         command line) are the set ``given`` of destinations, which
         :func:`check_arguments` judges against :data:`APPLIES`.
         """
+        for action in self._actions:
+            _once(action)
         saved = {
             action: action.default
             for action in self._actions
@@ -79,6 +81,50 @@ class Parser(argparse.ArgumentParser):
                 setattr(namespace, action.dest, default)
         namespace.given = given
         return namespace, extras
+
+
+# actions that may be given more than once, or that end the parse
+_REPEATABLE = (
+    argparse._HelpAction,
+    argparse._VersionAction,
+    argparse._AppendAction,
+    argparse._CountAction,
+    argparse._SubParsersAction,
+)
+_ONCE_CLASSES = {}
+
+
+def _once(action):
+    """Make ``action`` refuse a second setting of its destination (idempotent).
+
+    argparse lets the last of ``--theta 0.5 --theta 0.7`` win silently, and
+    two spellings of one option (``--unit MHz --constants-unit GHz``) too;
+    here either is one line naming both.
+    """
+    kind = type(action)
+    if (
+        not action.option_strings
+        or isinstance(action, _REPEATABLE)
+        or kind in _ONCE_CLASSES.values()
+    ):
+        return
+    if kind not in _ONCE_CLASSES:
+
+        def __call__(self, parser, namespace, values, option_string=None):
+            seen = namespace.__dict__.setdefault("_options_seen", {})
+            first = seen.get(self.dest)
+            if first is not None:
+                nargs = self.nargs
+                several = nargs in ("+", "*") or (isinstance(nargs, int) and nargs > 1)
+                if first == option_string:
+                    hint = f": give every value after one {option_string}" if several else ""
+                    raise InputError(f"{option_string} is given more than once{hint}")
+                raise InputError(f"{first} and {option_string} set the same thing: give one")
+            seen[self.dest] = option_string
+            kind.__call__(self, parser, namespace, values, option_string)
+
+        _ONCE_CLASSES[kind] = type(f"Once{kind.__name__}", (kind,), {"__call__": __call__})
+    action.__class__ = _ONCE_CLASSES[kind]
 
 
 class _NotGivenType:
@@ -287,9 +333,14 @@ def _point_masses_from_csv(path):
     import pandas as pd
 
     try:
-        from ..atomic import csv_float_options
+        import io
 
-        table = pd.read_csv(path, comment="#", **csv_float_options())
+        from ..atomic import csv_float_options, read_limited
+        from ..limits import memory_budget
+
+        # a device or endless pipe (/dev/zero) must not fill the memory
+        data = read_limited(path, memory_budget() // 16)
+        table = pd.read_csv(io.BytesIO(data), comment="#", **csv_float_options())
     except (OSError, ValueError) as error:
         raise InputError(f"cannot read point masses from {path}: {error}") from None
     missing = {"mass", "x", "y", "z"} - set(table.columns)
@@ -679,6 +730,10 @@ def check_arguments(args):
                 raise InputError(
                     f"{option} applies to {_targets(allowed, command)}, not to {_label(selected)}"
                 )
+        allowed = rule.spins_for(command)
+        if spin is None and allowed is not None and not any(name in given for name in spins):
+            # e.g. catalog --units rpm with no --omega: nothing for it to apply to
+            raise InputError(f"{option} applies only with {_targets(allowed, command)}")
     _check_angles(args, given)
 
 
