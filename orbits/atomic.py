@@ -189,11 +189,11 @@ def remove_stale_temporaries(directory, name, regex=False):
 
 
 @contextmanager
-def atomic_path(path, follow_links=True):
+def atomic_path(path):
     """Yield a temporary path; on success move it onto ``path``.
 
-    A symbolic link at ``path`` is always refused (:func:`refuse_link`);
-    ``follow_links`` is kept for old callers and no longer follows one.
+    A symbolic link at ``path`` is refused (:func:`refuse_link`), never
+    written through.
 
     Raises
     ------
@@ -277,9 +277,7 @@ def file_set(directory, names):
 
     directory = Path(directory)
     names = list(dict.fromkeys(names))
-    for name in names:
-        ensure_writable(directory / name)
-        refuse_link(directory / name)
+    check_targets(directory, names)
     _remove_stale_sets(directory)
     try:
         stage = Path(
@@ -303,6 +301,17 @@ def file_set(directory, names):
             _COMMITTING.clear()
     finally:
         shutil.rmtree(stage, ignore_errors=True)
+
+
+def check_targets(directory, names):
+    """Raise :class:`InputError` unless every file ``names`` in ``directory`` can be written.
+
+    :func:`ensure_writable` and no symbolic link, for each; what
+    :func:`file_set` checks before anything is made.
+    """
+    for name in names:
+        ensure_writable(Path(directory) / name)
+        refuse_link(Path(directory) / name)
 
 
 def _remove_stale_sets(directory):
@@ -331,15 +340,15 @@ _WRITE_ERRNOS = {
 }
 
 
-def write_text_atomic(path, text, follow_links=True):
+def write_text_atomic(path, text):
     """Write ``text`` to ``path`` atomically (see :func:`atomic_path`)."""
-    with atomic_path(path, follow_links) as temporary:
+    with atomic_path(path) as temporary:
         temporary.write_text(text)
 
 
-def write_bytes_atomic(path, data, follow_links=True):
+def write_bytes_atomic(path, data):
     """Write ``data`` (bytes) to ``path`` atomically (see :func:`atomic_path`)."""
-    with atomic_path(path, follow_links) as temporary:
+    with atomic_path(path) as temporary:
         temporary.write_bytes(data)
 
 
@@ -415,8 +424,7 @@ def read_limited(path, limit):
     if len(data) > limit:
         raise InputError(
             f"{path} holds more than {limit / 2**20:.0f} MiB (or never ends: a device "
-            "or a pipe), more than an input file of this machine may (1/16 of the "
-            "memory budget)"
+            "or a pipe), more than an input file of this machine may take"
         )
     return data
 

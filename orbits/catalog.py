@@ -522,11 +522,10 @@ def read_bodies_csv(path, skip_invalid=False):
         the count of further bad rows.
     """
     from .atomic import read_limited
-    from .limits import memory_budget
+    from .limits import input_limit
 
     try:
-        # a device or an endless pipe (/dev/zero) must not fill the memory
-        text = read_limited(path, memory_budget() // 16).decode("utf-8")
+        text = read_limited(path, input_limit()).decode("utf-8")
     except FileNotFoundError:
         raise InputError(f"no bodies file at {path}") from None
     except IsADirectoryError:

@@ -60,6 +60,11 @@ def _stem(row):
     return f"herpolhode_{row.branch}_{multiple}"
 
 
+def figure_files(stems, formats=("png", "svg")):
+    """``stem.format`` for each stem, in every format (each format once)."""
+    return [f"{stem}.{fmt}" for stem in stems for fmt in dict.fromkeys(formats)]
+
+
 def set_file_names(orbits, formats=("png", "svg")):
     """The files :func:`herpolhode_set` writes for the closed orbits ``orbits``.
 
@@ -70,7 +75,7 @@ def set_file_names(orbits, formats=("png", "svg")):
     stems = [_stem(row) for row in _paper_order(orbits).itertuples()]
     if stems:
         stems.append("contact_sheet")
-    return [f"{stem}.{fmt}" for stem in stems for fmt in dict.fromkeys(formats)]
+    return figure_files(stems, formats)
 
 
 def _paper_order(orbits):
@@ -552,7 +557,7 @@ def paper_figures(out_dir, *, formats=("png", "svg"), survey_grid=None, progress
     """
     out_dir = _directory(out_dir)
     names = list(names or PAPER_FIGURES)
-    files = [f"{name}.{fmt}" for name in names for fmt in dict.fromkeys(formats)]
+    files = figure_files(names, formats)
     with file_set(out_dir, files) as stage:  # all or none
         for name in names:
             build = PAPER_FIGURES[name]

@@ -412,7 +412,7 @@ def test_atomic_writes_can_refuse_a_link(tmp_path):
     real.write_text("mine\n")
     (tmp_path / "link.txt").symlink_to(real)
     with pytest.raises(orbits.InputError, match="symbolic link"):
-        write_text_atomic(tmp_path / "link.txt", "new\n", follow_links=False)
+        write_text_atomic(tmp_path / "link.txt", "new\n")
     assert real.read_text() == "mine\n" and (tmp_path / "link.txt").is_symlink()
 
 

@@ -1,5 +1,6 @@
 """``orbits figures``: closed herpolhodes of a body, the paper's figures, Fig. 2 of a survey."""
 
+import math
 import sys
 
 from ..errors import InputError
@@ -21,7 +22,7 @@ def _output_directory(path, names=()):
     """
     from pathlib import Path
 
-    from ..atomic import ensure_writable, refuse_link
+    from ..atomic import check_targets, ensure_writable, refuse_link
 
     if str(path) == "-":
         raise InputError(
@@ -39,9 +40,7 @@ def _output_directory(path, names=()):
     if not directory.is_dir():
         raise InputError(f"output path {directory} is not a directory")
     ensure_writable(directory / "probe")
-    for name in names:
-        ensure_writable(directory / name)
-        refuse_link(directory / name)
+    check_targets(directory, names)
     return directory
 
 
@@ -69,9 +68,7 @@ def _cmd_figures(args):
 
             grid = survey_grid(args.survey)
         names = ["fig2"] if args.survey else list(figures.PAPER_FIGURES)
-        out = _output_directory(
-            args.out, [f"{name}.{fmt}" for name in names for fmt in dict.fromkeys(args.formats)]
-        )
+        out = _output_directory(args.out, figures.figure_files(names, args.formats))
         with progress_bar(len(names), "figures", unit="figure") as bar:
             written = figures.paper_figures(
                 out, formats=args.formats, survey_grid=grid, progress=bar.update, names=names
@@ -94,7 +91,7 @@ def _cmd_figures(args):
             raise InputError(
                 f"orbits figures: this body has no closed orbit with n <= {args.n_max}"
                 + (f" (q <= {args.q_max})" if args.q_max > 1 else "")
-                + f", nothing to draw: its smallest total phase is {low / 6.283185307179586:.4g} "
+                + f", nothing to draw: its smallest total phase is {low / math.tau:.4g} "
                 "turns; raise --n-max"
             )
         # drawing is the long part: estimated (and refused) before any file

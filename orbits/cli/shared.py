@@ -336,10 +336,9 @@ def _point_masses_from_csv(path):
         import io
 
         from ..atomic import csv_float_options, read_limited
-        from ..limits import memory_budget
+        from ..limits import input_limit
 
-        # a device or endless pipe (/dev/zero) must not fill the memory
-        data = read_limited(path, memory_budget() // 16)
+        data = read_limited(path, input_limit())
         table = pd.read_csv(io.BytesIO(data), comment="#", **csv_float_options())
     except (OSError, ValueError) as error:
         raise InputError(f"cannot read point masses from {path}: {error}") from None

@@ -430,9 +430,7 @@ class Ledger:
             "parts": dict(sorted(self.parts.items(), key=lambda item: int(item[0]))),
         }
         document["sha256"] = manifest_checksum(document)
-        write_text_atomic(
-            self.out_dir / MANIFEST, json.dumps(document, indent=1) + "\n", follow_links=False
-        )
+        write_text_atomic(self.out_dir / MANIFEST, json.dumps(document, indent=1) + "\n")
 
     def record(self, index, entry):
         """Add a finished chunk's entry (both parts on disk) and write the manifest."""

@@ -105,5 +105,5 @@ def survey_report(out_dir, n_max, q_max, skipped_rows, verify=True, summaries=No
         "bodies_with_unresolved_orbits": summary["unresolved"],
         "skipped_rows": int(skipped_rows),
     }
-    write_text_atomic(out_dir / REPORT, json.dumps(report, indent=2) + "\n", follow_links=False)
+    write_text_atomic(out_dir / REPORT, json.dumps(report, indent=2) + "\n")
     return report

@@ -177,7 +177,7 @@ class Survey:
         }
         for table, frame in (("orbits", orbits), ("bodies", bodies)):
             name = part_name(table, index, self.format)
-            write_part(frame, self.out_dir / name, self.format, follow_links=False)
+            write_part(frame, self.out_dir / name, self.format)
             entry[table] = {
                 "file": name,
                 "rows": int(len(frame)),

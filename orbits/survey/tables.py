@@ -24,7 +24,7 @@ def require_pyarrow():
         raise InputError("--format parquet needs pyarrow: pip install 'orbits[parquet]'")
 
 
-def write_part(frame, path, fmt, engine=None, follow_links=True):
+def write_part(frame, path, fmt, engine=None):
     """Write one table part atomically.
 
     CSV goes through pyarrow's writer when it is installed (ten times
@@ -36,7 +36,7 @@ def write_part(frame, path, fmt, engine=None, follow_links=True):
         engine = "arrow" if have_pyarrow() else "pandas"
     if fmt == "csv" and "name" in frame.columns:
         frame = frame.assign(name=[neutralize(str(v)) for v in frame["name"]])
-    with atomic_path(path, follow_links) as temporary:
+    with atomic_path(path) as temporary:
         if fmt == "parquet":
             # dictionary pages only for text columns: on doubles they never
             # pay off and cost pyarrow ~4x the write time
