@@ -303,12 +303,28 @@ class Body:
         shaft axis (y) and the normal to the plane of the T (z); a short
         cross piece reorders them, which :class:`Body` handles by sorting
         (the footnote to eqn:ellipsoid).
+
+        The lengths are scaled by the exact power of two that brings the
+        largest into [1/2, 1) before the polynomials are formed, so the body
+        does not depend on the scale (lengths ``2**k`` times give moments
+        ``4**k`` times, bit for bit).
+
+        Raises
+        ------
+        NonPhysicalBodyError
+            A length not finite and positive; a moment that overflows a
+            double or underflows below the smallest normal double (2.2e-308);
+            or lengths so disparate that the smallest moment underflows when
+            computed at the scale of the largest.
         """
         for label, value in (("l1", l1), ("l2", l2), ("w", w)):
             if not (math.isfinite(value) and value > 0.0):
                 raise NonPhysicalBodyError(
                     f"T-handle {label} must be a positive length, got {value}"
                 )
+        shape = ("t-handle", float(l1), float(l2), float(w))
+        k = _binary_exponent(max(l1, l2, w))
+        l1, l2, w = (math.ldexp(float(v), -k) for v in (l1, l2, w))
         total = l1 + l2
         ix = (
             6 * l1 * l2 * w**2
@@ -324,8 +340,27 @@ class Body:
             + l2**2 * w * (6 * l1 + w)
             + l2**4
         ) / (12 * total**2)
-        body = cls((ix, iy, iz), name=name)
-        body.shape = ("t-handle", float(l1), float(l2), float(w))
+        what = "T-handle ({:.6g}, {:.6g}, {:.6g})".format(*shape[1:])
+        labels = ("I_x", "I_y", "I_z")
+        small = "give the lengths in smaller units (larger numbers)"
+        moments = _at_scale(
+            (ix, iy, iz),
+            2 * k,
+            what,
+            labels,
+            small=small,
+            large="give the lengths in larger units (smaller numbers)",
+        )
+        for label, value in zip(labels, (ix, iy, iz)):
+            if value < _SAFE_UNIT:
+                raise NonPhysicalBodyError(
+                    f"the {what} has {label} = {_decimal(value, 2 * k)}, less than "
+                    f"{_decimal(_SAFE_UNIT)} of the square of its longest length: it "
+                    "underflows in the intermediate products and would lose precision "
+                    "(lengths this disparate are beyond double precision)"
+                )
+        body = cls(moments, name=name)
+        body.shape = shape
         return body
 
     @classmethod
@@ -335,14 +370,38 @@ class Body:
         ``I1 = b^2 + c^2``, ``I2 = (c^2 - b^2 + S)/2``,
         ``I3 = (b^2 - c^2 + S)/2`` with ``S = sqrt(2 - 3b^4 - 2b^2c^2 - 3c^4)``,
         so that ``|I| = 1``; the third semi-axis is
-        ``a = sqrt((S - b^2 - c^2)/2)``.  Needs ``0 < c < b < a``.
+        ``a = sqrt((S - b^2 - c^2)/2)``.  Needs ``0 <= c < b < a``
+        (``c = 0``: a flat body, a lamina); the semi-axes are dimensionless
+        (the body has unit norm, not unit mass).
+
+        Raises
+        ------
+        NonPhysicalBodyError
+            ``b`` or ``c`` not finite, negative, ``c > b``, ``a < b``, too
+            large for a unit norm (``2 - 3b^4 - 2b^2c^2 - 3c^4 < 0``), or
+            ``b`` so small that ``I1 = b^2 + c^2`` underflows below the
+            smallest normal double (2.2e-308).
+        SymmetricTopError
+            ``c = b`` or ``a = b`` (two equal moments).
         """
         for label, value in (("b", b), ("c", c)):
             if not (math.isfinite(value) and value >= 0.0):
                 raise NonPhysicalBodyError(
                     f"ellipsoid semi-axis {label} must be finite and >= 0, got {value}"
                 )
-        root_sq = 2.0 - 3.0 * b**4 - 2.0 * b**2 * c**2 - 3.0 * c**4
+        b, c = float(b), float(c)
+        if c > b:
+            raise NonPhysicalBodyError(
+                f"ellipsoid semi-axes b={b}, c={c}: the paper's parametrisation needs "
+                "0 <= c < b < a (c the shortest semi-axis); swap b and c"
+            )
+        if c == b:
+            raise SymmetricTopError(
+                f"ellipsoid semi-axes b = c = {b} give I2 = I3: a symmetric top, which "
+                "has no separatrix and no total-phase formula; need 0 <= c < b < a"
+            )
+        # 3 b^4 <= 2 needs b < 1; checked first so that b^4 cannot overflow
+        root_sq = 2.0 - 3.0 * b**4 - 2.0 * b**2 * c**2 - 3.0 * c**4 if b < 1.0 else -1.0
         if root_sq < 0.0:
             raise NonPhysicalBodyError(
                 f"ellipsoid semi-axes b={b}, c={c} are too large for a "
@@ -354,7 +413,23 @@ class Body:
                 f"ellipsoid semi-axes b={b}, c={c} leave no real third "
                 "semi-axis a (need sqrt(2-3b^4-2b^2c^2-3c^4) > b^2 + c^2)"
             )
-        moments = (b * b + c * c, 0.5 * (c * c - b * b + root), 0.5 * (b * b - c * c + root))
+        # a^2 - b^2 = (S - 3 b^2 - c^2)/2 = I2 - I1
+        if root - 3.0 * b * b - c * c < 0.0:
+            a = math.sqrt(0.5 * (root - b * b - c * c))
+            raise NonPhysicalBodyError(
+                f"ellipsoid semi-axes b={b}, c={c} give a third semi-axis a = {a:.6g} "
+                "shorter than b: the paper's parametrisation needs 0 <= c < b < a "
+                "(b the middle semi-axis)"
+            )
+        square_sum, k = _scaled_square_sum(b, c)
+        (i1,) = _at_scale(
+            (square_sum,),
+            k,
+            f"ellipsoid of semi-axes b={b:.6g}, c={c:.6g}",
+            ("I1 = b^2 + c^2",),
+            small="b must be at least about 1.5e-154",
+        )
+        moments = (i1, 0.5 * (c * c - b * b + root), 0.5 * (b * b - c * c + root))
         return cls(moments, name=name)
 
     @classmethod
@@ -394,15 +469,43 @@ class Body:
         """Uniform solid ellipsoid of unit mass with semi-axes a, b, c.
 
         Moments about the a, b, c axes are ``(b^2+c^2)/5``, ``(a^2+c^2)/5``
-        and ``(a^2+b^2)/5`` (caller's axes along a, b, c).
+        and ``(a^2+b^2)/5`` (caller's axes along a, b, c); a zero semi-axis
+        gives a flat body.  Each moment is computed with its semi-axes scaled
+        by an exact power of two (scale-free, as :meth:`box`).
+
+        Raises
+        ------
+        NonPhysicalBodyError
+            A semi-axis not finite or negative, two zero semi-axes, or a
+            moment that overflows a double or underflows below the smallest
+            normal double (2.2e-308).
+        SymmetricTopError
+            Two equal semi-axes.
         """
         for label, value in (("a", a), ("b", b), ("c", c)):
             if not (math.isfinite(value) and value >= 0.0):
                 raise NonPhysicalBodyError(
                     f"semi-axis {label} must be finite and >= 0, got {value}"
                 )
-        a2, b2, c2 = a * a, b * b, c * c
-        return cls(((b2 + c2) / 5.0, (a2 + c2) / 5.0, (a2 + b2) / 5.0), name=name)
+        a, b, c = float(a), float(b), float(c)
+        values, exponents = [], []
+        for p, q in ((b, c), (a, c), (a, b)):
+            if max(p, q) == 0.0:
+                values.append(0.0)  # refused by Body: not positive
+                exponents.append(0)
+                continue
+            square_sum, k = _scaled_square_sum(p, q)
+            values.append(square_sum / 5.0)
+            exponents.append(k)
+        moments = _at_scale(
+            values,
+            exponents,
+            f"ellipsoid of semi-axes ({a:.6g}, {b:.6g}, {c:.6g})",
+            ("I_a", "I_b", "I_c"),
+            small="give the semi-axes in smaller units (larger numbers)",
+            large="give the semi-axes in larger units (smaller numbers)",
+        )
+        return cls(moments, name=name)
 
     @classmethod
     def preset(cls, name):
@@ -520,19 +623,39 @@ class Body:
         Table of moments).  In SI units (m, kg) the moments are in kg m^2 and
         every output of :class:`orbits.Motion` is physical.
 
+        Each moment is computed with its two edges and the mass scaled by
+        exact powers of two, so the body does not depend on the scale: edges
+        ``2**k (a, b, c)`` give moments ``4**k`` times those of ``(a, b, c)``,
+        bit for bit, and the same unit moments and phases.
+
         Raises
         ------
         NonPhysicalBodyError
-            An edge or the mass not finite and positive.
+            An edge or the mass not finite and positive, a subnormal mass, or
+            a moment that overflows a double or underflows below the smallest
+            normal double (2.2e-308): give the lengths or the mass in other
+            units.
         SymmetricTopError
             Two equal edges (a square cross-section is a symmetric top).
         """
         a, b, c = _positive_lengths("box edge", a=a, b=b, c=c)
         mass = _positive_mass(mass)
-        a2, b2, c2 = a * a, b * b, c * c
-        body = cls(
-            (mass * (b2 + c2) / 12.0, mass * (a2 + c2) / 12.0, mass * (a2 + b2) / 12.0), name=name
+        m_exp = _binary_exponent(mass)
+        m = math.ldexp(mass, -m_exp)
+        values, exponents = [], []
+        for p, q in ((b, c), (a, c), (a, b)):
+            square_sum, k = _scaled_square_sum(p, q)
+            values.append(m * square_sum / 12.0)
+            exponents.append(m_exp + k)
+        moments = _at_scale(
+            values,
+            exponents,
+            f"box ({a:.6g}, {b:.6g}, {c:.6g}) of mass {mass:.6g}",
+            ("I_x", "I_y", "I_z"),
+            small=_SMALL_LENGTHS,
+            large=_LARGE_LENGTHS,
         )
+        body = cls(moments, name=name)
         body.shape = ("box", a, b, c)
         return body
 
@@ -589,7 +712,17 @@ class Body:
         ------
         NonPhysicalBodyError
             Shapes that do not match, masses not positive, non-finite
-            values, or collinear masses (a zero moment).
+            values, a subnormal mass, collinear masses (a zero moment), or
+            moments that overflow a double or underflow below the smallest
+            normal double (2.2e-308).
+
+        Notes
+        -----
+        The masses and positions are scaled by exact powers of two (largest
+        mass and largest coordinate in [1/2, 1)) before the tensor is formed,
+        so the body does not depend on the units: positions ``2**k`` times
+        give moments ``4**k`` times, bit for bit, with no overflow of the
+        intermediate products.
         SymmetricTopError
             Two moments closer than the rounding of the sums that built
             them (e.g. three equal masses on an equilateral triangle).
@@ -605,9 +738,39 @@ class Body:
             raise NonPhysicalBodyError("point masses and positions must be finite")
         if np.any(masses <= 0.0):
             raise NonPhysicalBodyError("point masses must all be positive")
+        for k in np.flatnonzero(masses < _SMALLEST_NORMAL)[:1]:
+            _refuse_below_normal(f"point mass #{k}", float(masses[k]))
+        reach_given = float(np.max(np.abs(positions)))
+        if reach_given == 0.0:
+            raise NonPhysicalBodyError(
+                "the point masses all lie at one point: every moment is zero, "
+                "which is no rigid body of this library"
+            )
+        _refuse_below_normal("the largest point-mass coordinate", reach_given)
+        # exact power-of-two scalings: the largest mass and the largest
+        # coordinate in [1/2, 1); the tensor is then 2**exponent times the one
+        # computed here, free of overflow, and the same bits at any scale
+        m_exp = _binary_exponent(float(np.max(masses)))
+        x_exp = _binary_exponent(reach_given)
+        with np.errstate(under="ignore"):
+            masses = np.ldexp(masses, -m_exp)
+            positions = np.ldexp(positions, -x_exp)
+        exponent = m_exp + 2 * x_exp
         relative = positions - masses @ positions / masses.sum()
-        squared = np.einsum("k,ki,ki->", masses, relative, relative)
-        tensor = squared * np.eye(3) - np.einsum("k,ki,kj->ij", masses, relative, relative)
+        with np.errstate(under="ignore"):
+            squared = np.einsum("k,ki,ki->", masses, relative, relative)
+            tensor = squared * np.eye(3) - np.einsum("k,ki,kj->ij", masses, relative, relative)
+        if not squared > masses.size * _SAFE_UNIT:
+            # at this scale an underflowed product is off by ~2^-1074 at most:
+            # negligible beside moments above n 2^-960, not beside smaller ones
+            raise NonPhysicalBodyError(
+                "the point masses have a moment of inertia sum m r^2 = "
+                f"{_decimal(float(squared), exponent)} about their centre of mass, less "
+                f"than {_decimal(masses.size * _SAFE_UNIT)} of (largest mass) x (largest "
+                "coordinate)^2: it underflows in the intermediate products and would "
+                "lose precision (masses or distances this disparate are beyond double "
+                "precision)"
+            )
         values = np.linalg.eigvalsh(tensor)
         if values[0] <= 1e-12 * values[2]:
             raise NonPhysicalBodyError(
@@ -620,7 +783,7 @@ class Body:
         reach = np.sqrt(np.einsum("ki,ki->k", relative, relative))
         extent = np.sqrt(np.einsum("ki,ki->k", positions, positions))
         rounding = 4.0 * (masses.size + 4) * _EPS * float(masses @ ((reach + extent) ** 2))
-        return _from_tensor(cls, tensor, name, defect, rounding, "point masses")
+        return _from_tensor(cls, tensor, name, defect, rounding, "point masses", exponent)
 
     @classmethod
     def from_mesh(cls, path, *, density=1.0, name=None, defect="error"):
@@ -641,7 +804,11 @@ class Body:
             trimesh missing, the file unreadable, or the mesh not closed
             (not watertight) or inside out.
         NonPhysicalBodyError
-            ``density`` not finite and positive.
+            ``density`` not finite and positive or subnormal, or moments that
+            overflow a double or underflow below the smallest normal double
+            (2.2e-308).  The vertices and the density are scaled by exact
+            powers of two before trimesh integrates, so the body does not
+            depend on the units.
         SymmetricTopError
             Two moments closer than the rounding of the sums over the
             faces that built them (e.g. a sphere or a cube as a mesh).
@@ -654,31 +821,48 @@ class Body:
         except ImportError:
             raise InputError("Body.from_mesh needs trimesh: pip install 'orbits[mesh]'") from None
         try:
-            mesh = trimesh.load(str(path), force="mesh")
+            # read as stored, then processed (vertices merged, trimesh's
+            # absolute tolerance) at the working scale below
+            raw = trimesh.load(str(path), force="mesh", process=False)
         except Exception as error:  # trimesh raises many kinds
             raise InputError(f"cannot read mesh {path}: {error}") from None
-        if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
+        if not isinstance(raw, trimesh.Trimesh) or len(raw.faces) == 0:
+            raise InputError(f"{path} holds no triangle mesh")
+        vertices = np.asarray(raw.vertices, dtype=float)
+        if not np.all(np.isfinite(vertices)):
+            raise InputError(f"mesh {path} has vertices that are not finite numbers")
+        # exact power-of-two scalings (largest coordinate and the density in
+        # [1/2, 1)): trimesh's volume integrals (degree 5 in the lengths) are
+        # then free of overflow and underflow, and its merging tolerance is
+        # relative to the size; the tensor is 2**exponent times the one computed
+        x_exp = _binary_exponent(float(np.max(np.abs(vertices))))
+        d_exp = _binary_exponent(density)
+        mesh = trimesh.Trimesh(vertices=np.ldexp(vertices, -x_exp), faces=np.asarray(raw.faces))
+        if len(mesh.faces) == 0:
             raise InputError(f"{path} holds no triangle mesh")
         if not mesh.is_watertight:
             raise InputError(f"mesh {path} is not closed (watertight): it bounds no volume")
-        if not mesh.is_winding_consistent or mesh.volume <= 0.0:
+        if not mesh.is_winding_consistent or not mesh.volume > 0.0:
             raise InputError(
                 f"mesh {path} is inside out or inconsistently wound (its volume is not positive)"
             )
-        mesh.density = density
+        mesh.density = math.ldexp(density, -d_exp)
+        exponent = d_exp + 5 * x_exp
         tensor = np.asarray(mesh.moment_inertia, dtype=float)
+        centre = np.asarray(mesh.center_mass, dtype=float)
         # rounding of the construction: the vertices as the file stores them
         # (moving each by delta moves I by at most ~2 M R delta; 8 M R delta
         # is the bound used), and one sum over the faces per entry, bounded
         # by 16 (faces + 4) eps |I|
-        reach = float(np.max(np.linalg.norm(mesh.vertices - mesh.center_mass, axis=1)))
-        rounding = 8.0 * vertex_rounding(mesh.vertices) * float(mesh.mass) * reach + 16.0 * (
+        reach = float(np.max(np.linalg.norm(mesh.vertices - centre, axis=1)))
+        delta = math.ldexp(vertex_rounding(vertices), -x_exp)  # as the file stores them
+        rounding = 8.0 * delta * float(mesh.mass) * reach + 16.0 * (
             len(mesh.faces) + 4
         ) * _EPS * float(np.abs(np.trace(tensor)))
-        body = _from_tensor(cls, tensor, name, defect, rounding, f"mesh {path}")
+        body = _from_tensor(cls, tensor, name, defect, rounding, f"mesh {path}", exponent)
         body.shape = (
             "mesh",
-            np.asarray(mesh.vertices - mesh.center_mass, dtype=float),
+            np.ldexp(np.asarray(mesh.vertices - centre, dtype=float), x_exp),
             np.asarray(mesh.faces),
         )
         return body
@@ -709,8 +893,10 @@ class Body:
         Raises
         ------
         NonPhysicalBodyError
-            A constant not finite and positive, an unknown unit, or a
-            positive inertial defect with ``defect="error"``.
+            A constant not finite and positive or subnormal, an unknown unit,
+            a moment that overflows a double or underflows below the smallest
+            normal double (2.2e-308), or a positive inertial defect with
+            ``defect="error"``.
 
         Warns
         -----
@@ -726,9 +912,23 @@ class Body:
             )
         if defect not in ("error", "flatten"):
             raise NonPhysicalBodyError(f"defect must be 'error' or 'flatten', got {defect!r}")
-        values = _positive_lengths("rotational constant", A=a, B=b, C=c)
-        hertz = np.sort(np.array(values)) * factors[unit]  # C <= B <= A
-        i_c, i_b, i_a = codata.h / (8.0 * math.pi**2 * hertz)
+        values = _positive_lengths("rotational constant", normal=True, A=a, B=b, C=c)
+        # I = h / (8 pi^2 f X) with X = x 2**e (x in [1/2, 1)) computed as
+        # (h / (8 pi^2 f x)) 2**-e: exact scaling, free of overflow/underflow
+        scaled, exponents = [], []
+        for value in sorted(values):  # C <= B <= A
+            e = _binary_exponent(value)
+            scaled.append(codata.h / (8.0 * math.pi**2 * (math.ldexp(value, -e) * factors[unit])))
+            exponents.append(-e)
+        i_c, i_b, i_a = _at_scale(
+            scaled,
+            exponents,
+            f"molecule of rotational constants ({a:.10g}, {b:.10g}, {c:.10g}) {unit}",
+            ("I_C", "I_B", "I_A"),
+            unit="kg m^2",
+            small="the rotational constants are too large",
+            large="the rotational constants are too small",
+        )
         amu_a2 = codata.physical_constants["atomic mass constant"][0] * 1e-20
         i_a, i_b, i_c = remove_flat_excess(
             i_a,
@@ -838,12 +1038,15 @@ def vertex_rounding(vertices):
     """
     v = np.asarray(vertices, dtype=float)
     big = float(np.max(np.abs(v))) if v.size else 0.0
-    if np.array_equal(v.astype(np.float32).astype(float), v):
-        return big * 2.0**-24
+    with np.errstate(over="ignore", under="ignore"):  # beyond float32's range
+        if np.array_equal(v.astype(np.float32).astype(float), v):
+            return big * 2.0**-24
     slack = 4.0 * _EPS * np.maximum(np.abs(v), np.finfo(float).tiny)
     for digits in range(16):
         if np.all(np.abs(np.round(v, digits) - v) <= slack):
-            return 0.5 * 10.0**-digits
+            # (above 2^53 every double is an integer: then a double's own
+            # rounding, not the decimals, bounds it)
+            return max(0.5 * 10.0**-digits, 0.5 * big * _EPS)
     return big * _EPS
 
 
@@ -881,27 +1084,176 @@ def symmetric_within_rounding(values, rounding, what):
         )
 
 
-def _from_tensor(cls, tensor, name, defect, rounding, what):
-    """A Body from a tensor computed with ``rounding`` (see ``from_inertia_tensor``)."""
+def _from_tensor(cls, tensor, name, defect, rounding, what, exponent=0):
+    """A Body from a tensor computed with ``rounding`` (see ``from_inertia_tensor``).
+
+    The inertia tensor is ``tensor * 2**exponent`` and ``rounding`` is in the
+    units of ``tensor``.  The eigenvalues are found at the working scale
+    (largest entry in [1/2, 1), an exact power-of-two scaling) and brought
+    back exactly; moments that no normal double holds are refused.
+    """
     tensor = np.asarray(tensor, dtype=float)
     if tensor.shape != (3, 3) or not np.all(np.isfinite(tensor)):
         raise NonPhysicalBodyError("an inertia tensor must be a finite 3x3 matrix")
-    scale = np.max(np.abs(tensor))
-    if not np.allclose(tensor, tensor.T, rtol=0.0, atol=1e-12 * scale):
+    scale = float(np.max(np.abs(tensor)))
+    if scale == 0.0:
+        raise NonPhysicalBodyError(
+            f"the inertia tensor of the {what} is zero: no rigid body of this library"
+        )
+    k = _binary_exponent(scale)
+    with np.errstate(under="ignore"):
+        tensor = np.ldexp(tensor, -k)
+    rounding = math.ldexp(rounding, -k)
+    exponent = int(exponent) + k
+    if not np.allclose(tensor, tensor.T, rtol=0.0, atol=1e-12 * np.max(np.abs(tensor))):
         raise NonPhysicalBodyError("an inertia tensor must be symmetric")
     values, vectors = np.linalg.eigh(0.5 * (tensor + tensor.T))
-    if values[0] > 0.0 and np.all(np.isfinite(values)):
-        symmetric_within_rounding(
-            values, rounding + _EIGEN_ROUNDING * _EPS * float(np.max(np.abs(values))), what
+    if not values[0] > 0.0:
+        shown = ", ".join(_decimal(float(v), exponent) for v in values)
+        raise NonPhysicalBodyError(
+            f"the inertia tensor of the {what} has eigenvalues ({shown}), not all "
+            "positive: these are not the moments of a rigid body"
         )
-        values = np.array(
-            remove_flat_excess(*values, defect, what=f"the moments of the {what}", stacklevel=3)
+    values = np.array(
+        _at_scale(
+            [float(v) for v in values],
+            exponent,
+            f"inertia tensor of the {what}",
+            ("I1", "I2", "I3"),
+            small="give the body in smaller units (larger numbers)",
+            large="give the body in larger units (smaller numbers)",
         )
+    )
+    with np.errstate(under="ignore"):
+        rounding = math.ldexp(rounding, exponent) if rounding > 0.0 else 0.0
+    symmetric_within_rounding(
+        values, rounding + _EIGEN_ROUNDING * _EPS * float(np.max(np.abs(values))), what
+    )
+    values = np.array(
+        remove_flat_excess(*values, defect, what=f"the moments of the {what}", stacklevel=3)
+    )
     return cls(values, name=name, frame=vectors.T)
 
 
-def _positive_lengths(what, **values):
-    """The values, checked finite and positive (named in the error)."""
+# ------------------------------------------------------- exact scaling of constructors
+# A moment computed as ``unit * 2**exponent`` from lengths and masses scaled by
+# exact powers of two: ``m * 2**t`` with ``m`` in [1/2, 1) is a normal double
+# iff ``t >= -1021`` and finite iff ``t <= 1024``.
+_LOWEST_EXPONENT = -1021
+_HIGHEST_EXPONENT = 1024
+# At the working scale (largest length and mass in [1/2, 1)) every term of a
+# moment is a sum of positive products; an intermediate that underflowed
+# there is off by at most a few 2^-1074 in absolute value, which is below
+# eps of any working-scale moment above this bound.
+_SAFE_UNIT = 2.0**-960
+_SMALLEST_NORMAL = float(np.finfo(float).tiny)
+
+
+def _decimal(value, exponent=0):
+    """``value * 2**exponent`` in decimal (3 digits), even beyond the doubles."""
+    if value == 0.0:
+        return "0"
+    mantissa, power = math.frexp(abs(value))
+    log = math.log10(mantissa) + (power + exponent) * math.log10(2.0)
+    tens = math.floor(log)
+    digits = 10.0 ** (log - tens)
+    if digits >= 9.995:  # rounds up to 10.0
+        digits, tens = 1.0, tens + 1
+    sign = "-" if value < 0.0 else ""
+    return f"{sign}{digits:.3g}e{tens:+03d}"
+
+
+def _binary_exponent(value):
+    """``e`` with ``value * 2**-e`` in [1/2, 1) (0 for a zero)."""
+    return math.frexp(value)[1]
+
+
+def _scaled_square_sum(p, q):
+    """``p^2 + q^2`` as ``(s, e)`` with ``s * 2**e`` the sum, free of under/overflow.
+
+    Both lengths are scaled by the exact power of two that brings the larger
+    into [1/2, 1), so ``s`` is the correctly ordered ``fl(p*p + q*q)`` of the
+    scaled lengths: bit for bit the plain formula wherever that is normal.
+    """
+    k = _binary_exponent(max(p, q))
+    p, q = math.ldexp(p, -k), math.ldexp(q, -k)
+    return p * p + q * q, 2 * k
+
+
+def _at_scale(values, exponents, what, labels, unit="", small="", large=""):
+    """``values[k] * 2**exponents[k]`` exactly, refusing what no normal double holds.
+
+    Parameters
+    ----------
+    values : sequence of float
+        Moments at the working scale (normal doubles, or 0 for a degenerate
+        body, passed on as 0 for :class:`Body` to refuse).
+    exponents : int or sequence of int
+        Binary exponents of the scale factors.
+    what : str
+        The body, for the messages.
+    labels : sequence of str
+        Names of the moments.
+    unit : str
+        Unit of the moments, for the messages.
+    small, large : str
+        Advice when a moment underflows / overflows.
+
+    Returns
+    -------
+    tuple of float
+        The moments at the caller's scale, each a normal double.
+
+    Raises
+    ------
+    NonPhysicalBodyError
+        A moment beyond the largest double (overflow), or below the smallest
+        normal double 2.2e-308 (underflow: it would keep fewer than 53 bits).
+    """
+    if isinstance(exponents, (int, np.integer)):
+        exponents = [int(exponents)] * len(values)
+    unit = f" {unit}" if unit else ""
+    tops = [
+        (value, exponent, label)
+        for value, exponent, label in zip(values, exponents, labels)
+        if value > 0.0
+    ]
+    # the most extreme moment is the one named
+    tops.sort(key=lambda top: (_binary_exponent(top[0]) + top[1], math.frexp(top[0])[0]))
+    for value, exponent, label in reversed(tops):
+        if _binary_exponent(value) + exponent > _HIGHEST_EXPONENT:
+            raise NonPhysicalBodyError(
+                f"the {what} has {label} = {_decimal(value, exponent)}{unit}: it overflows "
+                f"a double (above 1.8e+308){'; ' + large if large else ''}"
+            )
+    for value, exponent, label in tops:
+        if _binary_exponent(value) + exponent < _LOWEST_EXPONENT:
+            raise NonPhysicalBodyError(
+                f"the {what} has {label} = {_decimal(value, exponent)}{unit}: it underflows "
+                "below the smallest normal double (2.2e-308) and would lose precision"
+                f"{'; ' + small if small else ''}"
+            )
+    return tuple(
+        math.ldexp(value, exponent) if value > 0.0 else float(value)
+        for value, exponent in zip(values, exponents)
+    )
+
+
+def _refuse_below_normal(label, value):
+    """Refuse a subnormal input whose imprecision would scale every moment."""
+    if 0.0 < abs(value) < _SMALLEST_NORMAL:
+        raise NonPhysicalBodyError(
+            f"{label} {value!r} is below the smallest normal double (2.2e-308) and "
+            "would be stored with reduced precision; give it in larger units"
+        )
+
+
+def _positive_lengths(what, normal=False, **values):
+    """The values, checked finite and positive (named in the error).
+
+    With ``normal``, a subnormal value (below 2.2e-308, stored with fewer
+    than 53 bits) is refused too: it would scale every moment.
+    """
     for label, value in values.items():
         if not (
             isinstance(value, (int, float, np.floating, np.integer))
@@ -911,17 +1263,25 @@ def _positive_lengths(what, **values):
             raise NonPhysicalBodyError(
                 f"{what} {label} must be a finite positive number, got {value!r}"
             )
+        if normal:
+            _refuse_below_normal(f"{what} {label}", float(value))
     return tuple(float(v) for v in values.values())
 
 
 def _positive_mass(value, label="mass"):
+    """A finite, positive, normal mass (or density); subnormal values are refused."""
     if not (
         isinstance(value, (int, float, np.floating, np.integer))
         and math.isfinite(value)
         and value > 0.0
     ):
         raise NonPhysicalBodyError(f"{label} must be a finite positive number, got {value!r}")
+    _refuse_below_normal(label, float(value))
     return float(value)
+
+
+_SMALL_LENGTHS = "give the lengths or the mass in smaller units (larger numbers)"
+_LARGE_LENGTHS = "give the lengths or the mass in larger units (smaller numbers)"
 
 
 def cylinder_moments(radius, length, mass=1.0, *, radius_y=None):
@@ -931,15 +1291,40 @@ def cylinder_moments(radius, length, mass=1.0, *, radius_y=None):
     ``radius``): ``I_x = m (b^2/4 + L^2/12)``, ``I_y = m (a^2/4 + L^2/12)``,
     ``I_z = m (a^2 + b^2)/4``.  Not validated as a :class:`Body` (a circular
     cylinder is a symmetric top).
+
+    Lengths in m and the mass in kg give kg m^2.  Each moment is computed
+    with its lengths and the mass scaled by exact powers of two, so the
+    result does not depend on the scale (bit for bit the plain formula
+    wherever that is free of underflow and overflow).
+
+    Raises
+    ------
+    NonPhysicalBodyError
+        A length or the mass not finite and positive, a subnormal mass, or a
+        moment that overflows a double or underflows below the smallest
+        normal double (2.2e-308).
     """
     a, length = _positive_lengths("cylinder", radius=radius, length=length)
     b = a if radius_y is None else _positive_lengths("cylinder", radius_y=radius_y)[0]
     mass = _positive_mass(mass)
-    axial = length * length / 12.0
-    return (
-        mass * (b * b / 4.0 + axial),
-        mass * (a * a / 4.0 + axial),
-        mass * (a * a + b * b) / 4.0,
+    m_exp = _binary_exponent(mass)
+    m = math.ldexp(mass, -m_exp)
+    values, exponents = [], []
+    for radius_across in (b, a):  # I_x, I_y
+        k = _binary_exponent(max(radius_across, length))
+        r, ell = math.ldexp(radius_across, -k), math.ldexp(length, -k)
+        values.append(m * (r * r / 4.0 + ell * ell / 12.0))
+        exponents.append(m_exp + 2 * k)
+    square_sum, k = _scaled_square_sum(a, b)
+    values.append(m * square_sum / 4.0)
+    exponents.append(m_exp + k)
+    return _at_scale(
+        values,
+        exponents,
+        "cylinder",
+        ("I_x", "I_y", "I_z"),
+        small=_SMALL_LENGTHS,
+        large=_LARGE_LENGTHS,
     )
 
 

@@ -276,3 +276,103 @@ def test_point_masses_take_the_defect_choice():
         Body.from_point_masses(masses, points, defect="ignore")
     with pytest.raises(NonPhysicalBodyError, match="defect must be"):
         Body.from_inertia_tensor(np.diag([1.0, 2.0, 2.5]), defect="ignore")
+
+
+# ---------------------------------------------------------------------------
+# Scale: constructors from lengths work at exact powers of two of the
+# lengths (no underflow or overflow in the intermediate products), and refuse
+# moments that no normal double holds, naming underflow or overflow.
+# ---------------------------------------------------------------------------
+@pytest.mark.parametrize("k", [-500, -300, 300, 500])
+def test_t_handle_is_scale_free(k):
+    """Lengths 2**k times: moments exactly 4**k times, unit moments bit-identical."""
+    base = Body.t_handle(8.0, 4.0, 1.0)
+    scaled = Body.t_handle(*(math.ldexp(v, k) for v in (8.0, 4.0, 1.0)))
+    assert np.array_equal(scaled.unit_moments, base.unit_moments)
+    assert np.array_equal(scaled.moments, np.ldexp(base.moments, 2 * k))
+    assert scaled.critical_angle() == base.critical_angle()
+
+
+def test_t_handle_at_a_decimal_small_scale_keeps_its_unit_moments():
+    """1e-150 (not a power of two): the same unit-norm body to a few ulps."""
+    base = Body.t_handle(8.0, 4.0, 1.0)
+    small = Body.t_handle(8e-150, 4e-150, 1e-150)
+    np.testing.assert_allclose(small.normalized_moments, base.normalized_moments, rtol=4 * EPS)
+    np.testing.assert_allclose(small.moments, base.moments * 1e-300, rtol=1e-14)
+
+
+def test_t_handle_underflow_and_overflow_are_named():
+    # moments ~5e-401: underflow (it used to be reported as an overflow)
+    with pytest.raises(NonPhysicalBodyError, match="underflows below the smallest normal") as e:
+        Body.t_handle(1e-200, 2e-200, 3e-201)
+    assert "overflow" not in str(e.value)
+    with pytest.raises(NonPhysicalBodyError, match=r"I_z = 8\.33e\+398: it overflows") as e:
+        Body.t_handle(1e200, 4.0, 1.0)
+    assert "underflow" not in str(e.value)
+    # normal moments, but the smallest underflows at the scale of the largest
+    with pytest.raises(NonPhysicalBodyError, match="intermediate products"):
+        Body.t_handle(1e150, 1e-20, 1e-20)
+
+
+@pytest.mark.parametrize("k", [-500, 500])
+def test_semi_axes_are_scale_free(k):
+    base = Body.from_semi_axes(3.0, 2.0, 0.5)
+    scaled = Body.from_semi_axes(*(math.ldexp(v, k) for v in (3.0, 2.0, 0.5)))
+    assert np.array_equal(scaled.unit_moments, base.unit_moments)
+    assert np.array_equal(scaled.moments, np.ldexp(base.moments, 2 * k))
+
+
+def test_semi_axes_beyond_the_doubles_are_refused():
+    with pytest.raises(NonPhysicalBodyError, match=r"I_a = 1e-322: it underflows"):
+        Body.from_semi_axes(3e-160, 2e-161, 1e-161)
+    with pytest.raises(NonPhysicalBodyError, match=r"I_c = 2\.6e\+400: it overflows"):
+        Body.from_semi_axes(3e200, 2e200, 1e200)
+
+
+class TestEllipsoidDomain:
+    """``Body.ellipsoid(b, c)`` needs 0 <= c < b < a (docstring and eqn:isforellipsoid)."""
+
+    @pytest.mark.parametrize("b, c", [(0.0, 0.3), (0.3, 0.4)])
+    def test_c_larger_than_b_is_refused(self, b, c):
+        with pytest.raises(NonPhysicalBodyError, match=r"needs 0 <= c < b < a.*swap b and c"):
+            Body.ellipsoid(b, c)
+
+    def test_equal_b_and_c_is_a_symmetric_top(self):
+        with pytest.raises(SymmetricTopError, match="b = c = 0.5"):
+            Body.ellipsoid(0.5, 0.5)
+
+    def test_a_shorter_than_b_is_refused(self):
+        # b = 0.7, c = 0.1: S = 1.1268 < 3 b^2 + c^2 = 1.48, so a = 0.5598 < b
+        with pytest.raises(NonPhysicalBodyError, match=r"a = 0\.5598\d* shorter than b"):
+            Body.ellipsoid(0.7, 0.1)
+
+    def test_just_inside_is_accepted_with_the_formula(self):
+        b, c = 0.6, 0.05  # a = 0.673 > b
+        body = Body.ellipsoid(b, c)
+        assert body.moments[0] == b * b + c * c
+        assert body.equivalent_ellipsoid()[0] > body.equivalent_ellipsoid()[1]
+
+    def test_huge_is_too_large_not_an_overflow(self):
+        with pytest.raises(NonPhysicalBodyError, match="too large for a unit-norm"):
+            Body.ellipsoid(1e100, 0.0)
+
+    def test_tiny_b_underflows(self):
+        with pytest.raises(
+            NonPhysicalBodyError, match=r"I1 = b\^2 \+ c\^2 = 1e-340: it underflows"
+        ):
+            Body.ellipsoid(1e-170, 0.0)
+
+
+@pytest.mark.parametrize("k", [-1000, 1000])
+def test_inertia_tensor_is_scale_free(k):
+    tensor = rotated((1.0, 2.0, 2.5))
+    base = Body.from_inertia_tensor(tensor)
+    scaled = Body.from_inertia_tensor(np.ldexp(tensor, k))
+    assert np.array_equal(scaled.unit_moments, base.unit_moments)
+    assert np.array_equal(scaled.moments, np.ldexp(base.moments, k))
+    assert np.array_equal(scaled.frame, base.frame)
+
+
+def test_inertia_tensor_with_subnormal_moments_is_refused():
+    with pytest.raises(NonPhysicalBodyError, match="underflows below the smallest normal"):
+        Body.from_inertia_tensor(np.diag([1.0, 2.0, 2.5]) * 1e-310)

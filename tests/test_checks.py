@@ -152,3 +152,71 @@ def test_cli_verify_bad_arguments(capsys):
     assert "must be >= 1" in capsys.readouterr().err
     assert main(["verify", "--bodies", "2", "--table", "/nonexistent/dir/x.csv"]) == 2
     assert "does not exist" in capsys.readouterr().err
+
+
+def _strict_json(text):
+    """json.loads that refuses NaN and Infinity (as strict parsers do)."""
+
+    def refuse(constant):
+        raise ValueError(f"non-strict JSON constant {constant}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def test_verify_nearly_symmetric_body_is_finite_strict_and_labelled(capsys):
+    """Moments 1, 1 + 1e-8, 1 + 2e-8: the period is ~4e9 / |w0| (~1e9 turns).
+
+    The ODE check cannot integrate that within its step budget: it is
+    reported not applicable with a reason (never NaN); the exact motion
+    agrees with the closed form to a few spacings of doubles at 4e9 rad.
+    """
+    code = main(
+        ["verify", "--moments", "1", "1.00000001", "1.00000002", "--angles", "1", "--json"]
+    )
+    out = _strict_json(capsys.readouterr().out)
+    assert code == 1  # 1e-9 rad cannot be resolved at 4e9 rad
+    assert out["body"] == "moments(1.0, 1.00000001, 1.00000002)"
+    assert out["moments"] == [1.0, 1.00000001, 1.00000002]
+    ode = out["checks"]["ode_rotation"]
+    assert ode["max_abs_error"] is None and ode["not_applicable"] == 1
+    assert "did not complete one period within 10,000,000 steps" in ode["reason"]
+    assert out["ode_period_max_abs_error"] is None
+    # theta = pi/4: Delta alpha ~ 3.9e9 rad, where doubles are 4.8e-7 apart
+    assert 3.8e9 < out["max_abs_phase"] < 4.0e9
+    assert out["phase_resolution"] == np.spacing(out["max_abs_phase"])
+    motion = out["checks"]["exact_motion"]
+    assert motion["failed_to_evaluate"] == 0 and motion["reason"] is None
+    assert 0.0 <= motion["max_abs_error"] <= 4 * out["phase_resolution"]
+    assert math.isfinite(out["checks"]["montgomery"]["max_abs_error"])
+
+
+def test_verify_summary_has_no_nan_and_explains_missing_values():
+    """_summarize on a hand-made table: NaN never reaches the summary."""
+    import pandas as pd
+
+    nan = float("nan")
+    table = pd.DataFrame(
+        {
+            "closed_form": [1.0, 2.0, nan],
+            "period": [6.0, 7.0, nan],
+            "montgomery_error": [1e-12, nan, nan],
+            "motion_error": [2e-12, 3e-12, nan],
+            "ode_error": [nan, 5e-11, nan],
+            "ode_period_error": [nan, 1e-10, nan],
+        }
+    )
+    summary = checks._summarize(table, 1e-9)
+    json.dumps(summary, allow_nan=False)
+    assert not summary["passed"]  # a separatrix row and a missing Montgomery value
+    montgomery = summary["checks"]["montgomery"]
+    assert montgomery["max_abs_error"] == 1e-12 and montgomery["failed_to_evaluate"] == 1
+    ode = summary["checks"]["ode_rotation"]
+    assert ode["max_abs_error"] == 5e-11 and ode["not_applicable"] == 1
+    assert "closed-form period up to 6 / |w0|" in ode["reason"]
+    assert "1 initial condition(s) on the separatrix" in ode["reason"]
+    assert summary["ode_period_max_abs_error"] == 1e-10
+    assert summary["max_abs_phase"] == 2.0
+    # the ODE check alone not applicable is no failure
+    ok = checks._summarize(table.iloc[:1].assign(montgomery_error=[1e-12]), 1e-9)
+    assert ok["passed"] and ok["checks"]["ode_rotation"]["not_applicable"] == 1
+    assert ok["checks"]["ode_rotation"]["max_abs_error"] is None

@@ -153,6 +153,126 @@ def test_point_masses_rejected(masses, points):
         Body.from_point_masses(masses, points)
 
 
+# ---------------------------------------------------------------- scale
+# The constructors scale lengths and masses by exact powers of two before
+# forming products: a body does not depend on its units, and moments that no
+# normal double holds (below 2.2e-308 or above 1.8e308) are refused, naming
+# underflow or overflow (issue: --box 1e-160 ... gave I1 = 0.231862 for 0.231963).
+BOX = (1.0, 2.0, 3.5)
+
+
+@pytest.mark.parametrize("k, mass_k", [(-530, 60), (-500, 0), (500, 0), (-200, -300)])
+def test_box_is_scale_free(k, mass_k):
+    """Edges 2**k, mass 2**mass_k: moments exactly 2**(2k + mass_k) times, same unit moments."""
+    base = Body.box(*BOX)
+    scaled = Body.box(*(math.ldexp(v, k) for v in BOX), math.ldexp(1.0, mass_k))
+    assert np.array_equal(scaled.unit_moments, base.unit_moments)
+    assert np.array_equal(scaled.moments, np.ldexp(base.moments, 2 * k + mass_k))
+    assert scaled.critical_angle() == base.critical_angle()
+
+
+def test_box_at_a_decimal_small_scale():
+    """1e-160 edges (moments 1e-320 would be subnormal) with mass 1e30: moments 1e-290."""
+    base = Body.box(*BOX)
+    small = Body.box(*(1e-160 * v for v in BOX), 1e30)
+    np.testing.assert_allclose(small.normalized_moments, base.normalized_moments, rtol=1e-15)
+    np.testing.assert_allclose(small.moments, base.moments * 1e-290, rtol=1e-14)
+    assert small.critical_angle() == pytest.approx(base.critical_angle(), rel=1e-14)
+
+
+def test_box_moments_beyond_the_doubles_are_refused():
+    with pytest.raises(NonPhysicalBodyError, match=r"I_z = 4\.17e-321: it underflows") as e:
+        Body.box(*(1e-160 * v for v in BOX))
+    assert "overflow" not in str(e.value)
+    with pytest.raises(NonPhysicalBodyError, match=r"I_x = 1\.08e\+400: it overflows") as e:
+        Body.box(1e200, 2e200, 3e200)
+    assert "underflow" not in str(e.value)
+    with pytest.raises(NonPhysicalBodyError, match="it overflows"):
+        Body.box(2.0, 4.0, 6.0, 1e308)  # I_x = 4.33e308
+
+
+def test_subnormal_mass_is_refused():
+    """A mass below 2.2e-308 keeps fewer than 53 bits: every moment would be off."""
+    with pytest.raises(NonPhysicalBodyError, match="mass 1e-320 is below the smallest normal"):
+        Body.cylinder(1.0, 2.0, 1e-320, radius_y=1.5)
+    with pytest.raises(NonPhysicalBodyError, match="mass 1e-310 is below the smallest normal"):
+        Body.box(1.0, 2.0, 3.0, 1e-310)
+
+
+def test_cylinder_is_scale_free():
+    base = Body.cylinder(1.0, 2.0, radius_y=1.5)
+    scaled = Body.cylinder(2.0**-520, 2.0**-519, 2.0**100, radius_y=1.5 * 2.0**-520)
+    assert np.array_equal(scaled.unit_moments, base.unit_moments)
+    assert np.array_equal(scaled.moments, np.ldexp(base.moments, -940))
+    # 1e-300 kg: moments 1e-300 times, same phases (I1 0.434435 before and after)
+    light = Body.cylinder(1.0, 2.0, 1e-300, radius_y=1.5)
+    np.testing.assert_allclose(light.moments, base.moments * 1e-300, rtol=1e-15)
+    assert light.normalized_moments[0] == pytest.approx(0.434435, abs=5e-7)
+    with pytest.raises(NonPhysicalBodyError, match="it underflows"):
+        Body.cylinder(1e-10, 2e-10, 1e-300, radius_y=1.5e-10)
+    with pytest.raises(NonPhysicalBodyError, match=r"I_z = 2\.5e\+399: it overflows"):
+        cylinder_moments(1e200, 1.0, radius_y=1.0)
+
+
+POINT_MASSES = ([1.0, 2.0, 3.0], np.array([[0.0, 0.0, 0.0], [1.0, 0.2, 0.0], [0.3, 1.4, 0.5]]))
+
+
+@pytest.mark.parametrize("k, mass_k", [(-500, 0), (500, 0), (-530, 100), (200, -300)])
+def test_point_masses_are_scale_free(k, mass_k):
+    masses, points = POINT_MASSES
+    base = Body.from_point_masses(masses, points)
+    scaled = Body.from_point_masses(np.ldexp(masses, mass_k), np.ldexp(points, k))
+    assert np.array_equal(scaled.unit_moments, base.unit_moments)
+    assert np.array_equal(scaled.moments, np.ldexp(base.moments, 2 * k + mass_k))
+    assert np.array_equal(scaled.frame, base.frame)
+
+
+def test_point_masses_at_1e200_overflow_clearly():
+    """Positions ~1e200: the tensor ~1e400 (LinAlgError from eigvalsh before)."""
+    masses, points = POINT_MASSES
+    with pytest.raises(NonPhysicalBodyError, match=r"I3 = 3\.68e\+400: it overflows"):
+        Body.from_point_masses(masses, points * 1e200)
+    with pytest.raises(NonPhysicalBodyError, match=r"I1 = 6\.88e-321: it underflows"):
+        Body.from_point_masses(masses, points * 1e-160)
+    # the same positions with heavy masses: moments ~1e-170, the same body
+    base = Body.from_point_masses(masses, points)
+    heavy = Body.from_point_masses(np.array(masses) * 1e150, points * 1e-160)
+    np.testing.assert_allclose(heavy.moments, base.moments * 1e-170, rtol=1e-14)
+    np.testing.assert_allclose(heavy.normalized_moments, base.normalized_moments, rtol=1e-14)
+
+
+def test_point_masses_degenerate_scales_are_refused():
+    masses, points = POINT_MASSES
+    with pytest.raises(NonPhysicalBodyError, match="point mass #1 .* below the smallest normal"):
+        Body.from_point_masses([1.0, 1e-320, 1.0], points)
+    with pytest.raises(NonPhysicalBodyError, match="all lie at one point"):
+        Body.from_point_masses(masses, np.zeros((3, 3)))
+    with pytest.raises(NonPhysicalBodyError, match="coordinate .* below the smallest normal"):
+        Body.from_point_masses(masses, points * 1e-310)
+    # masses 1e300 apart: the moment underflows at the scale of the heaviest
+    with pytest.raises(NonPhysicalBodyError, match="intermediate products"):
+        Body.from_point_masses([1.0, 1e-300, 1e-300], points)
+
+
+@pytest.mark.parametrize("k", [-800, 800])
+def test_rotational_constants_are_scale_free(k):
+    """Constants 2**k times give moments exactly 2**-k times (I = h / (8 pi^2 B))."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", InertialDefectWarning)
+        base = Body.from_rotational_constants(*FORMALDEHYDE_MHZ, unit="MHz", defect="flatten")
+        scaled = Body.from_rotational_constants(
+            *(math.ldexp(v, k) for v in FORMALDEHYDE_MHZ), unit="MHz", defect="flatten"
+        )
+    assert np.array_equal(scaled.moments, np.ldexp(base.moments, -k))
+
+
+def test_rotational_constants_beyond_the_doubles_are_refused():
+    with pytest.raises(NonPhysicalBodyError, match=r"I_A = 9\.33e-312 kg m\^2: it underflows"):
+        Body.from_rotational_constants(1e265, 2e265, 3e265)
+    with pytest.raises(NonPhysicalBodyError, match="constant C 1e-320 is below the smallest"):
+        Body.from_rotational_constants(3.0, 2.0, 1e-320)
+
+
 # ---------------------------------------------------------------- mesh
 trimesh = pytest.importorskip("trimesh", reason="the optional extra orbits[mesh]")
 
@@ -316,3 +436,32 @@ def test_nearly_cubic_mesh_is_accepted(tmp_path):
     np.testing.assert_allclose(
         body.moments, Body.box(1.0, 1.001, 0.999, 1.0 * 1.001 * 0.999).moments, rtol=1e-6
     )
+
+
+def write_obj(path, vertices, faces):
+    """An OBJ file with every coordinate as a full double (repr)."""
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in vertices.tolist()]
+    lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces.tolist()]
+    path.write_text("\n".join(lines) + "\n")
+
+
+@pytest.mark.parametrize("k", [-200, 200])
+def test_mesh_is_scale_free(tmp_path, k):
+    """Vertices 2**k times, density 2**-3k: moments 4**k times, the same unit moments.
+
+    At 2**-200 the file's vertices used to be merged by trimesh's absolute
+    tolerance (1e-8) into one point; beyond that the integrals (degree 5 in
+    the lengths) under- or overflowed.
+    """
+    mesh = trimesh.creation.box(extents=(0.4, 0.25, 0.1))
+    mesh.apply_translation([1.0, 2.0, 3.0])
+    write_obj(tmp_path / "box.obj", mesh.vertices, mesh.faces)
+    write_obj(tmp_path / "scaled.obj", np.ldexp(mesh.vertices, k), mesh.faces)
+    base = Body.from_mesh(tmp_path / "box.obj", density=2700.0)
+    body = Body.from_mesh(tmp_path / "scaled.obj", density=2700.0 * 2.0 ** (-3 * k))
+    assert np.array_equal(body.unit_moments, base.unit_moments)
+    assert np.array_equal(body.moments, np.ldexp(base.moments, 2 * k))
+    expected = Body.box(0.4, 0.25, 0.1, 2700.0 * 0.4 * 0.25 * 0.1).moments
+    # trimesh integrates about the origin and moves to the centre of mass
+    # (3.7 away for a 0.4 box): 1.5e-12 measured
+    np.testing.assert_allclose(base.moments, expected, rtol=1e-11)

@@ -286,3 +286,58 @@ def test_animation_html_shown_once():
     assert {"poinsot_animation", "PoinsotAnimation", "flip_motion", "orbit_row"} <= set(
         orbits.__all__
     )
+
+
+# --------------------------------------------------------------- bodies beyond the doubles
+def _unit_i1(text):
+    return float(next(line for line in text.splitlines() if line.startswith("I1")).split()[-1])
+
+
+def test_box_phases_do_not_depend_on_the_scale(capsys):
+    """1e-160 m edges and 1e30 kg (moments 1e-290): the I1 of the 1 m box (0.231963)."""
+    assert main(["phase", "--box", "1", "2", "3.5", "--theta", "0.5"]) == 0
+    base = _unit_i1(capsys.readouterr().out)
+    assert base == pytest.approx(0.231963, abs=5e-7)
+    argv = ["phase", "--box", "1e-160", "2e-160", "3.5e-160", "--mass", "1e30", "--theta", "0.5"]
+    assert main(argv) == 0
+    assert _unit_i1(capsys.readouterr().out) == pytest.approx(base, rel=1e-14)
+
+
+@pytest.mark.parametrize(
+    "body, words",
+    [
+        (["--box", "1e-160", "2e-160", "3.5e-160"], "I_z = 4.17e-321: it underflows"),
+        (["--cylinder", "1", "2", "1.5", "--mass", "1e-320"], "mass 1e-320 is below"),
+        (["--t-handle", "1e-200", "2e-200", "3e-201"], "it underflows below"),
+        (["--t-handle", "1e200", "4", "1"], "it overflows a double"),
+        (
+            ["--rotational-constants", "1e265", "2e265", "3e265"],
+            "I_A = 9.33e-312 kg m^2: it underflows",
+        ),
+        (["--ellipsoid", "0", "0.3"], "needs 0 <= c < b < a"),
+    ],
+)
+def test_bodies_beyond_the_doubles_exit_2(body, words, capsys):
+    assert main(["phase", *body, "--theta", "0.5"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("orbits: error: ") and err.count("\n") == 1, err
+    assert words in err
+    # underflow is never called an overflow, nor the reverse
+    assert ("overflow" in err) == ("overflows" in words)
+
+
+def test_point_masses_at_1e200_exit_2_without_traceback(tmp_path):
+    """Positions ~1e200 ended in numpy's LinAlgError (exit 1); now one line, exit 2."""
+    import os
+    import subprocess
+    import sys
+
+    path = tmp_path / "far.csv"
+    path.write_text("mass,x,y,z\n1,0,0,0\n2,1e200,2e199,0\n3,3e199,1.4e200,5e199\n")
+    root = os.path.dirname(os.path.dirname(os.path.abspath(orbits.__file__)))
+    env = dict(os.environ, PYTHONPATH=root)
+    argv = [sys.executable, "-m", "orbits", "phase", "--point-masses", str(path), "--theta", "0.5"]
+    done = subprocess.run(argv, capture_output=True, text=True, env=env, timeout=300)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr
+    assert "I3 = 3.68e+400: it overflows a double" in done.stderr

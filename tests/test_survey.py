@@ -385,3 +385,114 @@ def test_a_resumed_run_reports_on_every_chunk(tmp_path):
     (tmp_path / "s" / "bodies" / "part-00002.parquet").unlink()
     again = Survey.grid(tmp_path / "s", 30, 5, chunk=70)
     assert again.run() == first
+
+
+_SMALL = ["survey", "--resolution", "6", "--n-max", "3", "--format", "csv", "--chunk", "3"]
+
+
+def _small_survey(target, capsys):
+    assert main(_SMALL + ["--out", str(target)]) == 0
+    capsys.readouterr()
+    return json.loads((target / "report.json").read_text())
+
+
+@pytest.mark.parametrize("damage", ["edited", "deleted", "not-json"])
+def test_check_verifies_the_report(tmp_path, capsys, damage):
+    """--check recomputes report.json from the verified parts; a rerun rewrites it."""
+    from orbits.survey import check_survey
+
+    target = tmp_path / "s"
+    report = _small_survey(target, capsys)
+    assert check_survey(target)["report"] == "ok"
+    path = target / "report.json"
+    if damage == "edited":
+        edited = dict(report, bodies_with_a_two_pi_orbit=7)
+        path.write_text(json.dumps(edited, indent=2))
+        problem = "report.json differs from the report of the verified parts (bodies_with_a_two_pi_orbit)"
+    elif damage == "deleted":
+        path.unlink()
+        problem = "report.json is missing"
+    else:
+        path.write_text("{")
+        problem = "report.json is not valid JSON"
+    status = check_survey(target)
+    assert not status["complete"] and status["verified"] == status["chunks"] == 6
+    assert status["report"].startswith(problem)
+    assert status["damaged"] == [status["report"]]
+    assert "rerun the survey command to rewrite it" in status["report"]
+    assert main(["survey", "--check", str(target)]) == 1
+    out = capsys.readouterr().out
+    assert "DAMAGED" in out and problem in out and "every part" not in out
+    # the rerun recomputes nothing and rewrites the report
+    assert main(_SMALL + ["--out", str(target)]) == 0
+    assert "(0 computed now" in capsys.readouterr().out
+    assert json.loads(path.read_text()) == report
+    assert main(["survey", "--check", str(target), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["report"] == "ok"
+
+
+def test_a_reindented_report_still_verifies(tmp_path, capsys):
+    from orbits.survey import check_survey
+
+    target = tmp_path / "s"
+    report = _small_survey(target, capsys)
+    (target / "report.json").write_text(json.dumps(report, indent=7, sort_keys=True))
+    assert check_survey(target)["complete"]
+
+
+def test_check_exit_codes_damage_and_unreadable(tmp_path, capsys):
+    """docs/cli.md: 1 damaged parts or report; 2 a directory that cannot be checked."""
+    target = tmp_path / "s"
+    _small_survey(target, capsys)
+    manifest = target / "manifest.json"
+    original = manifest.read_text()
+    # a damaged part: 1, listed
+    part = target / "bodies" / "part-00001.csv"
+    part.write_text(part.read_text() + "\n")
+    assert main(["survey", "--check", str(target)]) == 1
+    assert "damaged chunk 1: bodies/part-00001.csv does not match" in capsys.readouterr().out
+    # a manifest edited by hand cannot be trusted: nothing can be checked, 2, one line
+    document = json.loads(original)
+    document["parts"]["0"]["orbits"]["rows"] = 0
+    manifest.write_text(json.dumps(document))
+    assert main(["survey", "--check", str(target)]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    err = captured.err.strip().splitlines()
+    assert len(err) == 1 and "does not match its own SHA-256" in err[0]
+    # the documentation says the same
+    from pathlib import Path
+
+    docs = (Path(__file__).resolve().parents[1] / "docs" / "cli.md").read_text()
+    assert "Exit 0 complete; 1 damaged or incomplete (parts or\nreport)" in docs
+    assert "does not match its own SHA-256 (its ledger cannot be\ntrusted" in docs
+
+
+@pytest.mark.parametrize("trailing", ["", "/"])
+def test_an_out_that_is_a_link_is_refused(tmp_path, capsys, trailing):
+    """--out (and Survey(out_dir)) naming a symbolic link: exit 2 before anything is written."""
+    import os
+
+    real = tmp_path / "real"
+    _small_survey(real, capsys)
+    link = tmp_path / "link"
+    os.symlink(real, link)
+    before = read_bytes(real)
+    manifest = (real / "manifest.json").read_bytes()
+    report = (real / "report.json").read_bytes()
+    # the same survey (it would resume there) and another one (it would be refused there)
+    for argv in (_SMALL, _SMALL[:4] + ["4"] + _SMALL[5:]):
+        assert main(argv + ["--out", str(link) + trailing]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "is a symbolic link; orbits never writes through a link" in err[0]
+    with pytest.raises(InputError, match="is a symbolic link"):
+        Survey.grid(link, 6, 3, fmt="csv", chunk=3)
+    # a link to a missing directory would create it: refused too
+    dangling = tmp_path / "dangling"
+    os.symlink(tmp_path / "nowhere", dangling)
+    assert main(_SMALL + ["--out", str(dangling)]) == 2
+    assert not (tmp_path / "nowhere").exists()
+    assert read_bytes(real) == before
+    assert (real / "manifest.json").read_bytes() == manifest
+    assert (real / "report.json").read_bytes() == report
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dangling", "link", "real"]

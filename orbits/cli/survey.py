@@ -18,6 +18,9 @@ def _cmd_survey(args):
         return _check_survey_directory(args, check_survey)
     if args.out is None:
         raise InputError("orbits survey: --out DIR is required (or --check DIR)")
+    from ..atomic import refuse_link
+
+    refuse_link(args.out.rstrip("/") or args.out)  # before the estimate, the grid, any file
     if args.n_max is None:
         raise InputError("orbits survey: the following arguments are required: --n-max")
     if (args.resolution is None) == (args.bodies is None):
@@ -128,7 +131,12 @@ def _check_survey_directory(args, check_survey):
     if args.json:
         print(json.dumps(status, indent=2))
     else:
-        verdict = "complete, every part verified" if status["complete"] else "NOT complete"
+        if status["complete"]:
+            verdict = "complete, every part and report.json verified"
+        elif status["damaged"]:
+            verdict = "DAMAGED" + (" and incomplete" if status["missing"] else "")
+        else:
+            verdict = "NOT complete"
         print(
             f"orbits survey --check {args.check}: {status['verified']} of "
             f"{status['chunks']} chunk(s) verified; {verdict}"

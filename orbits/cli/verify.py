@@ -20,6 +20,15 @@ _VERIFY_SECONDS_PER_CONDITION = 3e-5
 _VERIFY_BYTES_PER_CONDITION = 2000
 
 
+def _body_label(args, body):
+    """The body's name, with moments shown to full (shortest round-trip) precision."""
+    moments = getattr(args, "moments", None)
+    if moments is not None and not getattr(args, "name", None):
+        return "moments({})".format(", ".join(repr(float(v)) for v in moments))
+    values = ", ".join(repr(float(v)) for v in body.moments)
+    return f"{body.name} (moments {values})" if body.name else f"moments({values})"
+
+
 def _cmd_verify(args):
     import json
 
@@ -56,9 +65,11 @@ def _cmd_verify(args):
             )
     summary = report.summary
     if one:
-        summary["body"] = body.name or repr(body)
+        summary["body"] = _body_label(args, body)
+        summary["moments"] = [float(v) for v in body.moments]
     if args.json:
-        print(json.dumps(summary, indent=2))
+        # strict JSON: a value that cannot exist is null with a reason, never NaN
+        print(json.dumps(summary, indent=2, allow_nan=False))
     else:
         what = f"body {summary['body']}" if one else f"{args.bodies} bodies"
         print(
@@ -67,15 +78,37 @@ def _cmd_verify(args):
             f"{args.tolerance:g} rad"
         )
         print(f"{'check':<16} {'max |discrepancy| (rad)':>24}  result")
+        notes = []
         for name, label in (
             ("montgomery", "(b) Montgomery"),
             ("ode_rotation", "(a) ODE rotation"),
             ("exact_motion", "(c) exact motion"),
         ):
-            value = summary["checks"][name]["max_abs_error"]
-            verdict = "ok" if value <= args.tolerance else "FAIL"
-            print(f"{label:<16} {value:>24.3e}  {verdict}")
-        print(f"ODE period vs eqn:TK: max |dT| = {summary['ode_period_max_abs_error']:.3e}")
+            check = summary["checks"][name]
+            value = check["max_abs_error"]
+            if value is None:
+                shown, verdict = "n/a", "n/a" if check["not_applicable"] else "FAIL"
+            else:
+                shown = f"{value:.3e}"
+                verdict = "ok" if value <= args.tolerance else "FAIL"
+                if check["failed_to_evaluate"]:
+                    verdict = "FAIL"
+                elif check["not_applicable"]:
+                    verdict += " (partly n/a)"
+            print(f"{label:<16} {shown:>24}  {verdict}")
+            if check["reason"]:
+                notes.append(f"{label}: {check['reason']}")
+        period = summary["ode_period_max_abs_error"]
+        print("ODE period vs eqn:TK: max |dT| = " + ("n/a" if period is None else f"{period:.3e}"))
+        resolution = summary["phase_resolution"]
+        if resolution is not None and resolution > args.tolerance / 4:
+            notes.append(
+                f"the phases reach {summary['max_abs_phase']:.3g} rad, where doubles are "
+                f"{resolution:.3g} rad apart: no check can agree more closely than "
+                "a few times that"
+            )
+        for note in notes:
+            print(f"note: {note}")
     if args.table:
         from ..atomic import write_csv_atomic
 

@@ -62,7 +62,7 @@ from .ledger import (
     SURVEY_FORMAT,
     TABLES,
     Ledger,
-    check_survey,
+    check_parts,
     chunk_bounds,
     load_manifest,
     manifest_checksum,
@@ -70,7 +70,7 @@ from .ledger import (
     refuse_links,
     sha256_file,
 )
-from .report import survey_report
+from .report import check_report, check_survey, survey_report
 from .runner import CONNECT_TIMEOUT, DEFAULT_CHUNK, Survey
 from .tables import read_part, read_survey, read_table, survey_grid, write_part
 
@@ -93,6 +93,8 @@ __all__ = [
     "TABLES",
     "Ledger",
     "Survey",
+    "check_parts",
+    "check_report",
     "check_survey",
     "check_survey_bounds",
     "chunk_bounds",

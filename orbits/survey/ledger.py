@@ -231,8 +231,10 @@ def load_manifest(out_dir):
     return document
 
 
-def check_survey(out_dir):
-    """Verify a survey directory without computing anything.
+def check_parts(out_dir):
+    """Verify the parts of a survey directory against its ledger (not ``report.json``).
+
+    :func:`orbits.survey.check_survey` adds the check of the report.
 
     Returns
     -------

@@ -3,8 +3,9 @@
 import json
 from pathlib import Path
 
-from ..atomic import write_text_atomic
-from .ledger import REPORT, load_manifest
+from ..atomic import read_bytes_nofollow, write_text_atomic
+from ..errors import InputError
+from .ledger import REPORT, check_parts, load_manifest
 from .tables import read_table
 
 # the columns of each counterexample to the minimum-at-the-ends conjecture
@@ -84,6 +85,14 @@ def survey_report(out_dir, n_max, q_max, skipped_rows, verify=True, summaries=No
         Not a complete, verified survey.
     """
     out_dir = Path(out_dir)
+    report = build_report(out_dir, n_max, q_max, skipped_rows, verify, summaries)
+    write_text_atomic(out_dir / REPORT, json.dumps(report, indent=2) + "\n")
+    return report
+
+
+def build_report(out_dir, n_max, q_max, skipped_rows, verify=True, summaries=None):
+    """The document :func:`survey_report` writes, computed without writing it."""
+    out_dir = Path(out_dir)
     keys = None
     if summaries and not verify:
         keys = sorted(int(key) for key in load_manifest(out_dir)["parts"])
@@ -91,7 +100,7 @@ def survey_report(out_dir, n_max, q_max, skipped_rows, verify=True, summaries=No
         summary = combined_summary([summaries[key] for key in keys])
     else:
         summary = bodies_summary(read_table(out_dir, "bodies", verify=verify))
-    report = {
+    return {
         "bodies": summary["bodies"],
         "orbits": summary["orbits"],
         "n_max": n_max,
@@ -105,5 +114,93 @@ def survey_report(out_dir, n_max, q_max, skipped_rows, verify=True, summaries=No
         "bodies_with_unresolved_orbits": summary["unresolved"],
         "skipped_rows": int(skipped_rows),
     }
-    write_text_atomic(out_dir / REPORT, json.dumps(report, indent=2) + "\n")
-    return report
+
+
+_RERUN = "rerun the survey command to rewrite it"
+
+
+def _canonical(document):
+    """Key order, indentation and float spelling are not content."""
+    return json.dumps(document, sort_keys=True)
+
+
+def check_report(out_dir, document=None):
+    """The problem of ``DIR/report.json``, or '' if it is the report of the parts.
+
+    The report is recomputed from the bodies table (read without hashing
+    again: call this after :func:`~orbits.survey.ledger.check_parts` found
+    every part intact) and compared, as JSON values, with the file.
+
+    Returns
+    -------
+    str
+        One line (``report.json is missing``, ``... differs from ...``,
+        ...), ending with how to repair it; '' when it matches.
+    """
+    out_dir = Path(out_dir)
+    if document is None:
+        document = load_manifest(out_dir)
+    parameters = document["parameters"]
+    skipped = document.get("skipped_rows") or []
+    expected = build_report(
+        out_dir, parameters["n_max"], parameters["q_max"], len(skipped), verify=False
+    )
+    try:
+        text = read_bytes_nofollow(out_dir / REPORT).decode("utf-8")
+    except FileNotFoundError:
+        return f"{REPORT} is missing; {_RERUN}"
+    except UnicodeDecodeError:
+        return f"{REPORT} is not valid JSON; {_RERUN}"
+    except OSError as error:
+        raise InputError(f"cannot read {out_dir / REPORT}: {error.strerror}") from None
+    try:
+        found = json.loads(text)
+    except ValueError:
+        return f"{REPORT} is not valid JSON; {_RERUN}"
+    # through JSON, as the file was written (tuples are lists, NaN is NaN)
+    if _canonical(found) != _canonical(json.loads(json.dumps(expected))):
+        keys = [
+            key
+            for key in expected
+            if not isinstance(found, dict)
+            or key not in found
+            or _canonical(found[key]) != _canonical(json.loads(json.dumps(expected[key])))
+        ]
+        extra = [key for key in found if key not in expected] if isinstance(found, dict) else []
+        what = ", ".join((keys + extra)[:3]) or "its layout"
+        return f"{REPORT} differs from the report of the verified parts ({what}); {_RERUN}"
+    return ""
+
+
+def check_survey(out_dir):
+    """Verify a survey directory without computing anything: parts and report.
+
+    Every part is checked against its ledger entry (SHA-256); when all are
+    intact, ``report.json`` is recomputed from the bodies table and
+    compared with the file (a missing or different report is damage, and a
+    rerun of the survey command rewrites it).
+
+    Returns
+    -------
+    dict
+        ``chunks`` (expected), ``verified`` (count), ``damaged`` and
+        ``missing`` (lists of one-line descriptions; a problem with the
+        report is listed under ``damaged``), ``report`` (``"ok"``, the
+        report's problem, or ``"not checked"`` while parts are damaged or
+        missing), ``complete`` (bool).
+
+    Raises
+    ------
+    InputError
+        Not a survey directory, its manifest is damaged, or a link.
+    """
+    document = load_manifest(out_dir)
+    status = check_parts(out_dir)
+    status["report"] = "not checked"
+    if status["complete"]:
+        problem = check_report(out_dir, document)
+        status["report"] = problem or "ok"
+        if problem:
+            status["damaged"].append(problem)
+            status["complete"] = False
+    return status

@@ -16,6 +16,7 @@ import numpy as np
 
 from .._args import integer, path_argument, real_array
 from .._version import __version__
+from ..atomic import refuse_link
 from ..bodies import as_moments, region_grid
 from ..device import check_device, cuda_kernels
 from ..errors import ArgumentTypeError, InputError
@@ -76,6 +77,9 @@ class Survey:
             for name, value in (("n_max", n_max), ("q_max", q_max), ("chunk", chunk))
         )
         self.out_dir = Path(path_argument("out_dir", out_dir))
+        # the directory itself is never reached through a link either (a
+        # link to another survey would resume, or overwrite, that one)
+        refuse_link(self.out_dir)
         self.moments = np.ascontiguousarray(as_moments(moments), dtype=float).reshape(-1, 3)
         if self.moments.shape[0] == 0:
             raise InputError("a survey needs at least one body")

@@ -16,7 +16,7 @@ from ..cells import neutralize, unneutralize
 from ..errors import InputError
 from ..search import CATALOG_COLUMNS
 from .compute import BODY_COLUMNS, UNIT_COLUMNS, derive_orbit_rows
-from .ledger import check_survey, entry_problem, load_manifest, one_line
+from .ledger import check_parts, entry_problem, load_manifest, one_line
 
 
 def require_pyarrow():
@@ -109,7 +109,7 @@ def read_table(out_dir, table, verify=True):
     if table not in ("bodies", "orbits"):
         raise InputError(f"table must be 'bodies' or 'orbits', got {table!r}")
     document = load_manifest(out_dir)
-    status = check_survey(out_dir) if verify else None
+    status = check_parts(out_dir) if verify else None
     if status is not None and not status["complete"]:
         problems = status["damaged"] + [f"{m} missing" for m in status["missing"]]
         raise InputError(
