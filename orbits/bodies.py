@@ -715,6 +715,9 @@ class Body:
             values, a subnormal mass, collinear masses (a zero moment), or
             moments that overflow a double or underflow below the smallest
             normal double (2.2e-308).
+        SymmetricTopError
+            Two moments closer than the rounding of the sums that built
+            them (e.g. three equal masses on an equilateral triangle).
 
         Notes
         -----
@@ -723,9 +726,6 @@ class Body:
         so the body does not depend on the units: positions ``2**k`` times
         give moments ``4**k`` times, bit for bit, with no overflow of the
         intermediate products.
-        SymmetricTopError
-            Two moments closer than the rounding of the sums that built
-            them (e.g. three equal masses on an equilateral triangle).
         """
         masses = np.asarray(masses, dtype=float)
         positions = np.asarray(positions, dtype=float)

@@ -6,11 +6,13 @@ import math
 import mpmath as mp
 import numpy as np
 import pytest
+from mp_formulas import period_and_total_phase
 
 import orbits
 from orbits import Body, checks
 from orbits.atomic import csv_float_options
 from orbits.cli import main
+from orbits.errors import InputError
 
 T_HANDLE = Body.t_handle(8, 4, 1)
 FIG6 = Body.preset("fig6")
@@ -149,7 +151,7 @@ def test_cli_verify_exit_code_and_table(capsys, tmp_path):
 
 def test_cli_verify_bad_arguments(capsys):
     assert main(["verify", "--bodies", "0"]) == 2
-    assert "must be >= 1" in capsys.readouterr().err
+    assert "must be an integer >= 1" in capsys.readouterr().err
     assert main(["verify", "--bodies", "2", "--table", "/nonexistent/dir/x.csv"]) == 2
     assert "does not exist" in capsys.readouterr().err
 
@@ -175,7 +177,7 @@ def test_verify_nearly_symmetric_body_is_finite_strict_and_labelled(capsys):
     )
     out = _strict_json(capsys.readouterr().out)
     assert code == 1  # 1e-9 rad cannot be resolved at 4e9 rad
-    assert out["body"] == "moments(1.0, 1.00000001, 1.00000002)"
+    assert out["body"] == "moments(1, 1.00000001, 1.00000002)"
     assert out["moments"] == [1.0, 1.00000001, 1.00000002]
     ode = out["checks"]["ode_rotation"]
     assert ode["max_abs_error"] is None and ode["not_applicable"] == 1
@@ -205,7 +207,8 @@ def test_verify_summary_has_no_nan_and_explains_missing_values():
             "ode_period_error": [nan, 1e-10, nan],
         }
     )
-    summary = checks._summarize(table, 1e-9)
+    exhausted = np.array([True, False, False])
+    summary = checks._summarize(table, 1e-9, exhausted)
     json.dumps(summary, allow_nan=False)
     assert not summary["passed"]  # a separatrix row and a missing Montgomery value
     montgomery = summary["checks"]["montgomery"]
@@ -217,6 +220,91 @@ def test_verify_summary_has_no_nan_and_explains_missing_values():
     assert summary["ode_period_max_abs_error"] == 1e-10
     assert summary["max_abs_phase"] == 2.0
     # the ODE check alone not applicable is no failure
-    ok = checks._summarize(table.iloc[:1].assign(montgomery_error=[1e-12]), 1e-9)
+    first = table.iloc[:1].assign(montgomery_error=[1e-12])
+    ok = checks._summarize(first, 1e-9, exhausted[:1])
     assert ok["passed"] and ok["checks"]["ode_rotation"]["not_applicable"] == 1
     assert ok["checks"]["ode_rotation"]["max_abs_error"] is None
+    # an ODE value missing for any other reason than the step budget fails
+    failed = checks._summarize(first, 1e-9, np.array([False]))
+    ode = failed["checks"]["ode_rotation"]
+    assert not failed["passed"]
+    assert ode["not_applicable"] == 0 and ode["failed_to_evaluate"] == 1
+    assert ode["reason"] == "no value (not finite) at 1 initial condition(s)"
+
+
+def test_rotation_by_integration_refuses_a_period_beyond_its_budget():
+    """No NaN: the nearly symmetric body's period (~4e9 / |w0|) is beyond both engines."""
+    body = orbits.Body((1.0, 1.00000001, 1.00000002))
+    with pytest.raises(InputError, match="did not reach the end of period 1 within 10,000,000"):
+        orbits.rotation_by_integration(body, 0.7, engine="compiled")
+    # SciPy's engine refuses up front rather than stepping in Python for hours
+    with pytest.raises(InputError, match=r"1\.2\d*e\+08 turns of omega, beyond the 10,000"):
+        orbits.rotation_by_integration(body, 0.7, engine="scipy")
+
+
+def test_rotation_after_periods_marks_the_step_budget():
+    """The kernel's period is -1 when the steps ran out, a real period otherwise."""
+    from orbits.core import checks as kernel
+
+    body = orbits.Body((1.0, 1.00000001, 1.00000002))
+    w = orbits.Motion.from_spin(body, 0.7).omega0
+    period, angle, off_axis = kernel.rotation_after_periods(
+        *body.moments, *w, 1, 1e-12, 1e-14, 1000
+    )
+    assert period == kernel.STEP_BUDGET_EXHAUSTED
+    assert math.isnan(angle) and math.isnan(off_axis)
+    fig = orbits.Body.preset("t-handle")
+    w = orbits.Motion.from_spin(fig, 1.2).omega0
+    period, angle, off_axis = kernel.rotation_after_periods(*fig.moments, *w, 1, 1e-12, 1e-14, 10)
+    assert period == kernel.STEP_BUDGET_EXHAUSTED  # 10 steps are too few here too
+    period, _, _ = kernel.rotation_after_periods(*fig.moments, *w, 1, 1e-12, 1e-14, 10**6)
+    assert period > 0.0
+    assert abs(period - orbits.Motion.from_spin(fig, 1.2).period) < 1e-9 * period
+
+
+@pytest.mark.parametrize(
+    "moments, theta",
+    [
+        ((1.0, 1.00000001, 1.00000002), 0.7),  # nearly symmetric: period ~8e8
+        ((1.0, 1.0000001, 2.0), 0.3),
+        ((1.0, 1.9999999, 2.0), 1.2),
+        ((0.3, 0.7, 0.9), 0.5),
+    ],
+)
+def test_montgomery_keeps_the_digits_moments_share(moments, theta):
+    """Montgomery's 2ET/M - Omega against eqn:GeometricPhase in mpmath (40 digits),
+    on the same double omega0: nearly equal moments must not cost digits (the
+    quadrature's 1/Ii - 1/Ij are formed as (Ij - Ii)/(Ii Ij); the difference of
+    rounded reciprocals was off by 0.36 rad for the first body)."""
+
+    body = Body(moments)
+    check = checks.montgomery(body, theta)
+    w = orbits.Motion.from_spin(body, theta).omega0
+    with mp.workdps(40):
+        i1, i2, i3 = (mp.mpf(float(v)) for v in body.moments)
+        w1, w2, w3 = (mp.mpf(float(v)) for v in w)
+        two_e = i1 * w1**2 + i2 * w2**2 + i3 * w3**2
+        m_sq = i1**2 * w1**2 + i2**2 * w2**2 + i3**2 * w3**2
+        period, total = period_and_total_phase(i1, i2, i3, two_e, m_sq)
+    assert check.period == pytest.approx(float(period), rel=1e-12)
+    assert check.total_phase == pytest.approx(float(total), rel=1e-12)
+
+
+@pytest.mark.parametrize("scale", [2.0**-700, 1e-200, 1e200, 2.0**700])
+def test_checks_are_scale_free(scale):
+    """The three checks on moments scaled by 1e-200 .. 1e200: the same numbers
+    (Montgomery's bit for bit at powers of two), not a ZeroDivisionError or an
+    overflow."""
+    unit = Body((1.0, 2.0, 3.0))
+    scaled = Body((scale, 2.0 * scale, 3.0 * scale))
+    expected = checks.montgomery(unit, 0.7)
+    got = checks.montgomery(scaled, 0.7)
+    if math.frexp(scale)[0] == 0.5:  # a power of two: the same body, bit for bit
+        assert got == expected
+    else:  # 3 * 1e-200 rounds differently from 3: the body differs by an ulp
+        for field in expected._fields:
+            assert getattr(got, field) == pytest.approx(getattr(expected, field), rel=1e-14)
+    rotation = checks.rotation_by_integration(scaled, 0.7, engine="compiled")
+    assert rotation.error < 1e-9
+    assert rotation.period == pytest.approx(expected.period, rel=1e-10)
+    assert checks.motion_phase(scaled, 0.7) == pytest.approx(expected.total_phase, rel=1e-13)

@@ -20,15 +20,6 @@ _VERIFY_SECONDS_PER_CONDITION = 3e-5
 _VERIFY_BYTES_PER_CONDITION = 2000
 
 
-def _body_label(args, body):
-    """The body's name, with moments shown to full (shortest round-trip) precision."""
-    moments = getattr(args, "moments", None)
-    if moments is not None and not getattr(args, "name", None):
-        return "moments({})".format(", ".join(repr(float(v)) for v in moments))
-    values = ", ".join(repr(float(v)) for v in body.moments)
-    return f"{body.name} (moments {values})" if body.name else f"moments({values})"
-
-
 def _cmd_verify(args):
     import json
 
@@ -65,7 +56,7 @@ def _cmd_verify(args):
             )
     summary = report.summary
     if one:
-        summary["body"] = _body_label(args, body)
+        summary["body"] = body.name or repr(body)
         summary["moments"] = [float(v) for v in body.moments]
     if args.json:
         # strict JSON: a value that cannot exist is null with a reason, never NaN

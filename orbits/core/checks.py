@@ -69,6 +69,13 @@ def rotation_about_momentum(q, i1, i2, i3, w1, w2, w3):
     return angle, 2.0 * math.sqrt(p1 * p1 + p2 * p2 + p3 * p3)
 
 
+# the period reported by :func:`rotation_after_periods` (and ``ode_period``
+# of :func:`check_batch`) when the step budget ran out before the last return
+STEP_BUDGET_EXHAUSTED = -1.0
+# the step budget of the ODE check in :func:`check_batch`
+ODE_MAX_STEPS = 10_000_000
+
+
 @njit(cache=True, nogil=True)
 def _integrate_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol, max_steps, y_end):
     """Integrate from the identity orientation until omega has returned
@@ -101,10 +108,16 @@ def rotation_after_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol, max_step
 
     The period is the time between returns of omega to omega0 (see
     :func:`return_event`); ``angle`` and ``off_axis`` as in
-    :func:`rotation_about_momentum`.  All NaN if no return was found.
+    :func:`rotation_about_momentum`.  When the ``max_steps`` steps end
+    before the last return (a period too long for the budget: a nearly
+    symmetric body, or a spin very near the separatrix) the period is
+    :data:`STEP_BUDGET_EXHAUSTED` (-1) and the rest NaN; all NaN when
+    omega does not move (a steady spin about an axis: no return).
     """
     y_end = np.empty(STATE_SIZE)
     t_end = _integrate_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol, max_steps, y_end)
+    if t_end == STEP_BUDGET_EXHAUSTED:
+        return STEP_BUDGET_EXHAUSTED, np.nan, np.nan
     if not t_end >= 0.0:
         return np.nan, np.nan, np.nan
     angle, off_axis = rotation_about_momentum(y_end[3:], i1, i2, i3, w1, w2, w3)
@@ -238,7 +251,9 @@ def check_batch(moments, theta, phi, ode_rtol, ode_atol, quad_rtol, out):
     closed-form total phase (Bulirsch ``cel``), the exact-motion
     ``phi(T)`` phase, Montgomery's total phase, solid angle and period, the
     ODE period, rotation angle mod 2 pi and off-axis size, the closed-form
-    period and the branch.  Rows on the separatrix get NaN.
+    period and the branch.  Rows on the separatrix get NaN; a row whose
+    integration ran out of steps has ``ode_period`` equal to
+    :data:`STEP_BUDGET_EXHAUSTED` (see :func:`rotation_after_periods`).
     """
     for k in prange(moments.shape[0]):
         i1 = moments[k, 0]
@@ -265,7 +280,7 @@ def check_batch(moments, theta, phi, ode_rtol, ode_atol, quad_rtol, out):
         out[k, 3] = solid
         out[k, 4] = period
         ode_period, angle, off_axis = rotation_after_periods(
-            i1, i2, i3, w1, w2, w3, 1, ode_rtol, ode_atol, 10_000_000
+            i1, i2, i3, w1, w2, w3, 1, ode_rtol, ode_atol, ODE_MAX_STEPS
         )
         out[k, 5] = ode_period
         out[k, 6] = angle

@@ -43,7 +43,10 @@ _STACK = 200
 def _integrands(u, sam, inv, gap_m1, gap_3m, gap, m_sq, momentum):
     """(dt/du, 1 - cos v) at azimuth u.
 
-    ``inv = (1/I1, 1/I2, 1/I3)``; the invariants enter as
+    ``inv = (1/I1, 1/I2, 1/I3, 1/I1 - 1/I3, 1/I2 - 1/I3, 1/I1 - 1/I2)``,
+    the differences formed as ``(Ij - Ii)/(Ii Ij)`` (a difference of the
+    rounded reciprocals would lose every digit the moments share, all of
+    them for a nearly symmetric body); the invariants enter as
     ``M^2 - 2 E I1``, ``2 E I3 - M^2`` and ``M^2 - 2 E I2`` so that
     ``cos^2 v`` keeps its relative accuracy at the saddle, where it is
     proportional to ``M^2 - 2 E I2``.
@@ -51,11 +54,11 @@ def _integrands(u, sam, inv, gap_m1, gap_3m, gap, m_sq, momentum):
     c2 = math.cos(u) ** 2
     s2 = 1.0 - c2
     if sam:
-        denom = c2 * (inv[0] - inv[2]) + s2 * (inv[1] - inv[2])
+        denom = c2 * inv[3] + s2 * inv[4]
         cos_sq = (c2 * gap_m1 * inv[0] + s2 * gap * inv[1]) / (m_sq * denom)
         sin_sq = gap_3m * inv[2] / (m_sq * denom)
     else:
-        denom = c2 * (inv[0] - inv[1]) + s2 * (inv[0] - inv[2])
+        denom = c2 * inv[5] + s2 * inv[3]
         cos_sq = (-c2 * gap * inv[1] + s2 * gap_3m * inv[2]) / (m_sq * denom)
         sin_sq = gap_m1 * inv[0] / (m_sq * denom)
     cos_v = math.sqrt(max(cos_sq, 0.0))
@@ -99,7 +102,16 @@ def period_and_cap(i1, i2, i3, w1, w2, w3, gap, rtol):
     gap_m1 = i2 * (i2 - i1) * s2 + i3 * (i3 - i1) * s3
     gap_3m = i1 * (i3 - i1) * s1 + i2 * (i3 - i2) * s2
     momentum = math.sqrt(m_sq)
-    inv = np.array([1.0 / i1, 1.0 / i2, 1.0 / i3])
+    inv = np.array(
+        [
+            1.0 / i1,
+            1.0 / i2,
+            1.0 / i3,
+            (i3 - i1) / (i1 * i3),
+            (i3 - i2) / (i2 * i3),
+            (i2 - i1) / (i1 * i2),
+        ]
+    )
     lo_stack = np.empty(_STACK)
     hi_stack = np.empty(_STACK)
     depth = 0
