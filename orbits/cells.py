@@ -94,3 +94,19 @@ def literal_text(text):
 
 
 _LITERAL = {"$": r"$\$$", "\\": r"$\backslash$"}
+
+
+def numbers_label(kind, values):
+    """``kind(v1, v2, ...)`` for a body's label: each number short (``%g``)
+    where that reads back exactly, else to full precision (the shortest
+    round trip), so that nearly equal moments never read as equal ones.
+
+    >>> numbers_label("moments", [1.0, 1.00000001, 2.5])
+    'moments(1, 1.00000001, 2.5)'
+    """
+    shown = []
+    for value in values:
+        value = float(value)
+        short = f"{value:g}"
+        shown.append(short if float(short) == value else repr(value))
+    return f"{kind}({', '.join(shown)})"

@@ -15,7 +15,8 @@ from fractions import Fraction
 import numpy as np
 
 from ._args import integer
-from .bodies import Body, unit_moments
+from .bodies import Body, canonical_moments, unit_moments
+from .cells import numbers_label
 from .core import search as _kernels
 from .device import check_device, cuda_kernels, run_cuda
 from .errors import InputError
@@ -139,10 +140,14 @@ def _count(name, value):
     return integer(name, value, minimum=1)
 
 
-def _label(body, moments):
-    if isinstance(body, Body) and body.name:
-        return str(body.name)
-    return "I=({:.9g}, {:.9g}, {:.9g})".format(*moments)
+def _label(body, unit, exponent):
+    """The body's name, or ``I=(I1, I2, I3)``: its moments as given (sorted,
+    at their own scale; see :func:`orbits.cells.numbers_label`)."""
+    if isinstance(body, Body):
+        if body.name:
+            return str(body.name)
+        return numbers_label("I=", body.moments)
+    return numbers_label("I=", np.ldexp(unit, exponent))
 
 
 TWO_PI = 2.0 * np.pi
@@ -218,7 +223,11 @@ def search_bodies(moments, levels, *, capacity=None, device="cpu"):
     ----------
     moments : array_like (n, 3) float64
         Principal moments per body, ascending in each row, any positive
-        scale (the survey passes :func:`orbits.bodies.unit_moments` rows).
+        scale of doubles (the survey passes :func:`orbits.bodies.unit_moments`
+        rows).  Each row is brought to the canonical form of
+        :func:`orbits.bodies.canonical_moments` (an exact power-of-two
+        scaling, a body within rounding of the flat edge moved onto it)
+        before the search, so the roots do not depend on the scale.
     levels : array_like (m,) float64
         Target total phases ``2 pi p/q``, ascending, finite (e.g.
         :func:`phase_levels` masked by :func:`searched`).
@@ -240,6 +249,8 @@ def search_bodies(moments, levels, *, capacity=None, device="cpu"):
     ------
     InputError
         Shapes, order or values not as above.
+    NonPhysicalBodyError
+        A row with ``I3 > I1 + I2`` beyond rounding (no rigid body).
     DeviceError
         ``device="cuda"`` unavailable.
     """
@@ -256,6 +267,10 @@ def search_bodies(moments, levels, *, capacity=None, device="cpu"):
         and np.all(np.diff(moments, axis=1) > 0)
     ):
         raise InputError("moments must be finite, positive and strictly ascending in each row")
+    if moments.size:
+        # scale-free and physical, as every other entry point: the kernels
+        # assume the largest moment in [1/2, 1) (no underflow or overflow)
+        moments = np.ascontiguousarray(canonical_moments(moments)[0])
     if capacity is None:
         capacity = 2 * levels.size + 8
     capacity = integer("capacity", capacity, minimum=1)
@@ -317,7 +332,7 @@ def closed_orbits(body, n_max=10, q_max=1):
     """
     n_max, q_max = _count("n_max", n_max), _count("q_max", q_max)
     check_search_bounds(n_max, q_max, 1, "this search")
-    moments, _ = unit_moments(body)
+    moments, exponent = unit_moments(body)
     if moments.shape != (3,):
         raise InputError("closed_orbits takes one body; use orbits.catalog.catalog for many")
     p, q, values = phase_levels(n_max, q_max)
@@ -333,7 +348,9 @@ def closed_orbits(body, n_max=10, q_max=1):
             stacklevel=2,
         )
     order = np.argsort(offset, kind="stable")
-    frame = catalog_rows(_label(body, moments), moments, level[order], offset[order], p, q, values)
+    frame = catalog_rows(
+        _label(body, moments, exponent), moments, level[order], offset[order], p, q, values
+    )
     frame.attrs["unresolved"] = unreached
     frame.attrs["minimum_phase"] = {
         "SAM": (

@@ -193,3 +193,40 @@ def test_catalog_rows_carry_d():
     s2, c2 = np.sin(table["theta"]) ** 2, np.cos(table["theta"]) ** 2
     i1, i3 = table["I1"], table["I3"]
     np.testing.assert_allclose(d, (i1**2 * s2 + i3**2 * c2) / (i1 * s2 + i3 * c2), rtol=1e-14)
+
+
+@pytest.mark.parametrize("scale", [2.0**-1000, 2.0**-300, 2.0**300, 2.0**1000, 1e-120, 1e80])
+def test_search_bodies_is_scale_free(scale):
+    """search_bodies at any scale of doubles: the roots of the unit-scale body
+    (bit for bit at powers of two; within a few ulps where the scaled moments
+    round).  Before, 1e-80 moved roots by 7e-4, 1e-120 raised ZeroDivisionError
+    and 1e80 found no roots."""
+    levels = 2.0 * np.pi * np.array([2.0, 3.0, 5.0])
+    given = np.array([[1.0, 2.0, 2.5]])
+    expected = orbits.search_bodies(given, levels)
+    got = orbits.search_bodies(given * scale, levels)
+    count = int(expected.counts[0])
+    assert count == 6 and int(got.counts[0]) == count
+    np.testing.assert_array_equal(got.branch[0, :count], expected.branch[0, :count])
+    np.testing.assert_array_equal(got.level[0, :count], expected.level[0, :count])
+    if math.frexp(scale)[0] == 0.5:
+        np.testing.assert_array_equal(got.offset[0, :count], expected.offset[0, :count])
+    else:
+        np.testing.assert_allclose(got.offset[0, :count], expected.offset[0, :count], rtol=1e-13)
+
+
+def test_search_bodies_refuses_a_non_physical_body():
+    levels = 2.0 * np.pi * np.array([2.0, 3.0])
+    with pytest.raises(orbits.NonPhysicalBodyError, match="I3 <= I1 \\+ I2"):
+        orbits.search_bodies([[1.0, 2.0, 3.5]], levels)
+
+
+def test_an_unnamed_body_is_labelled_by_its_moments_as_given():
+    """Not by the internal power-of-two scaling (was ``I=(0.25, 0.5, 0.625)``)."""
+    assert closed_orbits([1.0, 2.0, 2.5], 3)["body"].iloc[0] == "I=(1, 2, 2.5)"
+    assert closed_orbits(Body([2.5, 1.0, 2.0]), 3)["body"].iloc[0] == "I=(1, 2, 2.5)"
+    assert orbits.catalog([[3.0, 6.0, 9.0]], 3)["body"].iloc[0] == "I=(3, 6, 9)"
+    near = closed_orbits([1.0, 1.00000001, 1.5], 3)["body"].iloc[0]
+    assert near == "I=(1, 1.00000001, 1.5)"
+    tiny = closed_orbits(np.array([1.0, 2.0, 2.5]) * 1e-200, 3)["body"].iloc[0]
+    assert tiny == "I=(1e-200, 2e-200, 2.5e-200)"
