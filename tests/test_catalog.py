@@ -254,7 +254,10 @@ class TestCli:
     @pytest.mark.parametrize(
         "argv, fragment",
         [
-            (["catalog", "--preset", "fig6", "--n-max", "0", "--out", "x.csv"], "must be >= 1"),
+            (
+                ["catalog", "--preset", "fig6", "--n-max", "0", "--out", "x.csv"],
+                "must be an integer >= 1",
+            ),
             (["catalog", "--preset", "nope", "--n-max", "3", "--out", "x.csv"], "invalid choice"),
             (
                 ["catalog", "--moments", "1", "1", "2", "--n-max", "3", "--out", "x.csv"],

@@ -252,3 +252,64 @@ def test_angles_beyond_a_turn(argv, fragment):
 )
 def test_angles_within_a_turn_pass(argv):
     check_arguments(_parse(argv))
+
+
+@pytest.mark.parametrize(
+    "options, name",
+    [
+        (["--moments", "1", "2", "3"], "moments(1, 2, 3)"),
+        (["--moments", "1", "1.00000001", "1.00000002"], "moments(1, 1.00000001, 1.00000002)"),
+        (
+            ["--moments", "0.1", "0.2", "0.30000000000000004"],
+            "moments(0.1, 0.2, 0.30000000000000004)",
+        ),
+        (["--t-handle", "1", "2.5", "0.1234567891"], "t-handle(1, 2.5, 0.1234567891)"),
+        (["--ellipsoid", "0.5", "0.3"], "ellipsoid(0.5, 0.3)"),
+        (["--box", "1", "2", "3.0000001", "--mass", "1"], "box(1, 2, 3.0000001)"),
+        (
+            ["--rotational-constants", "3.0000001", "2", "1.5"],
+            "rotational-constants(3.0000001, 2, 1.5)",
+        ),
+    ],
+)
+def test_body_labels_read_back_exactly(options, name):
+    """A body's label shows each number as given: nearly equal moments stay distinct."""
+    from orbits.cli.shared import body_from_args
+
+    args = _PARSER.parse_args(["phase", *options, "--theta", "0.5"])
+    assert body_from_args(args).name == name
+
+
+@pytest.mark.parametrize(
+    "argv, fragment",
+    [
+        (["catalog", "--preset", "t-handle", "--n-max", "1_0"], "not an integer: '1_0'"),
+        (["catalog", "--preset", "t-handle", "--n-max", "\uff11\uff10"], "not an integer"),
+        (["phase", "--moments", "1", "2", "3_0", "--theta", "0.5"], "not a number: '3_0'"),
+        (["phase", "--moments", "1", "2", "3", "--theta", "0.\u0665"], "not a number"),
+        (["phase", "--moments", "1", "2", "3", "--theta", " 0.5"], "not a number"),
+    ],
+)
+def test_numbers_are_ascii_decimals(argv, fragment, capsys):
+    """Python's int() and float() read "1_0" as 10 and non-ASCII digits as
+    digits; the command line takes plain decimals only."""
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and fragment in err[0]
+
+
+@pytest.mark.parametrize("text", ["-1.", ".5", "+0.5", "5e-1", "0.5E+0", "-.5e-1"])
+def test_plain_decimals_pass(text, capsys):
+    assert main(["phase", "--moments", "1", "2", "3", "--dtheta", text]) == 0
+    capsys.readouterr()
+
+
+@pytest.mark.parametrize("option", ["--out", "--bodies"])
+def test_control_characters_in_file_names_are_refused(option, tmp_path, capsys):
+    name = str(tmp_path / "a\nb")
+    argv = ["survey", "--n-max", "3", option, name]
+    argv += ["--out", str(tmp_path / "s")] if option == "--bodies" else ["--resolution", "10"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "contains the control character '\\n'" in err[0]
+    assert sorted(p.name for p in tmp_path.iterdir()) == []

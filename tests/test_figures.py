@@ -169,7 +169,10 @@ class TestCli:
             (["figures", "--out", "d"], "exactly one"),
             (["figures", "--paper", "--preset", "fig6", "--out", "d"], "exactly one"),
             (["figures", "--preset", "fig6", "--out", "d"], "--n-max is required"),
-            (["figures", "--preset", "fig6", "--n-max", "0", "--out", "d"], "must be >= 1"),
+            (
+                ["figures", "--preset", "fig6", "--n-max", "0", "--out", "d"],
+                "must be an integer >= 1",
+            ),
             (["figures", "--moments", "1", "1", "2", "--n-max", "2", "--out", "d"], "symmetric"),
             (["figures", "--preset", "nope", "--n-max", "2", "--out", "d"], "invalid choice"),
             (["figures", "--paper", "--formats", "gif", "--out", "d"], "invalid choice"),

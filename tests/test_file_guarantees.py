@@ -129,6 +129,24 @@ def test_a_second_run_is_refused_while_the_lock_is_held(reference, tmp_path, cap
     assert files(target) == before
 
 
+def test_a_held_lock_is_the_only_line_before_any_estimate(tmp_path, capsys):
+    """A long survey (its estimate would be announced) into a locked directory:
+    one line, the lock's, and nothing created or built."""
+    out = tmp_path / "s"
+    out.mkdir()
+    with open(out / ".lock", "a+") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        handle.write("4242\n")
+        handle.flush()
+        capsys.readouterr()
+        argv = ["survey", "--resolution", "3000", "--n-max", "30", "--out", str(out)]
+        assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    assert "being written by another orbits run (pid 4242)" in err[0]
+    assert sorted(p.name for p in out.iterdir()) == [".lock"]
+
+
 def test_a_directory_being_created_is_not_foreign(tmp_path, capsys):
     """Another run (or a killed one) has made DIR/.lock, bodies/, orbits/ but no manifest."""
     out = tmp_path / "s"

@@ -249,7 +249,10 @@ def test_cli_survey_and_errors(tmp_path, capsys, monkeypatch):
     assert report["bodies"] == 2
     for argv, fragment in [
         (["survey", "--n-max", "3", "--out", "x"], "exactly one"),
-        (["survey", "--resolution", "10", "--n-max", "0", "--out", "x"], "must be >= 1"),
+        (
+            ["survey", "--resolution", "10", "--n-max", "0", "--out", "x"],
+            "must be an integer >= 1",
+        ),
         (
             ["survey", "--resolution", "10", "--n-max", "3", "--format", "xml", "--out", "x"],
             "invalid choice",

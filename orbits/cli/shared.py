@@ -15,6 +15,7 @@ import sys
 
 from .._args import below_normal, below_normal_message
 from ..bodies import PRESETS, Body
+from ..cells import numbers_label
 from ..errors import InputError
 from ..limits import format_bytes, format_duration
 
@@ -135,7 +136,17 @@ class _NotGivenType:
 _NOT_GIVEN = _NotGivenType()
 
 
+# what a number on the command line may look like: ASCII digits, an optional
+# sign, point and exponent.  Python's float() and int() also take "1_0" and
+# non-ASCII digits ("\uff11\uff10"), which would pass as 10 unseen.
+_DECIMAL = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?", re.ASCII)
+_SPECIAL = ("nan", "+nan", "-nan", "inf", "+inf", "-inf", "infinity", "+infinity", "-infinity")
+_INTEGER = re.compile(r"[+-]?[0-9]+", re.ASCII)
+
+
 def finite(text):
+    if not (_DECIMAL.fullmatch(text) or text.lower() in _SPECIAL):
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}")
     try:
         value = float(text)
     except ValueError:
@@ -158,14 +169,21 @@ def moment(text):
     return value
 
 
-def positive_int(text):
-    try:
+def integer_at_least(minimum):
+    """An argparse type: an ASCII integer >= ``minimum``, refused in one line."""
+
+    def parse(text):
+        if not _INTEGER.fullmatch(text):
+            raise argparse.ArgumentTypeError(f"not an integer: {text!r}")
         value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be >= 1, got {value}")
-    return value
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"must be an integer >= {minimum}, got {value}")
+        return value
+
+    return parse
+
+
+positive_int = integer_at_least(1)
 
 
 def add_body_options(parser, many=False):
@@ -359,9 +377,7 @@ def _real_body_from_args(args):
     """The body of a real-body option, or None if none was given."""
     name = getattr(args, "name", None)
     if getattr(args, "box", None) is not None:
-        return Body.box(
-            *args.box, args.mass, name=name or "box({:g}, {:g}, {:g})".format(*args.box)
-        )
+        return Body.box(*args.box, args.mass, name=name or numbers_label("box", args.box))
     if getattr(args, "cylinder", None) is not None:
         if len(args.cylinder) not in (2, 3):
             raise InputError("--cylinder takes R L or R L RY")
@@ -371,7 +387,7 @@ def _real_body_from_args(args):
             length,
             args.mass,
             radius_y=rest[0] if rest else None,
-            name=name or "cylinder(" + ", ".join(f"{v:g}" for v in args.cylinder) + ")",
+            name=name or numbers_label("cylinder", args.cylinder),
         )
     if getattr(args, "point_masses", None) is not None:
         masses, positions = _point_masses_from_csv(args.point_masses)
@@ -388,8 +404,7 @@ def _real_body_from_args(args):
             args,
             *args.rotational_constants,
             unit=args.constants_unit,
-            name=name
-            or "rotational-constants({:g}, {:g}, {:g})".format(*args.rotational_constants),
+            name=name or numbers_label("rotational-constants", args.rotational_constants),
         )
     return None
 
@@ -434,15 +449,11 @@ def body_from_args(args):
 
 def _named_body_from_args(args):
     if args.moments is not None:
-        return Body(args.moments, name="moments({:g}, {:g}, {:g})".format(*args.moments))
+        return Body(args.moments, name=numbers_label("moments", args.moments))
     if args.t_handle is not None:
-        return Body.t_handle(
-            *args.t_handle, name="t-handle({:g}, {:g}, {:g})".format(*args.t_handle)
-        )
+        return Body.t_handle(*args.t_handle, name=numbers_label("t-handle", args.t_handle))
     if args.ellipsoid is not None:
-        return Body.ellipsoid(
-            *args.ellipsoid, name="ellipsoid({:g}, {:g})".format(*args.ellipsoid)
-        )
+        return Body.ellipsoid(*args.ellipsoid, name=numbers_label("ellipsoid", args.ellipsoid))
     return Body.preset(args.preset)
 
 
@@ -734,6 +745,29 @@ def check_arguments(args):
             # e.g. catalog --units rpm with no --omega: nothing for it to apply to
             raise InputError(f"{option} applies only with {_targets(allowed, command)}")
     _check_angles(args, given)
+    _check_names(args, given)
+
+
+# options that name files the command writes or reads
+_PATH_OPTIONS = ("out", "table", "bodies", "point_masses", "mesh")
+
+
+def _check_names(args, given):
+    """Refuse a file name with a control character (a newline, a tab, ...).
+
+    Such a name is legal on POSIX but would split or garble every message
+    and provenance line that quotes it, and is nearly always a typing or
+    quoting accident.
+    """
+    for dest in _PATH_OPTIONS:
+        value = getattr(args, dest, None)
+        if dest in given and isinstance(value, str):
+            bad = [c for c in value if ord(c) < 32 or ord(c) == 127]
+            if bad:
+                raise InputError(
+                    f"{option_string(dest)} {value!r} contains the control character "
+                    f"{bad[0]!r}: give a file name without control characters"
+                )
 
 
 def _check_angles(args, given):

@@ -5,7 +5,14 @@ import sys
 
 from ..errors import InputError
 from ..limits import check_resolution
-from .shared import EXIT_CHECK_FAILED, announce, bodies_file_from_args, positive_int, progress_bar
+from .shared import (
+    EXIT_CHECK_FAILED,
+    announce,
+    bodies_file_from_args,
+    integer_at_least,
+    positive_int,
+    progress_bar,
+)
 
 
 def _cmd_survey(args):
@@ -21,6 +28,9 @@ def _cmd_survey(args):
     from ..atomic import refuse_link
 
     refuse_link(args.out.rstrip("/") or args.out)  # before the estimate, the grid, any file
+    from ..survey import check_unlocked
+
+    check_unlocked(args.out)  # "another run holds it" as the one line, not after an estimate
     if args.n_max is None:
         raise InputError("orbits survey: the following arguments are required: --n-max")
     if (args.resolution is None) == (args.bodies is None):
@@ -170,7 +180,7 @@ def add_parser(subparsers):
     source = parser.add_mutually_exclusive_group()
     source.add_argument(
         "--resolution",
-        type=positive_int,
+        type=integer_at_least(2),  # a grid needs two points a side
         metavar="N",
         help="an N x N grid over the bounding box of the region, keeping the points inside it",
     )

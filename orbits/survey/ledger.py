@@ -267,6 +267,40 @@ def check_parts(out_dir):
     }
 
 
+def check_unlocked(directory):
+    """Refuse at once a directory another run holds (see :class:`_DirectoryLock`).
+
+    Takes and drops a shared lock on ``DIR/.lock`` if it exists, creating
+    nothing; the run itself locks again.  Lets the command say "being
+    written by another run" before it announces an estimate.
+
+    Raises
+    ------
+    InputError
+        Another run holds the lock.
+    """
+    import fcntl
+    import os
+
+    path = Path(directory) / LOCK
+    try:
+        descriptor = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC)
+    except OSError:
+        return  # no lock file (or a link, refused when the run locks)
+    with os.fdopen(descriptor, "r") as handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        except BlockingIOError:
+            owner = handle.read().strip() or "unknown"
+            raise InputError(
+                f"{path.parent} is being written by another orbits run "
+                f"(pid {owner}); wait for it to finish or use another "
+                "directory"
+            ) from None
+        except OSError:
+            return  # a lock file flock does not take: the run reports it
+
+
 class _DirectoryLock:
     """An exclusive ``fcntl.flock`` on ``DIR/.lock``, released on exit (or death)."""
 
