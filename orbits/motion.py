@@ -155,6 +155,10 @@ def _scaled(value, power, what):
     return out
 
 
+# the largest |t| the motion takes, in periods (see ``Motion._times``)
+_TIME_LIMIT_PERIODS = 2.0**50
+
+
 class Motion:
     """The torque-free motion of one body from one initial spin.
 
@@ -376,11 +380,35 @@ class Motion:
                 scaled = np.ldexp(times, self._speed)
         if self._speed > 0 and not np.all(np.isfinite(scaled)):
             raise InputError("times too large for this |omega0| (t |omega0| overflows)")
+        period = self._orbit[_kernels.SLOT_PERIOD]
+        if scaled.size and math.isfinite(period) and period > 0.0:
+            # the elliptic argument u = u0 + rate t keeps its quarter-period
+            # count exact only below 2^52 quarters: beyond, the place within
+            # the period is lost to rounding (and the count's parity with it)
+            largest = float(np.max(np.abs(scaled)))
+            if largest > _TIME_LIMIT_PERIODS * period:
+                raise InputError(
+                    f"|t| = {largest / period:.3g} periods is beyond the "
+                    f"{_TIME_LIMIT_PERIODS:.3g} periods (2^50) at which a double still "
+                    "places a time within its period: the orientation there is lost to "
+                    "rounding"
+                )
         return times, np.ascontiguousarray(scaled.reshape(-1))
 
     @size_aware
     def state(self, t):
-        """Everything at the times ``t``: a :class:`MotionState`."""
+        """Everything at the times ``t``: a :class:`MotionState`.
+
+        Every method that takes times (``omega``, ``euler_angles``,
+        ``rotation``, ``quaternion``, ...) takes them here.
+
+        Raises
+        ------
+        InputError
+            A time not finite, or ``|t|`` beyond ``2**50`` periods, where a
+            double no longer places a time within its period (the
+            orientation there is lost to rounding).
+        """
         times, flat = self._times(t)
         n = flat.shape[0]
         omega = np.empty((n, 3))

@@ -554,3 +554,21 @@ def test_spin_within_1e300_of_the_unstable_axis(omega0):
     assert ulps_apart(motion.omega(0.0), omega0).max() <= 64
     times = np.linspace(0.0, motion.period, 5)
     assert_matches_mpmath(motion, times, 1e-11, dps=700)
+
+
+def test_times_beyond_the_resolution_of_the_period_are_refused():
+    """Up to 2^50 periods the unwrapped angles follow their drift; beyond, the
+    quarter-period count of the elliptic argument is no longer exact (at 2^62
+    periods psi came back as +1.45e19 for either sign of t), so such times are
+    an InputError, never a wrong orientation."""
+    motion = orbits.Motion.from_spin(orbits.Body([1.0, 2.0, 3.0]), 0.5, phi=0.2)
+    period = motion.period
+    t = 2.0**50 * period
+    phi, _, psi = motion.euler_angles(t)
+    # SAM about I3: psi winds by -2 pi per period; phi by its mean rate
+    assert psi / (-2.0 * np.pi * 2.0**50) == pytest.approx(1.0, rel=1e-12)
+    rate = motion.euler_angles(period)[0] / period
+    assert phi / t == pytest.approx(rate, rel=1e-12)
+    for bad in (2.0**51 * period, -1e20, [0.0, 1e300]):
+        with pytest.raises(orbits.InputError, match=r"beyond the 1\.13e\+15 periods"):
+            motion.euler_angles(bad)
