@@ -535,7 +535,7 @@ def bench_search_scaling(resolution=500, n_max=30, repeats=3):
     from .bodies import region_grid
     from .survey.compute import search_chunk
     from .survey.runner import DEFAULT_CHUNK
-    from .threads import get_num_threads, set_num_threads
+    from .threads import using_threads
 
     moments = region_grid(resolution)
     chunks = [moments[i : i + DEFAULT_CHUNK] for i in range(0, len(moments), DEFAULT_CHUNK)]
@@ -543,15 +543,11 @@ def bench_search_scaling(resolution=500, n_max=30, repeats=3):
     search_chunk(chunks[0][:64], n_max)  # load the kernels first
 
     def once(threads):
-        before = get_num_threads()
-        try:
-            set_num_threads(threads)
+        with using_threads(threads):
             start = time.perf_counter()
             for chunk in chunks:
                 search_chunk(chunk, n_max)
             return time.perf_counter() - start
-        finally:
-            set_num_threads(before)
 
     singles, everys = [], []
     for _ in range(repeats):
@@ -579,19 +575,17 @@ def bench_survey_threads(resolution=300, n_max=30):
     import tempfile
 
     from .survey import Survey
-    from .threads import get_num_threads, set_num_threads
+    from .threads import using_threads
 
     def once(threads):
         directory = tempfile.mkdtemp(prefix="orbits-bench-")
-        before = get_num_threads()
         try:
-            set_num_threads(threads)
-            start = time.perf_counter()
-            survey = Survey.grid(os.path.join(directory, "s"), resolution, n_max)
-            survey.run()
-            return time.perf_counter() - start, survey.moments.shape[0]
+            with using_threads(threads):
+                start = time.perf_counter()
+                survey = Survey.grid(os.path.join(directory, "s"), resolution, n_max)
+                survey.run()
+                return time.perf_counter() - start, survey.moments.shape[0]
         finally:
-            set_num_threads(before)
             shutil.rmtree(directory, ignore_errors=True)
 
     top = numba.config.NUMBA_NUM_THREADS

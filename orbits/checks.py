@@ -21,7 +21,6 @@ way sharing no formula with the closed form it checks:
 (or more) and reports the largest discrepancy of each.
 """
 
-import math
 from collections import namedtuple
 
 import numpy as np
@@ -60,15 +59,6 @@ MontgomeryCheck = namedtuple(
 def _unit_motion(body_or_moments, theta, dtheta, phi):
     body = as_body(body_or_moments)
     return Motion.from_spin(body, theta, dtheta=dtheta, phi=phi)
-
-
-def _working_moments(motion):
-    """The body's moments scaled by the exact power of two that puts the
-    largest in [1/2, 1): with |omega0| = 1 every check is scale-free (the
-    period, the angles and the phases), and the products of the kernels
-    then neither underflow nor overflow at any scale of the body."""
-    moments = np.asarray(motion.body.moments, dtype=float)
-    return tuple(float(v) for v in np.ldexp(moments, -math.frexp(float(moments.max()))[1]))
 
 
 def circular_distance(a, b):
@@ -142,7 +132,9 @@ def rotation_by_integration(
     if int(periods) != periods or periods < 1:
         raise InputError(f"periods must be a positive integer, got {periods}")
     motion = _unit_motion(body_or_moments, theta, dtheta, phi)
-    i1, i2, i3 = _working_moments(motion)
+    # scale-free with |omega0| = 1 (period, angles, phases), and the
+    # kernels' products neither underflow nor overflow at any scale
+    i1, i2, i3 = (float(v) for v in motion.body.unit_moments)
     w = motion.omega0
     expected = np.mod(periods * motion_closed_form(motion), TWO_PI)
     # the closed-form period (|omega0| = 1) bounds the work: turns of omega
@@ -269,7 +261,9 @@ def montgomery(body_or_moments, theta=None, *, dtheta=None, phi=0.0, rtol=1e-14)
     (21.5303, 2.12519)
     """
     motion = _unit_motion(body_or_moments, theta, dtheta, phi)
-    i1, i2, i3 = _working_moments(motion)
+    # scale-free with |omega0| = 1 (period, angles, phases), and the
+    # kernels' products neither underflow nor overflow at any scale
+    i1, i2, i3 = (float(v) for v in motion.body.unit_moments)
     w1, w2, w3 = motion.omega0
     gap = separatrix_gap_exact(i1, i2, i3, w1, w3)
     total, dynamic, solid, period, _ = _quadrature.montgomery_phase(
@@ -585,18 +579,11 @@ def _summarize(table, tolerance, exhausted):
             entry["failed_to_evaluate"] = missing
             reasons.append(f"no value (not finite) at {missing} initial condition(s)")
             passed = False
-        entry["reason"] = "; ".join(reasons) or None
         if on_separatrix:
-            entry["reason"] = "; ".join(
-                filter(
-                    None,
-                    [
-                        entry["reason"],
-                        f"{on_separatrix} initial condition(s) on the separatrix "
-                        "have no closed form",
-                    ],
-                )
+            reasons.append(
+                f"{on_separatrix} initial condition(s) on the separatrix have no closed form"
             )
+        entry["reason"] = "; ".join(reasons) or None
         if entry["max_abs_error"] is not None and not entry["max_abs_error"] <= tolerance:
             passed = False
         checks[name] = entry

@@ -80,6 +80,17 @@ def get_num_threads():
 
 
 @contextmanager
+def using_threads(count):
+    """:func:`set_num_threads` ``count`` for the enclosed block, then the count before."""
+    before = get_num_threads()
+    set_num_threads(count)
+    try:
+        yield
+    finally:
+        set_num_threads(before)
+
+
+@contextmanager
 def threads_for(size):
     """Run the enclosed kernels serially when ``size < SERIAL_BELOW``."""
     numba = _numba()

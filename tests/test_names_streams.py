@@ -275,3 +275,19 @@ def test_a_second_signal_during_clean_up_is_ignored(monkeypatch, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert err == ["orbits: interrupted; no partial output was written"]
     assert {n: signal.getsignal(n) for n in before} == before
+
+
+def test_using_threads_restores_the_count_before():
+    """The bench rows' switch: the block runs on ``count`` threads, then the old count
+    is back, also when the block raises."""
+    import numba
+
+    from orbits.threads import using_threads
+
+    before = orbits.get_num_threads()
+    with using_threads(1):
+        assert orbits.get_num_threads() == 1 and numba.get_num_threads() == 1
+    assert orbits.get_num_threads() == before
+    with pytest.raises(RuntimeError), using_threads(1):
+        raise RuntimeError("inside")
+    assert orbits.get_num_threads() == before and numba.get_num_threads() == before

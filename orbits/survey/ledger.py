@@ -267,6 +267,17 @@ def check_parts(out_dir):
     }
 
 
+def _held(path, handle):
+    """The error for a lock file ``path`` another run holds (its pid read from ``handle``)."""
+    handle.seek(0)
+    owner = handle.read().strip() or "unknown"
+    return InputError(
+        f"{path.parent} is being written by another orbits run "
+        f"(pid {owner}); wait for it to finish or use another "
+        "directory"
+    )
+
+
 def check_unlocked(directory):
     """Refuse at once a directory another run holds (see :class:`_DirectoryLock`).
 
@@ -291,12 +302,7 @@ def check_unlocked(directory):
         try:
             fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)
         except BlockingIOError:
-            owner = handle.read().strip() or "unknown"
-            raise InputError(
-                f"{path.parent} is being written by another orbits run "
-                f"(pid {owner}); wait for it to finish or use another "
-                "directory"
-            ) from None
+            raise _held(path, handle) from None
         except OSError:
             return  # a lock file flock does not take: the run reports it
 
@@ -330,14 +336,9 @@ class _DirectoryLock:
         try:
             fcntl.flock(self.handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
-            self.handle.seek(0)
-            owner = self.handle.read().strip() or "unknown"
+            error = _held(self.path, self.handle)
             self.handle.close()
-            raise InputError(
-                f"{self.path.parent} is being written by another orbits run "
-                f"(pid {owner}); wait for it to finish or use another "
-                "directory"
-            ) from None
+            raise error from None
         self.handle.seek(0)
         self.handle.truncate()
         self.handle.write(f"{os.getpid()}\n")
