@@ -16,6 +16,7 @@ import math
 import numpy as np
 
 from ._args import broadcast, finite_array, flat_broadcast, integer, real_array
+from .cells import numbers_label
 from .errors import AngleError, InputError, NonPhysicalBodyError, SymmetricTopError
 from .limits import check_resolution, format_bytes, memory_budget
 from .threads import size_aware
@@ -172,7 +173,7 @@ def validate_moments(moments):
 def _row(flat, bad):
     index = int(np.flatnonzero(bad)[0])
     where = f" (body #{index})" if flat.shape[0] > 1 else ""
-    return "(" + ", ".join(f"{v:.17g}" for v in flat[index]) + ")" + where
+    return numbers_label("", flat[index]) + where
 
 
 def _moment_array(body_or_moments):
@@ -583,8 +584,7 @@ class Body:
 
     def __repr__(self):
         label = f", name={self.name!r}" if self.name else ""
-        values = ", ".join(f"{v:.17g}" for v in self._moments)
-        return f"Body(({values}){label})"
+        return f"Body({numbers_label('', self._moments)}{label})"
 
     def _repr_html_(self):
         """The body in a notebook: moments (with their unit where known) and axes."""
@@ -682,7 +682,7 @@ class Body:
         if radius_y is None or moments[0] == moments[1]:
             raise SymmetricTopError(
                 f"a cylinder of circular section has moments "
-                f"({moments[0]:.17g}, {moments[1]:.17g}, {moments[2]:.17g}): "
+                f"{numbers_label('', moments)}: "
                 "a symmetric top, which has no separatrix and no total-phase "
                 "formula; give radius_y (an elliptic section) for an asymmetric "
                 "body"
@@ -1076,7 +1076,7 @@ def symmetric_within_rounding(values, rounding, what):
     if gaps[k] <= 2.0 * rounding:
         pair = ("I1", "I2") if k == 0 else ("I2", "I3")
         raise SymmetricTopError(
-            f"the moments ({values[0]:.17g}, {values[1]:.17g}, {values[2]:.17g}) "
+            f"the moments {numbers_label('', values)} "
             f"computed from the {what} have {pair[1]} - {pair[0]} = "
             f"{gaps[k] / values[2]:.2g} I3, within the rounding of their "
             f"construction (bound {2.0 * rounding / values[2]:.2g} I3): a symmetric "

@@ -96,17 +96,25 @@ def literal_text(text):
 _LITERAL = {"$": r"$\$$", "\\": r"$\backslash$"}
 
 
+def exact_number(value):
+    """A float as text that reads back to the same double: short (``%g``)
+    where that is exact, else the shortest round trip (``repr``).
+
+    >>> exact_number(0.1), exact_number(1.0000000099999999), exact_number(2.0)
+    ('0.1', '1.00000001', '2')
+    """
+    value = float(value)
+    short = f"{value:g}"
+    return short if float(short) == value else repr(value)
+
+
 def numbers_label(kind, values):
-    """``kind(v1, v2, ...)`` for a body's label: each number short (``%g``)
-    where that reads back exactly, else to full precision (the shortest
-    round trip), so that nearly equal moments never read as equal ones.
+    """``kind(v1, v2, ...)`` for a body's label: each number as
+    :func:`exact_number`, so that nearly equal moments never read as equal
+    ones.
 
     >>> numbers_label("moments", [1.0, 1.00000001, 2.5])
     'moments(1, 1.00000001, 2.5)'
     """
-    shown = []
-    for value in values:
-        value = float(value)
-        short = f"{value:g}"
-        shown.append(short if float(short) == value else repr(value))
+    shown = [exact_number(value) for value in values]
     return f"{kind}({', '.join(shown)})"

@@ -48,6 +48,7 @@ from .bodies import (
     critical_angle,  # noqa: F401 (re-exported: defined in bodies, below this layer)
     unit_moments,
 )
+from .cells import exact_number, numbers_label
 from .core import angles as _angles
 from .core import phase as _kernels
 from .core import phase_table as _table
@@ -138,7 +139,7 @@ def fold_angle(angle):
         # beyond it the double carries no fraction of a radian at all, so a
         # fold would be a made-up number
         raise AngleError(
-            f"angle {flat[first]:.17g} rad is too large to fold into "
+            f"angle {exact_number(flat[first])} rad is too large to fold into "
             f"[0, pi/2] faithfully; give angles within +-{FOLD_LIMIT:.0f} rad"
         )
     return folded.reshape(angle.shape)
@@ -175,21 +176,21 @@ def _check_status(status, moments, angle, phi, shape, from_offset):
     theta_c = constants[2]
     if code == _kernels.STATUS_OUT_OF_RANGE:
         raise AngleError(
-            f"theta_c + dtheta = {theta_c:.17g} + {value:.17g} is outside "
+            f"theta_c + dtheta = {exact_number(theta_c)} + {exact_number(value)} is outside "
             "[0, pi/2]; dtheta is an offset from theta_c and is not folded "
             "(pass theta, which is folded by the top's symmetries)"
         )
     if not from_offset:
         slack = _kernels.side_slack(theta_c, constants[3])
         raise SeparatrixError(
-            f"theta = {value:.17g} is within the rounding error of theta_c = "
-            f"{theta_c:.17g} (|theta - theta_c| <= {slack:.3g} rad): on the "
+            f"theta = {exact_number(value)} is within the rounding error of theta_c = "
+            f"{exact_number(theta_c)} (|theta - theta_c| <= {slack:.3g} rad): on the "
             "separatrix M^2 = 2 E I2 or too near it to tell its side (SAM or LAM) "
             "in double precision; pass the offset dtheta = theta - theta_crit instead"
         )
     raise SeparatrixError(
-        f"dtheta = {value:.17g} puts the spin on the separatrix M^2 = 2 E I2 "
-        f"(theta_c = {theta_c:.17g}), where the period and the total phase "
+        f"dtheta = {exact_number(value)} puts the spin on the separatrix M^2 = 2 E I2 "
+        f"(theta_c = {exact_number(theta_c)}), where the period and the total phase "
         "are infinite; pass a nonzero dtheta"
     )
 
@@ -579,7 +580,7 @@ def spin_phases(body_or_moments, omega):
     if np.any(branch == 0):
         k = int(np.flatnonzero(branch == 0)[0])
         raise SeparatrixError(
-            f"omega = ({w1[k]:.17g}, {w2[k]:.17g}, {w3[k]:.17g}) lies on the "
+            f"omega = {numbers_label('', (w1[k], w2[k], w3[k]))} lies on the "
             "separatrix M^2 = 2 E I2 (infinite period and phase)"
         )
     # E, M and D for the moments and the spin *as given* (as Motion): the
@@ -601,7 +602,7 @@ def spin_phases(body_or_moments, omega):
         if wrong.any():
             k = int(np.flatnonzero(wrong)[0])
             raise InputError(
-                f"omega = ({w1[k]:.17g}, {w2[k]:.17g}, {w3[k]:.17g}): its {label} "
+                f"omega = {numbers_label('', (w1[k], w2[k], w3[k]))}: its {label} "
                 "does not fit a normal double (|omega| or the moments too large or too "
                 "small); the phases do not depend on |omega|: pass a unit spin"
             )

@@ -16,6 +16,7 @@ import numpy as np
 
 from ._args import real_scalar
 from .bodies import unit_moments
+from .cells import exact_number
 from .errors import InputError
 from .limits import plural
 
@@ -90,7 +91,7 @@ def _no_spin(moments, what):
     low, where = minimum_phase(moments)
     return InputError(
         f"no spin of this body has {what}: the total phase is at least "
-        f"{low:.17g} rad ({low / TWO_PI:.12g} turns, at dtheta = {where:.6g}) "
+        f"{exact_number(low)} rad ({low / TWO_PI:.12g} turns, at dtheta = {where:.6g}) "
         "and grows without bound towards the separatrix"
     )
 
@@ -158,7 +159,8 @@ def spins_with_total_phase(body_or_moments, total_phase):
     if moments.shape != (3,):
         raise InputError("spins_with_total_phase takes one body")
     target = _positive_finite("total_phase", total_phase)
-    offsets = _solve(moments, {"SAM": target, "LAM": target}, f"total phase {target:.17g} rad")
+    described = f"total phase {exact_number(target)} rad"
+    offsets = _solve(moments, {"SAM": target, "LAM": target}, described)
     return _table(moments, offsets, {"SAM": target, "LAM": target})
 
 
@@ -207,7 +209,7 @@ def spins_with_period_ratio(body_or_moments, ratio):
         "SAM": TWO_PI * (ratio - 1.0) if ratio > 1.0 else None,
         "LAM": TWO_PI * (ratio + 1.0),
     }
-    offsets = _solve(moments, targets, f"period ratio P_psi/P_phi = {ratio:.17g}")
+    offsets = _solve(moments, targets, f"period ratio P_psi/P_phi = {exact_number(ratio)}")
     return _table(moments, offsets, targets)
 
 

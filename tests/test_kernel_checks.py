@@ -4,6 +4,7 @@ when several inputs are bad at once (the kernels flag points; the host then
 names the error the serial checks named before)."""
 
 import importlib
+import re
 
 import numpy as np
 import pytest
@@ -13,7 +14,7 @@ from orbits.errors import AngleError, InputError, SeparatrixError
 
 BODY = (1.0, 2.0, 2.5)
 MANY = [BODY, (0.3, 0.9, 1.1)]
-TOO_LARGE = "angle 1000000000 rad is too large to fold"
+TOO_LARGE = "angle 1e+09 rad is too large to fold"
 
 
 @pytest.mark.parametrize("function", [orbits.total_phase, orbits.phases])
@@ -50,10 +51,11 @@ def test_shape_mismatch_named():
 def test_separatrix_theta_named():
     theta_c = orbits.critical_angle(BODY)
     for function in (orbits.total_phase, orbits.phases):
-        with pytest.raises(
-            SeparatrixError, match=f"theta = {theta_c:.17g} is within the rounding error"
-        ):
+        with pytest.raises(SeparatrixError, match="is within the rounding error") as info:
             function(BODY, [0.1, theta_c])
+        # the angle is printed so that it reads back to the same double, shortest form
+        shown = re.search(r"theta = (\S+) is within", str(info.value)).group(1)
+        assert float(shown) == theta_c and shown == repr(float(theta_c))
         with pytest.raises(SeparatrixError, match="dtheta = 0 puts the spin"):
             function(BODY, dtheta=[0.1, 0.0])
 
