@@ -12,10 +12,11 @@ lengths assume unit mass.
 """
 
 import math
+import re
 
 import numpy as np
 
-from ._args import broadcast, finite_array, flat_broadcast, integer, real_array
+from ._args import broadcast, finite_array, flat_broadcast, integer, real_array, real_scalar
 from .cells import numbers_label
 from .errors import AngleError, InputError, NonPhysicalBodyError, SymmetricTopError
 from .limits import check_resolution, format_bytes, memory_budget
@@ -224,6 +225,29 @@ def unit_moments(body_or_moments):
     return canonical_moments(_moment_array(body_or_moments))
 
 
+# largest |F F^T - 1| of a frame given to Body (eigenvectors from an eigen-
+# solver are orthonormal to a few 1e-16; a frame off by more would turn
+# every vector passed through it by that much)
+FRAME_TOLERANCE = 1e-9
+
+
+def _orthonormal_frame(frame):
+    """``frame`` as a float (3, 3) array with orthonormal rows, or an error."""
+    frame = real_array("frame", frame, NonPhysicalBodyError)
+    if frame.shape != (3, 3) or not np.all(np.isfinite(frame)):
+        got = "non-finite entries" if frame.shape == (3, 3) else f"shape {frame.shape}"
+        raise NonPhysicalBodyError(
+            f"frame must be a finite 3x3 matrix (the principal axes as rows), got {got}"
+        )
+    off = float(np.max(np.abs(frame @ frame.T - np.eye(3))))
+    if not off <= FRAME_TOLERANCE:
+        raise NonPhysicalBodyError(
+            f"frame rows are not orthonormal unit vectors: |F F^T - 1| = {off:.3g} "
+            f"> {FRAME_TOLERANCE:g} (a rotation, or a rotation times a reflection, is needed)"
+        )
+    return frame.copy()
+
+
 class Body:
     """An asymmetric rigid body given by its principal moments of inertia.
 
@@ -233,11 +257,17 @@ class Body:
         Principal moments in any order and any positive scale.
     name : str, optional
         Label carried into catalogs and figure titles.
+    frame : array_like, shape (3, 3), optional
+        Rows: the principal axes of ``moments`` (in the order given) as
+        unit vectors of the caller's frame, orthonormal to within
+        :data:`FRAME_TOLERANCE` (e.g. eigenvectors as rows).  Default: the
+        caller's axes are the principal axes.
 
     Raises
     ------
     NonPhysicalBodyError
-        Moments not finite or not positive, or ``I3 > I1 + I2``.
+        Moments not finite or not positive, or ``I3 > I1 + I2``; a frame
+        that is not a finite 3x3 matrix with orthonormal rows.
     SymmetricTopError
         Two equal moments.
 
@@ -266,7 +296,7 @@ class Body:
             if np.linalg.det(frame) < 0.0:
                 frame[2] *= -1.0
         else:
-            frame = np.asarray(frame, dtype=float)[order]
+            frame = _orthonormal_frame(frame)[order]
             if np.linalg.det(frame) < 0.0:
                 frame[2] *= -1.0
         self._moments = sorted_moments
@@ -318,11 +348,7 @@ class Body:
             or lengths so disparate that the smallest moment underflows when
             computed at the scale of the largest.
         """
-        for label, value in (("l1", l1), ("l2", l2), ("w", w)):
-            if not (math.isfinite(value) and value > 0.0):
-                raise NonPhysicalBodyError(
-                    f"T-handle {label} must be a positive length, got {value}"
-                )
+        l1, l2, w = _positive_lengths("T-handle", l1=l1, l2=l2, w=w)
         shape = ("t-handle", float(l1), float(l2), float(w))
         k = _binary_exponent(max(l1, l2, w))
         l1, l2, w = (math.ldexp(float(v), -k) for v in (l1, l2, w))
@@ -385,12 +411,7 @@ class Body:
         SymmetricTopError
             ``c = b`` or ``a = b`` (two equal moments).
         """
-        for label, value in (("b", b), ("c", c)):
-            if not (math.isfinite(value) and value >= 0.0):
-                raise NonPhysicalBodyError(
-                    f"ellipsoid semi-axis {label} must be finite and >= 0, got {value}"
-                )
-        b, c = float(b), float(c)
+        b, c = _non_negative_lengths("ellipsoid semi-axis", b=b, c=c)
         if c > b:
             raise NonPhysicalBodyError(
                 f"ellipsoid semi-axes b={b}, c={c}: the paper's parametrisation needs "
@@ -483,12 +504,7 @@ class Body:
         SymmetricTopError
             Two equal semi-axes.
         """
-        for label, value in (("a", a), ("b", b), ("c", c)):
-            if not (math.isfinite(value) and value >= 0.0):
-                raise NonPhysicalBodyError(
-                    f"semi-axis {label} must be finite and >= 0, got {value}"
-                )
-        a, b, c = float(a), float(b), float(c)
+        a, b, c = _non_negative_lengths("semi-axis", a=a, b=b, c=c)
         values, exponents = [], []
         for p, q in ((b, c), (a, c), (a, b)):
             if max(p, q) == 0.0:
@@ -515,6 +531,8 @@ class Body:
         ``fig6`` is the paper's Fig. 6 body, I = (0.26, 0.55, 0.793662).
         """
         try:
+            if not isinstance(name, str):
+                raise KeyError(name)
             factory = PRESETS[name]
         except KeyError:
             known = ", ".join(sorted(PRESETS))
@@ -727,8 +745,8 @@ class Body:
         give moments ``4**k`` times, bit for bit, with no overflow of the
         intermediate products.
         """
-        masses = np.asarray(masses, dtype=float)
-        positions = np.asarray(positions, dtype=float)
+        masses = real_array("point masses", masses, NonPhysicalBodyError)
+        positions = real_array("point-mass positions", positions, NonPhysicalBodyError)
         if masses.ndim != 1 or masses.size == 0 or positions.shape != (masses.size, 3):
             raise NonPhysicalBodyError(
                 f"point masses need masses of shape (n,) and positions of shape "
@@ -778,11 +796,15 @@ class Body:
                 "zero, which is no rigid body of this library"
             )
         # rounding of the construction: each entry is a sum of n products
-        # (n + 4 roundings each, relative to the sum of magnitudes), and the
-        # positions relative to the centre of mass carry eps |x| each
+        # (n + 4 roundings each, relative to the sum of magnitudes); the
+        # centre of mass is off by at most shift = 2 (n + 2) eps max|x|, which
+        # moves every relative position by that one vector (a term linear in
+        # the offset of the positions from their origin, not quadratic)
         reach = np.sqrt(np.einsum("ki,ki->k", relative, relative))
-        extent = np.sqrt(np.einsum("ki,ki->k", positions, positions))
-        rounding = 4.0 * (masses.size + 4) * _EPS * float(masses @ ((reach + extent) ** 2))
+        shift = 2.0 * (masses.size + 2) * _EPS * float(np.max(np.abs(positions))) * math.sqrt(3)
+        rounding = 4.0 * (masses.size + 4) * _EPS * float(masses @ reach**2) + 4.0 * shift * float(
+            masses @ (reach + shift)
+        )
         return _from_tensor(cls, tensor, name, defect, rounding, "point masses", exponent)
 
     @classmethod
@@ -816,6 +838,7 @@ class Body:
         from .errors import InputError
 
         density = _positive_mass(density, "density")
+        _check_defect(defect)
         try:
             import trimesh
         except ImportError:
@@ -851,14 +874,16 @@ class Body:
         tensor = np.asarray(mesh.moment_inertia, dtype=float)
         centre = np.asarray(mesh.center_mass, dtype=float)
         # rounding of the construction: the vertices as the file stores them
-        # (moving each by delta moves I by at most ~2 M R delta; 8 M R delta
-        # is the bound used), and one sum over the faces per entry, bounded
-        # by 16 (faces + 4) eps |I|
-        reach = float(np.max(np.linalg.norm(mesh.vertices - centre, axis=1)))
-        delta = math.ldexp(vertex_rounding(vertices), -x_exp)  # as the file stores them
-        rounding = 8.0 * delta * float(mesh.mass) * reach + 16.0 * (
-            len(mesh.faces) + 4
-        ) * _EPS * float(np.abs(np.trace(tensor)))
+        # move the surface by at most delta along its normal, which moves
+        # each moment by at most rho delta (surface integral of r^2 about the
+        # centre of mass; Weyl's inequality on rho (r^2 1 - r r^T) delta_n dA),
+        # 2 rho delta that integral is the bound used (a thin plate's moments
+        # move far more than M R delta); and one sum over the faces per
+        # entry, bounded by 16 (faces + 4) eps |I|
+        delta = math.ldexp(vertex_rounding(vertices, _mesh_text(path)), -x_exp)
+        rounding = 2.0 * delta * float(mesh.density) * _surface_r2(
+            mesh.triangles - centre, mesh.area_faces
+        ) + 16.0 * (len(mesh.faces) + 4) * _EPS * float(np.abs(np.trace(tensor)))
         body = _from_tensor(cls, tensor, name, defect, rounding, f"mesh {path}", exponent)
         body.shape = (
             "mesh",
@@ -906,12 +931,11 @@ class Body:
         from scipy import constants as codata
 
         factors = {"cm-1": 100.0 * codata.c, "MHz": 1e6, "GHz": 1e9}
-        if unit not in factors:
+        if not isinstance(unit, str) or unit not in factors:
             raise NonPhysicalBodyError(
                 f"unknown unit {unit!r} for rotational constants; use one of {', '.join(factors)}"
             )
-        if defect not in ("error", "flatten"):
-            raise NonPhysicalBodyError(f"defect must be 'error' or 'flatten', got {defect!r}")
+        _check_defect(defect)
         values = _positive_lengths("rotational constant", normal=True, A=a, B=b, C=c)
         # I = h / (8 pi^2 f X) with X = x 2**e (x in [1/2, 1)) computed as
         # (h / (8 pi^2 f x)) 2**-e: exact scaling, free of overflow/underflow
@@ -999,8 +1023,7 @@ def remove_flat_excess(
     """
     import warnings
 
-    if defect not in ("error", "flatten"):
-        raise NonPhysicalBodyError(f"defect must be 'error' or 'flatten', got {defect!r}")
+    _check_defect(defect)
     excess = i3 - (i1 + i2)
     if not excess > FLAT_SLACK * i3:
         return i1, i2, i3
@@ -1028,16 +1051,24 @@ def remove_flat_excess(
     return i1, i2, edge
 
 
-def vertex_rounding(vertices):
+def vertex_rounding(vertices, text=None):
     """Absolute rounding of vertex coordinates as a mesh file stores them.
 
-    STL keeps float32 (relative ``2^-24``); text formats keep a fixed number
-    of decimals (``0.5 10^-d`` absolute, the fewest ``d`` that reproduce every
-    coordinate to a few ulps); otherwise the coordinates are taken as full
-    doubles (relative ``eps``).
+    A text file (``text``: its bytes; OBJ, ASCII PLY or STL, OFF) keeps each
+    coordinate to the decimals written there, trailing zeros included:
+    ``0.15000000`` is good to ``5e-9``, ``1.5e-01`` to ``5e-3``.  Without
+    the text: STL keeps float32 (relative ``2^-24``); decimal values are
+    taken to keep the fewest decimals ``d`` that reproduce every
+    coordinate to a few ulps (``0.5 10^-d`` absolute, an upper bound: the
+    file may have written more); otherwise the coordinates are taken as
+    full doubles (relative ``eps``).
     """
     v = np.asarray(vertices, dtype=float)
     big = float(np.max(np.abs(v))) if v.size else 0.0
+    if text is not None:
+        written = _written_rounding(text, v.ravel())
+        if written is not None:
+            return max(written, 0.5 * big * _EPS)
     with np.errstate(over="ignore", under="ignore"):  # beyond float32's range
         if np.array_equal(v.astype(np.float32).astype(float), v):
             return big * 2.0**-24
@@ -1048,6 +1079,83 @@ def vertex_rounding(vertices):
             # rounding, not the decimals, bounds it)
             return max(0.5 * 10.0**-digits, 0.5 * big * _EPS)
     return big * _EPS
+
+
+# a decimal number with a point or an exponent, as text mesh formats write
+# coordinates (integers alone are indices and counts): sign, integer digits,
+# fraction digits, exponent
+_WRITTEN_NUMBER = re.compile(rb"[-+]?(?=\.?\d)(\d*)(?:\.(\d*))?(?:[eE]([-+]?\d+))?")
+
+
+def _surface_r2(triangles, areas):
+    """The integral of ``|r|^2`` over a triangulated surface (``triangles``
+    (F, 3, 3) relative to the point ``r`` is measured from; exact for the
+    polyhedron: ``area (a.a + b.b + c.c + a.b + b.c + c.a) / 6`` per face)."""
+    a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
+    per_face = np.einsum("fi,fi->f", a, a + b) + np.einsum("fi,fi->f", b, b + c)
+    per_face += np.einsum("fi,fi->f", c, c + a)
+    return float(np.dot(areas, per_face) / 6.0)
+
+
+def _mesh_text(path):
+    """The bytes of a mesh file up to 256 MiB (for :func:`vertex_rounding`), else None."""
+    import os
+
+    try:
+        if os.path.getsize(path) > 256 * 2**20:
+            return None
+        with open(path, "rb") as handle:
+            return handle.read()
+    except (OSError, TypeError, ValueError):
+        return None
+
+
+def _written_rounding(text, values):
+    """Largest absolute rounding of ``values`` as written in ``text`` (bytes), or None.
+
+    A writer that pads (a fraction of two or more digits ending in 0, as
+    ``%.8f`` writes ``0.15000000``) keeps fixed decimals: each value is good
+    to ``0.5 10^(e - decimals)`` of its finest writing.  A writer that
+    strips trailing zeros (``%g``, ``repr``) keeps some number of significant
+    digits, at least the most seen in any coordinate, ``S``: the values are
+    good to ``0.5 10^(1 - S) max|v|``.  None when the text is not plain
+    ASCII (a binary file) or some value is not written in it as a decimal
+    with a point or an exponent.
+    """
+    if not text or not text.isascii() or b"\0" in text:
+        return None
+    numbers, roundings, digits = [], [], []
+    padded = False
+    for match in _WRITTEN_NUMBER.finditer(text):
+        whole, fraction, exponent = match.group(1), match.group(2), match.group(3)
+        if fraction is None and exponent is None:
+            continue  # an integer (or no number at all)
+        fraction = fraction or b""
+        if not (whole or fraction):
+            continue  # a lone point or sign
+        try:
+            value = float(match.group(0))
+            rounding = 0.5 * 10.0 ** (int(exponent or 0) - len(fraction))
+        except (ValueError, OverflowError):
+            continue
+        padded = padded or (len(fraction) >= 2 and fraction.endswith(b"0"))
+        numbers.append(value)
+        roundings.append(rounding)
+        digits.append(max(len((whole + fraction).lstrip(b"0")), 1))
+    if not numbers:
+        return None
+    numbers, index = np.unique(np.asarray(numbers), return_inverse=True)
+    finest = np.full(numbers.size, np.inf)
+    np.minimum.at(finest, index, np.asarray(roundings))
+    most = np.zeros(numbers.size, dtype=np.int64)
+    np.maximum.at(most, index, np.asarray(digits))
+    where = np.minimum(np.searchsorted(numbers, values), numbers.size - 1)
+    if not np.array_equal(numbers[where], values):
+        return None
+    if padded:
+        return float(np.max(finest[where]))
+    significant = int(np.max(most[where]))
+    return 0.5 * 10.0 ** (1 - significant) * float(np.max(np.abs(values)))
 
 
 def symmetric_within_rounding(values, rounding, what):
@@ -1092,7 +1200,8 @@ def _from_tensor(cls, tensor, name, defect, rounding, what, exponent=0):
     (largest entry in [1/2, 1), an exact power-of-two scaling) and brought
     back exactly; moments that no normal double holds are refused.
     """
-    tensor = np.asarray(tensor, dtype=float)
+    _check_defect(defect)
+    tensor = real_array("the inertia tensor", tensor, NonPhysicalBodyError)
     if tensor.shape != (3, 3) or not np.all(np.isfinite(tensor)):
         raise NonPhysicalBodyError("an inertia tensor must be a finite 3x3 matrix")
     scale = float(np.max(np.abs(tensor)))
@@ -1248,36 +1357,55 @@ def _refuse_below_normal(label, value):
         )
 
 
+def _real_number(label, value):
+    """One real number (a Python float): text, booleans, complex numbers,
+    ``None``, arrays of several numbers and integers beyond a double are
+    refused with an :class:`~orbits.OrbitsError` naming ``label``."""
+    return real_scalar(label, value, NonPhysicalBodyError)
+
+
 def _positive_lengths(what, normal=False, **values):
     """The values, checked finite and positive (named in the error).
 
     With ``normal``, a subnormal value (below 2.2e-308, stored with fewer
     than 53 bits) is refused too: it would scale every moment.
     """
+    checked = []
     for label, value in values.items():
-        if not (
-            isinstance(value, (int, float, np.floating, np.integer))
-            and math.isfinite(value)
-            and value > 0.0
-        ):
+        number = _real_number(f"{what} {label}", value)
+        if not (math.isfinite(number) and number > 0.0):
             raise NonPhysicalBodyError(
                 f"{what} {label} must be a finite positive number, got {value!r}"
             )
         if normal:
-            _refuse_below_normal(f"{what} {label}", float(value))
-    return tuple(float(v) for v in values.values())
+            _refuse_below_normal(f"{what} {label}", number)
+        checked.append(number)
+    return tuple(checked)
+
+
+def _non_negative_lengths(what, **values):
+    """The values, checked finite and ``>= 0`` (named in the error)."""
+    checked = []
+    for label, value in values.items():
+        number = _real_number(f"{what} {label}", value)
+        if not (math.isfinite(number) and number >= 0.0):
+            raise NonPhysicalBodyError(f"{what} {label} must be finite and >= 0, got {value!r}")
+        checked.append(number)
+    return tuple(checked)
 
 
 def _positive_mass(value, label="mass"):
     """A finite, positive, normal mass (or density); subnormal values are refused."""
-    if not (
-        isinstance(value, (int, float, np.floating, np.integer))
-        and math.isfinite(value)
-        and value > 0.0
-    ):
+    number = _real_number(label, value)
+    if not (math.isfinite(number) and number > 0.0):
         raise NonPhysicalBodyError(f"{label} must be a finite positive number, got {value!r}")
-    _refuse_below_normal(label, float(value))
-    return float(value)
+    _refuse_below_normal(label, number)
+    return number
+
+
+def _check_defect(defect):
+    if not isinstance(defect, str) or defect not in ("error", "flatten"):
+        raise NonPhysicalBodyError(f"defect must be 'error' or 'flatten', got {defect!r}")
 
 
 _SMALL_LENGTHS = "give the lengths or the mass in smaller units (larger numbers)"

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ._args import below_normal, below_normal_message, integer, path_argument
+from ._args import below_normal, below_normal_message, integer, path_argument, real_array
 from ._version import __version__
 from .atomic import atomic_path, csv_float_options
 from .bodies import FLAT_SLACK, Body, flat_excess, validate_moments
@@ -186,8 +186,8 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
     k = integer("k", k, minimum=1)
     q_max = integer("q_max", q_max, minimum=1)
     factor = omega_factor(units)
-    given = np.asarray(omega, dtype=float) if not isinstance(omega, str) else None
-    if given is None or given.shape != (3,) or not np.all(np.isfinite(given)):
+    given = real_array("omega", omega, AngleError)
+    if given.shape != (3,) or not np.all(np.isfinite(given)):
         raise AngleError(f"omega must be a finite 3-vector, got {omega!r}")
     own = given * factor
     # the constructor takes omega along the principal axes (as from_omega)

@@ -34,12 +34,15 @@ def _positive_finite(name, value):
 _SMALLEST_OFFSET = 2.2250738585072014e-308
 
 
-def _solve(moments, targets, what):
+def _solve(moments, targets, what, reachable=None):
     """Roots for per-branch targets ``{"SAM": X or None, "LAM": X or None}``.
 
     ``what`` names the request in the errors.  Raises InputError when no
-    spin has it: below the body's minimum, or (a different message) only
-    closer to the separatrix than a double can hold.
+    spin has it: below the body's minimum on each branch, or (a different
+    message) only closer to the separatrix than a double can hold.
+    ``reachable(branch, low)`` states, in the request's own terms, what a
+    branch whose smallest total phase is ``low`` can reach (default: the
+    total phase itself).
     """
     from .core import search as _kernels
     from .search import UnresolvedOrbitsWarning, find_roots
@@ -58,7 +61,7 @@ def _solve(moments, targets, what):
         unreached += int(info[slot])
     offsets = np.sort(np.concatenate(found)) if found else np.empty(0)
     if offsets.size == 0:
-        raise _too_near(moments, what) if unreached else _no_spin(moments, what)
+        raise _too_near(moments, what) if unreached else _no_spin(moments, what, reachable)
     if unreached:
         warnings.warn(
             f"{plural(unreached, 'spin')} with this total phase "
@@ -85,14 +88,29 @@ def _table(moments, offsets, targets):
     return table
 
 
-def _no_spin(moments, what):
-    from .search import minimum_phase
+def _total_phase_at_least(branch, low):
+    return f"the total phase is at least {exact_number(low)} rad ({low / TWO_PI:.12g} turns)"
 
-    low, where = minimum_phase(moments)
+
+def _no_spin(moments, what, reachable=None):
+    """InputError: no spin has ``what``; each branch's smallest total phase, stated
+    through ``reachable`` (see :func:`_solve`)."""
+    from .core import search as _kernels
+    from .search import find_roots
+
+    reachable = reachable or _total_phase_at_least
+    _, _, _, info = find_roots(moments, np.empty(0))
+    parts = []
+    for branch, slot, at in (
+        ("SAM", _kernels.INFO_MIN_SAM, _kernels.INFO_MIN_AT_SAM),
+        ("LAM", _kernels.INFO_MIN_LAM, _kernels.INFO_MIN_AT_LAM),
+    ):
+        # Delta alpha > 2 pi on every spin (the flat edge reaches 2 pi in the limit)
+        low = max(float(info[slot]), TWO_PI)
+        parts.append(f"on {branch} {reachable(branch, low)}, at dtheta = {info[at]:.6g}")
     return InputError(
-        f"no spin of this body has {what}: the total phase is at least "
-        f"{exact_number(low)} rad ({low / TWO_PI:.12g} turns, at dtheta = {where:.6g}) "
-        "and grows without bound towards the separatrix"
+        f"no spin of this body has {what}: {parts[0]}; {parts[1]}; each grows "
+        "without bound towards the separatrix"
     )
 
 
@@ -209,8 +227,16 @@ def spins_with_period_ratio(body_or_moments, ratio):
         "SAM": TWO_PI * (ratio - 1.0) if ratio > 1.0 else None,
         "LAM": TWO_PI * (ratio + 1.0),
     }
-    offsets = _solve(moments, targets, f"period ratio P_psi/P_phi = {exact_number(ratio)}")
+    offsets = _solve(
+        moments, targets, f"period ratio P_psi/P_phi = {exact_number(ratio)}", _ratio_at_least
+    )
     return _table(moments, offsets, targets)
+
+
+def _ratio_at_least(branch, low):
+    """The smallest ``P_psi/P_phi`` of a branch whose smallest total phase is ``low``."""
+    turns = low / TWO_PI
+    return f"P_psi/P_phi is at least {turns + 1.0 if branch == 'SAM' else turns - 1.0:.12g}"
 
 
 def spins_with_periods(body_or_moments, p_psi, p_phi):

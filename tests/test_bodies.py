@@ -5,6 +5,7 @@ import math
 import numpy as np
 import pytest
 
+import orbits
 from orbits import Body, NonPhysicalBodyError, SymmetricTopError
 
 EPS = np.finfo(float).eps
@@ -70,7 +71,7 @@ class TestTHandle:
 
     @pytest.mark.parametrize("bad", [(0, 4, 1), (8, -1, 1), (8, 4, math.nan)])
     def test_rejects_bad_lengths(self, bad):
-        with pytest.raises(NonPhysicalBodyError, match="positive length"):
+        with pytest.raises(NonPhysicalBodyError, match="must be a finite positive number"):
             Body.t_handle(*bad)
 
 
@@ -189,6 +190,81 @@ class TestValidation:
     def test_wrong_shape(self):
         with pytest.raises(NonPhysicalBodyError, match="exactly 3"):
             Body((1.0, 2.0))
+
+
+class TestArgumentTypes:
+    """Every constructor refuses what is not a real number with an OrbitsError
+    naming the argument (these raised bare ValueError, TypeError,
+    OverflowError or IndexError, or took True for 1, or dropped the
+    imaginary part of a complex array)."""
+
+    P = [[1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.3, -1.0, 0.5], [0.0, 0.0, 1.0]]
+
+    @pytest.mark.parametrize(
+        "make, named",
+        [
+            (lambda: Body.from_point_masses("abc", [[0, 0, 1]]), "point masses"),
+            (lambda: Body.from_point_masses([1, 1], [[0, 0, 1], [1, 2]]), "positions"),
+            (lambda: Body.from_point_masses([1 + 1j, 1, 1], np.eye(3)), "point masses"),
+            (lambda: Body.from_point_masses(np.ones(3, complex), np.eye(3)), "point masses"),
+            (lambda: Body.from_inertia_tensor("abc"), "inertia tensor"),
+            (lambda: Body.from_inertia_tensor([[1, 0], [0, 1, 2]]), "inertia tensor"),
+            (
+                lambda: Body.from_inertia_tensor(
+                    np.array([[1, 0.5j, 0], [-0.5j, 2, 0], [0, 0, 2.5]])
+                ),
+                "inertia tensor",
+            ),
+            (lambda: Body.t_handle("8", 4, 1), "l1"),
+            (lambda: Body.t_handle(None, 4, 1), "l1"),
+            (lambda: Body.t_handle(np.array([8.0, 9.0]), 4, 1), "l1"),
+            (lambda: Body.t_handle(True, 4, 1), "l1"),
+            (lambda: Body.box(10**400, 2, 3), "box edge a"),
+            (lambda: Body.box(True, 2, 3), "box edge a"),
+            (lambda: Body.box(1, 2, 3, mass=False), "mass"),
+            (lambda: Body.ellipsoid("0.5", 0.1), "semi-axis b"),
+            (lambda: Body.from_semi_axes(10**400, 1, 2), "semi-axis a"),
+            (lambda: Body.cylinder(1, 2, radius_y="x"), "radius_y"),
+            (lambda: Body.from_rotational_constants(True, 2, 1.5), "rotational constant A"),
+            (lambda: Body.from_rotational_constants(3, 2, 1.5, unit=["MHz"]), "unknown unit"),
+            (lambda: Body.preset(["fig6"]), "unknown preset"),
+            (lambda: Body.from_inertia_tensor(np.eye(3), defect=np.array(["x"])), "defect"),
+        ],
+    )
+    def test_refused_with_an_orbits_error(self, make, named):
+        with pytest.raises(orbits.OrbitsError, match=named):
+            make()
+
+    def test_numpy_scalars_and_integers_are_numbers(self):
+        assert Body.t_handle(np.float32(8), np.int64(4), 1) == Body.t_handle(8.0, 4.0, 1.0)
+        assert Body.box(np.array(3.0), 1, 2) == Body.box(3, 1, 2)
+
+
+class TestFrameArgument:
+    """``frame`` must hold orthonormal rows: a non-rotation used to be stored
+    and every vector passed through it (``Motion.from_omega(axes="body")``)
+    came out wrong with no error."""
+
+    @pytest.mark.parametrize(
+        "frame, message",
+        [
+            ("abc", "frame must be real numbers"),
+            (np.eye(2), r"finite 3x3 matrix .* got shape \(2, 2\)"),
+            (np.full((3, 3), np.nan), "non-finite entries"),
+            (np.ones((3, 3)), r"not orthonormal .* = 3 >"),
+            (np.diag([1.0, 1.0, 1.0 + 1e-6]), "not orthonormal"),
+        ],
+    )
+    def test_refused(self, frame, message):
+        with pytest.raises(orbits.OrbitsError, match=message):
+            Body((1.0, 2.0, 2.5), frame=frame)
+
+    def test_a_rotation_is_kept_to_rounding(self):
+        turn, _ = np.linalg.qr(np.random.default_rng(3).normal(size=(3, 3)))
+        body = Body((2.5, 1.0, 2.0), frame=turn)
+        # rows reordered with the moments (a proper rotation, det +1)
+        assert np.linalg.det(body.frame) == pytest.approx(1.0, abs=1e-14)
+        np.testing.assert_allclose(np.abs(body.frame), np.abs(turn[[1, 2, 0]]), atol=0)
 
 
 # ---------------------------------------------------------------------------

@@ -139,6 +139,25 @@ def test_point_masses_are_taken_about_the_centre_of_mass_in_any_frame():
     np.testing.assert_allclose(rotated, np.diag(body.moments), atol=1e-12 * body.moments[2])
 
 
+@pytest.mark.parametrize("offset", [1e3, 1e7, 1e10])
+def test_point_masses_far_from_the_origin(offset):
+    """Far from the coordinates' origin (a spacecraft in Earth-centred
+    metres, 7e6): the centre of mass is off by ~n eps |x|, one shift of every
+    relative position, so the rounding grows like the offset, not its square.
+    1e7 was refused as a symmetric top (bound 2.4 I3) with moments good to 4e-10.
+    """
+    masses = [1.0, 2.0, 3.0, 1.0]
+    points = np.array([[1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.3, -1.0, 0.5], [0.0, 0.0, 1.0]])
+    body = Body.from_point_masses(masses, points + offset)
+    np.testing.assert_allclose(
+        body.moments, Body.from_point_masses(masses, points).moments, rtol=40 * offset * 2.2e-16
+    )
+    # an equilateral triangle there is still a symmetric top
+    triangle = np.array([[1.0, 0.0, 0.0], [-0.5, 0.75**0.5, 0.0], [-0.5, -(0.75**0.5), 0.0]])
+    with pytest.raises(SymmetricTopError):
+        Body.from_point_masses([1.0, 1.0, 1.0], triangle + offset)
+
+
 @pytest.mark.parametrize(
     "masses, points",
     [
@@ -438,9 +457,84 @@ def test_nearly_cubic_mesh_is_accepted(tmp_path):
     )
 
 
+def test_text_mesh_keeps_the_decimals_it_writes(tmp_path):
+    """A box 0.3 x 0.1 x 0.2 m exported by trimesh (OBJ, ``%.8f``: 0.15000000)
+    was refused as a symmetric top: the vertex rounding was guessed from the
+    values (2 decimals, 0.005 m), not from the 8 decimals in the file.  The
+    same file with the coordinates shortened to 0.15 is ambiguous (a writer
+    of 2 decimals or of shortest forms) and stays refused.
+    """
+    mesh = trimesh.creation.box(extents=(0.3, 0.1, 0.2))
+    path = tmp_path / "box.obj"
+    mesh.export(path)
+    assert "0.15000000" in path.read_text()
+    body = Body.from_mesh(path)
+    np.testing.assert_allclose(
+        body.moments, Body.box(0.3, 0.1, 0.2, 0.3 * 0.1 * 0.2).moments, rtol=1e-12
+    )
+    short = tmp_path / "short.obj"
+    text = path.read_text()
+    for long, brief in (("0.15000000", "0.15"), ("0.05000000", "0.05"), ("0.10000000", "0.1")):
+        text = text.replace(long, brief)
+    short.write_text(text)
+    with pytest.raises(SymmetricTopError, match="within the rounding of their construction"):
+        Body.from_mesh(short)
+
+
+def test_vertex_rounding_reads_the_written_decimals():
+    from orbits.bodies import vertex_rounding
+
+    values = np.array([0.15, -0.05, 0.1])
+    # a padded writer: fixed decimals, trailing zeros included
+    assert vertex_rounding(values, b"v 0.15000000 -0.05000000 0.10000000\n") == 5e-9
+    assert vertex_rounding(values, b"v 1.500e-01 -5.000e-02 1.000e-01\n") == 0.5e-4
+    # a stripping writer (%g, repr): at least the most significant digits seen
+    assert vertex_rounding(values, b"v 0.15 -0.05 0.1\n") == pytest.approx(0.5e-1 * 0.15)
+    long = np.array([0.0980171403295606, 0.15])
+    assert vertex_rounding(long, b"v 0.0980171403295606 0.15 0\n") == pytest.approx(0.5e-15 * 0.15)
+    # a value not written as a decimal with a point: the values alone decide
+    assert vertex_rounding(values, b"v 0.15 -0.05 1\n") == vertex_rounding(values)
+    # a binary file
+    assert vertex_rounding(values, b"\x00\x01binary") == vertex_rounding(values)
+
+
+def test_thin_plate_mesh_rounding_bound_covers_vertex_moves():
+    """The vertex-rounding bound is 2 rho delta (surface integral of r^2): a
+    thin plate's moments move far more than the M R delta once assumed.
+    Measured: random +-delta vertex moves of a 1 x 0.8 x 0.01 plate move a
+    moment by up to 16 delta (M = 1), above the old bound 8 M R delta = 5.1
+    delta; the surface bound is 57 delta."""
+    from orbits.bodies import _surface_r2
+
+    plate = trimesh.creation.box(extents=(1.0, 0.8, 0.01))
+    plate.density = 1.0 / plate.volume
+    bound = plate.density * _surface_r2(plate.triangles - plate.center_mass, plate.area_faces)
+    # exact for a box: 2 [bc (a^2/4 + (b^2 + c^2)/12) + cyclic]
+    a, b, c = 1.0, 0.8, 0.01
+    exact = 2 * (
+        b * c * (a * a / 4 + (b * b + c * c) / 12)
+        + a * c * (b * b / 4 + (a * a + c * c) / 12)
+        + a * b * (c * c / 4 + (a * a + b * b) / 12)
+    )
+    assert bound == pytest.approx(plate.density * exact, rel=1e-12)
+    rng = np.random.default_rng(0)
+    delta, worst = 1e-6, 0.0
+    base = np.linalg.eigvalsh(plate.moment_inertia)
+    for _ in range(20):
+        moved = trimesh.Trimesh(
+            plate.vertices + rng.choice([-delta, delta], size=plate.vertices.shape),
+            plate.faces,
+            process=False,
+        )
+        moved.density = plate.density
+        worst = max(worst, np.max(np.abs(np.linalg.eigvalsh(moved.moment_inertia) - base)))
+    assert 8.0 * 0.64 * delta < worst <= bound * delta
+
+
 def write_obj(path, vertices, faces):
-    """An OBJ file with every coordinate as a full double (repr)."""
-    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in vertices.tolist()]
+    """An OBJ file with every coordinate to 17 significant digits (``%.16e``:
+    the double itself, written with fixed decimals, so the file says so)."""
+    lines = [f"v {x:.16e} {y:.16e} {z:.16e}" for x, y, z in vertices.tolist()]
     lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in faces.tolist()]
     path.write_text("\n".join(lines) + "\n")
 

@@ -104,6 +104,10 @@ def test_nearest_orbits_refuses_bad_input():
         orbits.nearest_orbits(phone(), PHONE_THROW_RPM, 3, units="rps")
     with pytest.raises(orbits.AngleError):
         orbits.nearest_orbits(phone(), (1.0, np.nan, 0.0), 3)
+    # not real numbers: an OrbitsError naming omega (were bare ValueError/TypeError)
+    for omega in ([[120, 2], 1], ["a", 2, 1], [120j, 2, 1], "abc", None):
+        with pytest.raises(orbits.OrbitsError, match="omega"):
+            orbits.nearest_orbits(phone(), omega, 3)
     assert main(["catalog", "--preset", "fig6", "--nearest", "2", "--out", "-"]) == 2
 
 

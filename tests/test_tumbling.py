@@ -1,6 +1,7 @@
 """Tumbling periods (P_phi, P_psi), spins of a given total phase, and Apophis."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -134,6 +135,32 @@ def test_total_phase_below_the_minimum_is_an_error_with_the_minimum():
     for bad in (0.0, -1.0, math.nan, math.inf):
         with pytest.raises(InputError):
             spins_with_total_phase(FIG6, bad)
+
+
+def test_unreachable_ratio_states_each_branch_in_ratio_terms():
+    """A ratio below both branches' minima: the message gives each branch's
+    smallest P_psi/P_phi, from Eqs. (28), (29) at the axes (the minimum of
+    each branch for this body), not the total phase of the lower branch.
+
+    It used to say "the total phase is at least 6.589 rad (1.0487 turns)",
+    the SAM minimum, for a ratio below 1 that only LAM can have.
+    """
+    at_zero, at_half_pi = orbits.phase_limits(FIG6)
+    sam_least = at_zero / (2 * math.pi) + 1.0  # 2.0487
+    lam_least = at_half_pi / (2 * math.pi) - 1.0  # 0.6794
+    with pytest.raises(InputError, match="no spin of this body") as error:
+        spins_with_period_ratio(FIG6, 0.6)
+    shown = [float(x) for x in re.findall(r"P_psi/P_phi is at least (\S+),", str(error.value))]
+    np.testing.assert_allclose(shown, [sam_least, lam_least], rtol=1e-10)
+    assert "total phase" not in str(error.value)
+    # just above the LAM minimum a LAM spin exists
+    spins = spins_with_period_ratio(FIG6, lam_least * (1 + 1e-6))
+    assert spins["branch"].astype(str).tolist() == ["LAM"]
+    # the total-phase request names both branches' minima in radians
+    with pytest.raises(InputError) as error:
+        spins_with_total_phase(FIG6, 6.0)
+    shown = [float(x) for x in re.findall(r"total phase is at least (\S+) rad", str(error.value))]
+    np.testing.assert_allclose(shown, [at_zero, at_half_pi], rtol=1e-10)
 
 
 def test_total_phase_beyond_what_a_double_reaches_says_so():
