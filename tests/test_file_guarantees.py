@@ -351,8 +351,14 @@ def test_the_manifest_carries_its_own_checksum(reference, tmp_path, capsys):
             lambda d: d["parts"]["2"]["bodies"].update(rows=2),
             "chunk 2: bodies/part-00002.csv: 2 rows for 3 bodies",
         ),
+        (
+            # the orbits' count, which only read_survey compared with the
+            # part: --check and a rerun passed a directory read_survey refused
+            lambda d: d["parts"]["0"]["orbits"].update(rows=d["parts"]["0"]["orbits"]["rows"] - 1),
+            "chunk 0: orbits/part-00000.csv has",
+        ),
     ],
-    ids=["another-chunks-file", "extra-entry", "body-range", "rows"],
+    ids=["another-chunks-file", "extra-entry", "body-range", "rows", "orbit-rows"],
 )
 def test_forged_ledger_entries_are_bound_to_their_chunk(
     reference, tmp_path, capsys, edit, problem
@@ -368,6 +374,35 @@ def test_forged_ledger_entries_are_bound_to_their_chunk(
     assert main(GRID + ["--out", str(target)]) == 0
     assert "recomputing" in capsys.readouterr().err
     _same_survey(target, reference)
+
+
+def test_a_ledger_key_of_non_ascii_digits_is_damage(reference, tmp_path, capsys):
+    """``"\u00b2".isdigit()`` is True but int() refuses it: one line, exit 2, no traceback."""
+    target = copy(reference, tmp_path)
+    _edit_manifest(target, lambda d: d["parts"].update({"\u00b2": d["parts"]["2"]}), forge=True)
+    capsys.readouterr()
+    for argv in (["survey", "--check", str(target)], GRID + ["--out", str(target)]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "damaged ledger" in err[0], err
+    with pytest.raises(orbits.InputError, match="damaged ledger"):
+        read_survey(target)
+
+
+@pytest.mark.parametrize("kind", ["fifo", "directory"])
+def test_a_lock_that_is_no_regular_file_is_refused_at_once(reference, tmp_path, capsys, kind):
+    """A FIFO as DIR/.lock blocked the run forever (open without O_NONBLOCK);
+    a directory gave 'Is a directory: 3'.  Both: one line naming the path."""
+    target = copy(reference, tmp_path)
+    lock = target / ".lock"
+    lock.unlink(missing_ok=True)
+    os.mkfifo(lock) if kind == "fifo" else lock.mkdir()
+    capsys.readouterr()
+    assert main(GRID + ["--out", str(target)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"orbits: error: cannot lock {target}: {lock} is not a regular file"]
+    with pytest.raises(orbits.InputError, match="is not a regular file"):
+        orbits.survey.Survey.grid(target, 6, 3, fmt="csv", chunk=3).run()
 
 
 def test_a_part_of_another_chunk_is_caught_on_read(reference, tmp_path):

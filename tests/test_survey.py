@@ -194,8 +194,78 @@ def test_distributed_equals_local(tmp_path):
             ]
         )
         assert code == 0
+        # workers whose orbits differ from this process's (another version or
+        # edited sources) are refused, not mixed in under this version
+        with distributed.Client(cluster) as client:
+            client.run(_set_worker_fingerprint, "f" * 64)
+            try:
+                with pytest.raises(orbits.InputError, match="a dask worker runs orbits"):
+                    Survey.grid(tmp_path / "other", 60, 8, chunk=500).run(scheduler=client)
+            finally:
+                client.run(_set_worker_fingerprint, None)
     assert read_bytes(tmp_path / "client") == read_bytes(local)
     assert read_bytes(tmp_path / "address") == read_bytes(local)
+    # the refused run resumes locally to the same files
+    Survey.grid(tmp_path / "other", 60, 8, chunk=500).run()
+    assert read_bytes(tmp_path / "other") == read_bytes(local)
+
+
+def _set_worker_fingerprint(value):
+    import orbits._version
+
+    orbits._version._FINGERPRINT = value
+
+
+def _die_in_chunk(*arguments):
+    import os
+
+    os._exit(3)
+
+
+def test_distributed_lost_chunk_is_one_error_and_resumes(tmp_path, capsys):
+    """A worker that dies on a chunk (out of memory, killed): dask gives up
+    after its allowed failures (KilledWorker); the run ends with one
+    InputError line, exit 2, not a traceback, and a rerun resumes."""
+    distributed = pytest.importorskip("distributed")
+    import dask
+
+    local = tmp_path / "local"
+    Survey.grid(local, 60, 8, chunk=500).run()
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+        with distributed.LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster:
+            with distributed.Client(cluster) as client:
+                client.run(_patch_worker_chunk)
+            code = main(
+                [
+                    "survey",
+                    "--resolution",
+                    "60",
+                    "--n-max",
+                    "8",
+                    "--chunk",
+                    "500",
+                    "--scheduler",
+                    cluster.scheduler_address,
+                    "--out",
+                    str(tmp_path / "lost"),
+                ]
+            )
+    err = capsys.readouterr().err
+    assert code == 2
+    lines = [line for line in err.splitlines() if line.startswith("orbits: error:")]
+    assert len(lines) == 1 and "lost on the dask cluster (KilledWorker" in lines[0], err
+    assert "rerun the same command to resume" in lines[0]
+    assert "Traceback" not in err
+    Survey.grid(tmp_path / "lost", 60, 8, chunk=500).run()
+    assert read_bytes(tmp_path / "lost") == read_bytes(local)
+
+
+def _patch_worker_chunk():
+    import orbits.survey.runner as runner
+
+    runner._chunk_on_worker = _die_in_chunk
 
 
 def test_fig2_from_a_survey(tmp_path, capsys):

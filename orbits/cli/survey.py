@@ -39,6 +39,12 @@ def _cmd_survey(args):
         raise InputError("--skip-invalid applies to a --bodies file")
     if args.scheduler is not None and not args.scheduler.strip():
         raise InputError("--scheduler is empty; give tcp://HOST:PORT")
+    if args.scheduler is not None and args.device == "cuda":
+        # before the GPU is looked for: the two never go together
+        raise InputError(
+            "--device cuda searches on this machine's GPU; the workers of --scheduler "
+            "search on their CPUs: give one or the other"
+        )
     options = dict(
         q_max=args.q_max,
         fmt=args.format,

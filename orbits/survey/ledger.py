@@ -40,11 +40,44 @@ def sha256_file(path):
     Opened by :func:`orbits.atomic.open_nofollow` (a link or a non-regular
     file raises :class:`~orbits.errors.InputError`).
     """
+    return _digest(path)[0]
+
+
+def _digest(path):
+    """``(SHA-256, newlines, quoted)`` of a regular file read once (see :func:`sha256_file`)."""
     digest = hashlib.sha256()
+    newlines, quoted = 0, False
     with open_nofollow(path) as handle:
         for block in iter(lambda: handle.read(1 << 20), b""):
             digest.update(block)
-    return digest.hexdigest()
+            newlines += block.count(b"\n")
+            quoted = quoted or b'"' in block
+    return digest.hexdigest(), newlines, quoted
+
+
+def is_chunk_key(key):
+    """A ledger key: a chunk index in ASCII decimal digits (``"²"`` is a digit, not decimal)."""
+    return isinstance(key, str) and key.isascii() and key.isdecimal()
+
+
+def _part_rows(path, fmt, newlines, quoted):
+    """Rows of a part: Parquet's metadata; a CSV's records after the header.
+
+    A CSV without a quote has one record per line; with quotes (a name
+    holding a line break) the records are counted by the csv module.
+    """
+    if fmt == "parquet":
+        import pyarrow.parquet as pq
+
+        with open_nofollow(path) as handle:
+            return pq.ParquetFile(handle).metadata.num_rows
+    if not quoted:
+        return newlines - 1
+    import csv
+    import io
+
+    with open_nofollow(path) as handle:
+        return sum(1 for _ in csv.reader(io.TextIOWrapper(handle, "utf-8", newline=""))) - 1
 
 
 def manifest_checksum(document):
@@ -72,7 +105,7 @@ def part_name(table, index, fmt):
 def entry_problem(key, entry, parameters):
     """What binds an entry to its chunk and the parameters, broken ('' if not)."""
     chunks = -(-parameters["body_count"] // parameters["chunk"])
-    if not (isinstance(key, str) and key.isdigit() and key == str(int(key))):
+    if not (is_chunk_key(key) and key == str(int(key))):
         return "malformed ledger key"
     index = int(key)
     if index >= chunks:
@@ -117,8 +150,14 @@ def _check_part(out_dir, key, entry, parameters):
                 return f"{item['file']} is a symbolic link (never followed)"
             if not stat.S_ISREG(mode):
                 return f"{item['file']} is not a regular file"
-            if sha256_file(path) != item["sha256"]:
+            digest, newlines, quoted = _digest(path)
+            if digest != item["sha256"]:
                 return f"{item['file']} does not match its SHA-256 (changed or truncated)"
+            # the count is the ledger's word too: read_survey holds the
+            # part to it, so a check must (a forged count is a damaged chunk)
+            rows = _part_rows(path, parameters["format"], newlines, quoted)
+            if rows != item["rows"]:
+                return f"{item['file']} has {rows} rows, the ledger says {item['rows']}"
     except (KeyError, TypeError, AttributeError):
         return "malformed ledger entry"
     except InputError as error:
@@ -226,7 +265,7 @@ def load_manifest(out_dir):
         )
     ):
         raise InputError(f"{manifest} is incomplete or damaged")
-    if not all(str(key).isdigit() and isinstance(entry, dict) for key, entry in parts.items()):
+    if not all(is_chunk_key(key) and isinstance(entry, dict) for key, entry in parts.items()):
         raise InputError(f"{manifest} has a damaged ledger")
     return document
 
@@ -251,7 +290,7 @@ def check_parts(out_dir):
     parameters, ledger = document["parameters"], document["parts"]
     chunks = -(-parameters["body_count"] // parameters["chunk"])
     damaged, verified = [], 0
-    for key in sorted(ledger, key=lambda k: int(k) if str(k).isdigit() else -1):
+    for key in sorted(ledger, key=int):  # keys checked by load_manifest
         problem = _check_part(out_dir, key, ledger[key], parameters)
         if problem:
             damaged.append(f"chunk {key}: {problem}")
@@ -292,12 +331,18 @@ def check_unlocked(directory):
     """
     import fcntl
     import os
+    import stat
 
     path = Path(directory) / LOCK
     try:
-        descriptor = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC)
+        # O_NONBLOCK: a FIFO planted as .lock would block the open
+        flags = os.O_RDONLY | os.O_NOFOLLOW | os.O_CLOEXEC | os.O_NONBLOCK
+        descriptor = os.open(path, flags)
     except OSError:
         return  # no lock file (or a link, refused when the run locks)
+    if not stat.S_ISREG(os.fstat(descriptor).st_mode):
+        os.close(descriptor)
+        raise InputError(f"cannot lock {path.parent}: {path} is not a regular file")
     with os.fdopen(descriptor, "r") as handle:
         try:
             fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)
@@ -323,16 +368,19 @@ class _DirectoryLock:
             # never through a link planted as .lock (it would lock, and
             # write the pid into, a file outside the directory)
             descriptor = os.open(
-                self.path, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC, 0o666
+                self.path,
+                os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC | os.O_NONBLOCK,
+                0o666,
             )
         except OSError as error:
             if error.errno == errno.ELOOP:
                 refuse_link(self.path)
-            raise InputError(f"cannot lock {self.path.parent}: {error.strerror}") from None
-        self.handle = os.fdopen(descriptor, "r+")
+            why = f"{self.path} is not a regular file" if error.errno == errno.EISDIR else None
+            raise InputError(f"cannot lock {self.path.parent}: {why or error.strerror}") from None
         if not stat.S_ISREG(os.fstat(descriptor).st_mode):
-            self.handle.close()
+            os.close(descriptor)
             raise InputError(f"cannot lock {self.path.parent}: {self.path} is not a regular file")
+        self.handle = os.fdopen(descriptor, "r+")
         try:
             fcntl.flock(self.handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:

@@ -15,11 +15,11 @@ from pathlib import Path
 import numpy as np
 
 from .._args import integer, path_argument, real_array
-from .._version import __version__
+from .._version import __version__, source_fingerprint
 from ..atomic import refuse_link
 from ..bodies import as_moments, region_grid
 from ..device import check_device, cuda_kernels
-from ..errors import ArgumentTypeError, InputError
+from ..errors import ArgumentTypeError, InputError, OrbitsError
 from ..limits import check_resolution
 from . import compute
 from .compute import LAYOUTS, check_survey_bounds
@@ -377,11 +377,21 @@ class Survey:
         return client
 
     def _run_distributed(self, client, todo, progress):
+        """Chunks on the workers, written here as they finish.
+
+        Every worker must run this process's orbits (version and sources,
+        checked per chunk, so also on workers that join later).  A chunk
+        lost on the cluster (a worker killed again and again, the scheduler
+        gone) ends the run with one InputError; the chunks written so far
+        stay in the ledger and a rerun resumes.
+        """
         from distributed import as_completed
 
+        expected = (__version__, source_fingerprint())
         futures = {
             client.submit(
-                compute.compute_chunk,
+                _chunk_on_worker,
+                expected,
                 self.chunk_moments(index),
                 self.n_max,
                 self.q_max,
@@ -391,15 +401,47 @@ class Survey:
             ): index
             for index in todo
         }
-        for future in as_completed(futures):
-            bodies, orbits = future.result()
-            self.write_chunk(futures[future], bodies, orbits)
+        completed, index = as_completed(futures), None
+        while True:
+            try:
+                future = next(completed)
+                index = futures[future]
+                bodies, orbits = future.result()
+            except StopIteration:
+                break
+            except OrbitsError:
+                raise
+            except Exception as error:  # noqa: BLE001 - dask's and the network's
+                where = f"chunk {index}" if index is not None else "a chunk"
+                raise InputError(
+                    f"{where} was lost on the dask cluster ({type(error).__name__}: "
+                    f"{one_line(error)}); the chunks written so far are kept: rerun the "
+                    "same command to resume (a worker that dies again and again may be "
+                    "out of memory: try a smaller --chunk)"
+                ) from None
+            self.write_chunk(index, bodies, orbits)
             if progress is not None:
                 progress(len(bodies))
 
     def report(self):
         """Summary of a complete survey from its verified parts; written to ``report.json``."""
         return survey_report(self.out_dir, self.n_max, self.q_max, len(self.skipped))
+
+
+def _chunk_on_worker(expected, *arguments):
+    """:func:`compute.compute_chunk` on a dask worker that runs the client's orbits.
+
+    ``expected``: the client's ``(version, source fingerprint)``; a worker
+    with other code would write other numbers under the client's version.
+    """
+    found = (__version__, source_fingerprint())
+    if found != expected:
+        raise InputError(
+            f"a dask worker runs orbits {found[0]} (sources {found[1][:12] or 'unknown'}), "
+            f"not this run's {expected[0]} (sources {expected[1][:12] or 'unknown'}): "
+            "install the same orbits on the workers as here"
+        )
+    return compute.compute_chunk(*arguments)
 
 
 class _Done:
