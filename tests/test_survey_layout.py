@@ -198,3 +198,20 @@ def test_the_command_line_chooses_the_layout(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("orbits: error: --columns applies to")
     assert "not to --check" in err[0]
+
+
+def test_a_table_folder_that_is_a_file_is_named(tmp_path, capsys):
+    """DIR/bodies replaced by a file: the line names it (it said "cannot create DIR")."""
+    import shutil
+
+    target = tmp_path / "s"
+    argv = ["survey", "--resolution", "6", "--n-max", "3", "--out", str(target)]
+    assert main(argv) == 0
+    shutil.rmtree(target / "bodies")
+    (target / "bodies").write_text("not a folder\n")
+    capsys.readouterr()
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        f"orbits: error: {target / 'bodies'} is not a directory; a survey keeps its parts there"
+    ]

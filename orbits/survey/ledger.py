@@ -497,7 +497,12 @@ class Ledger:
                 refuse_link(self.out_dir / sub)
                 (self.out_dir / sub).mkdir(exist_ok=True)
         except OSError as error:
-            raise InputError(f"cannot create {self.out_dir}: {error.strerror}") from None
+            where = error.filename or self.out_dir
+            if isinstance(error, FileExistsError):  # DIR/bodies or DIR/orbits is a file
+                raise InputError(
+                    f"{where} is not a directory; a survey keeps its parts there"
+                ) from None
+            raise InputError(f"cannot create {where}: {error.strerror}") from None
         if existing is not None:
             self.parts = existing["parts"]
         else:
