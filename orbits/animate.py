@@ -42,13 +42,17 @@ matplotlib; this module turns it into artists, frames and files.
 
 import io
 import math
+import numbers
+import os
 from pathlib import Path
 
 import numpy as np
 
+from ._args import integer, path_argument, real_scalar
 from .animation_scene import (
     FrameData,
     PoinsotScene,
+    frame_times,
     inertia_ellipsoid_lines,
     solid_faces,
     t_handle_boxes,
@@ -57,12 +61,18 @@ from .atomic import atomic_path, ensure_writable
 from .bodies import Body
 from .cells import literal_text
 from .errors import InputError
-from .limits import check_animation
+from .limits import AGG_MAX_PIXELS, check_animation, short_number
 from .motion import Motion, as_body
 
 FORMATS = ("gif", "mp4")
 # 9 x 4 in frames at 120 dpi: 1080 x 480 px, text 14 px (small) to 17 px (title)
 DEFAULT_DPI = 120
+DEFAULT_FPS = 20
+# a GIF stores each frame's delay in whole hundredths of a second, and browsers
+# play a delay of 0 or 1 as 10: only these rates play as given (100/fps >= 2 cs)
+GIF_FPS = (1, 2, 4, 5, 10, 20, 25, 50)
+# mathtext draws a subscript (I_1 on the axes) at 0.7 of its text's size
+_SUBSCRIPT = 0.7
 # colours of the drawing (one place, so that the two panels agree)
 COLOURS = {
     "solid": "tab:green",
@@ -77,6 +87,164 @@ COLOURS = {
 
 
 # ----------------------------------------------------------------- inputs
+def min_dpi():
+    """The smallest dpi at which every text of the frames can be drawn.
+
+    FreeType sets a font at ``points x int(dpi) / 72`` pixels rounded to a
+    whole number, and refuses 0 (``invalid ppem value``).  The smallest text
+    of the frames is a subscript (0.7 of the size) in a ``small`` caption
+    (the body axes' ``I_1``): it needs at least half a pixel.  With
+    matplotlib's default font size (10 pt: small is 8.33 pt) that is 7.
+
+    Returns
+    -------
+    int
+    """
+    from matplotlib.font_manager import FontProperties
+
+    points = FontProperties(size="small").get_size_in_points() * _SUBSCRIPT
+    return max(1, math.ceil(36.0 / points))
+
+
+def check_dpi(dpi, name="dpi", size=(9.0, 4.0)):
+    """``dpi`` as a float, or an :class:`InputError` naming ``name``.
+
+    From :func:`min_dpi` (7: the frames' smallest text) to
+    ``AGG_MAX_PIXELS / max(size)`` (7281 for 9 x 4 in frames: matplotlib's
+    Agg draws at most 65535 pixels a side).  ``name`` is the caller's
+    spelling (``--dpi`` on the command line).
+    """
+    dpi = real_scalar(name, dpi)
+    low, high = min_dpi(), AGG_MAX_PIXELS / max(size)
+    if not (math.isfinite(dpi) and low <= dpi <= high):
+        raise InputError(
+            f"{name} must be a number from {low} to {math.floor(high)} (the frames' smallest "
+            f"text needs {low} pixels per inch; frames of {size[0]:g} x {size[1]:g} in have "
+            f"at most {AGG_MAX_PIXELS} pixels a side), got {dpi:g}"
+        )
+    return dpi
+
+
+def check_fps(fps, fmt=None, name="fps"):
+    """``fps`` as an int from 1 to 100, one a GIF can play when ``fmt`` is ``"gif"``.
+
+    A GIF stores each frame's delay in whole hundredths of a second, and
+    browsers play a delay of 1 (or 0) as 10: only the rates of
+    :data:`GIF_FPS` (delays 100/fps of 2 cs and more) play at their speed.
+    An MP4 takes any rate.
+
+    Raises
+    ------
+    InputError
+        Naming ``name`` (``--fps`` on the command line).
+    """
+    if (
+        isinstance(fps, (bool, np.bool_))
+        or not isinstance(fps, numbers.Real)
+        or not math.isfinite(fps)
+        or fps != int(fps)
+        or not 1 <= fps <= 100
+    ):
+        raise InputError(f"{name} must be an integer from 1 to 100, got {fps!r}")
+    fps = int(fps)
+    if fmt == "gif" and fps not in GIF_FPS:
+        rates = ", ".join(str(v) for v in GIF_FPS[:-1]) + f" or {GIF_FPS[-1]}"
+        raise InputError(
+            f"{name} {fps} cannot play at its speed in a GIF: a GIF holds each frame's "
+            f"delay in whole hundredths of a second (100/{fps} = {100 / fps:.3g}) and "
+            f"browsers play 1 as 10; give {name} {rates}, or write an .mp4"
+        )
+    return fps
+
+
+def real_time_frames(seconds, fps):
+    """The frames of ``seconds`` played at ``fps``: ``round(seconds x fps) + 1``.
+
+    Not checked; a product beyond 2**62 counts as 2**62.
+    """
+    product = seconds * fps
+    return int(round(product)) + 1 if product < 2.0**62 else 2**62
+
+
+def check_real_time(seconds, fps, seconds_name="seconds", fps_name="fps"):
+    """The frame count of a real-time animation, from 2 to :data:`MAX_FRAMES`.
+
+    Raises
+    ------
+    InputError
+        Fewer or more frames, naming ``seconds_name`` and ``fps_name``
+        (``--seconds`` and ``--fps`` on the command line).
+    """
+    seconds = real_scalar(seconds_name, seconds)
+    if not (math.isfinite(seconds) and seconds > 0):
+        raise InputError(f"{seconds_name} must be positive, got {seconds!r}")
+    frames = real_time_frames(seconds, fps)
+    what = (
+        f"{seconds_name} {seconds:g} at {fps_name} {fps} is {short_number(frames)} "
+        f"{'frame' if frames == 1 else 'frames'} (round(seconds x fps) + 1)"
+    )
+    if frames > MAX_FRAMES:
+        lower_fps = f" or {fps_name}" if real_time_frames(seconds, 1) <= MAX_FRAMES else ""
+        raise InputError(
+            f"{what}, more than {MAX_FRAMES}: lower {seconds_name} (at most "
+            f"{(MAX_FRAMES - 1) / fps:g}){lower_fps}"
+        )
+    if frames < 2:
+        raise InputError(
+            f"{what}, and an animation needs at least 2: give {seconds_name} of at least "
+            f"{1 / fps:g} (one frame at {fps_name} {fps})"
+        )
+    return frames
+
+
+def check_output(out, name="out", fmt=None):
+    """The animation file ``out`` as ``(Path, format)``, checked before any drawing.
+
+    The name has no control characters; the format (``fmt``, else the
+    suffix) is ``gif`` or ``mp4``, and an MP4 has its ffmpeg writer; the
+    directory exists and is writable, and ``out`` is not a directory or
+    another file that is not a regular file.
+
+    Raises
+    ------
+    InputError
+        Naming ``name`` (``--out`` on the command line) or the path.
+    """
+    text = path_argument(name, out)
+    bad = [c for c in text if ord(c) < 32 or ord(c) == 127]
+    if bad:
+        raise InputError(
+            f"{name} {text!r} contains the control character {bad[0]!r}: "
+            "give a file name without control characters"
+        )
+    path = Path(text)
+    if fmt is None:
+        fmt = path.suffix.lstrip(".").lower()
+        if fmt not in FORMATS:
+            raise InputError(f"unknown animation format {path.suffix!r}; use .gif or .mp4")
+    elif not isinstance(fmt, str) or fmt.lower() not in FORMATS:
+        raise InputError(f"unknown animation format {fmt!r}; use {', '.join(FORMATS)}")
+    fmt = fmt.lower()
+    if fmt == "mp4" and not mp4_available():
+        raise InputError(
+            "MP4 needs an ffmpeg writer: pip install 'orbits[animation]' "
+            "(imageio-ffmpeg), or write a .gif"
+        )
+    # the first folder above that exists must be a directory (not "does not exist")
+    for folder in path.parents:
+        if os.path.exists(folder):
+            if not os.path.isdir(folder):
+                raise InputError(f"cannot write {path}: {folder} is not a directory")
+            break
+    try:
+        ensure_writable(path)
+    except InputError as error:
+        # an animation has no standard-output form: do not suggest one
+        message = str(error).replace(" (use '--out -' for standard output)", "")
+        raise type(error)(message) from None
+    return path, fmt
+
+
 def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
     """The catalog row of one closed orbit of ``body``.
 
@@ -112,10 +280,7 @@ def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
     label_p = "n" if n is not None else "p"
     if n is not None:
         p, q = n, 1
-    for label, value in ((label_p, p), ("q", q)):
-        if isinstance(value, bool) or int(value) != value or value < 1:
-            raise InputError(f"{label} must be an integer >= 1, got {value!r}")
-    p, q = int(p), int(q)
+    p, q = integer(label_p, p), integer("q", q)
     if math.gcd(p, q) != 1:
         raise InputError(f"p/q = {p}/{q} is not in lowest terms")
     if branch is not None and branch not in ("SAM", "LAM"):
@@ -181,6 +346,8 @@ class PoinsotAnimation:
         Frame times, from 0 to the animation's duration, both included (so
         the last frame of a closed orbit drawn over q periods is its first).
     fps : int
+        1 to 100; :meth:`save` writes a GIF only at a rate of
+        :data:`GIF_FPS`.
     figure : matplotlib.figure.Figure
     space_axes, body_axes : Axes3D
     artists : dict
@@ -194,6 +361,14 @@ class PoinsotAnimation:
     solid_kind : str
     solid_scale : float
         Length units of the solid -> ellipsoid units (display only).
+
+    Raises
+    ------
+    InputError
+        ``times`` not finite, increasing and at least 2
+        (:func:`orbits.animation_scene.frame_times`); ``fps`` not an
+        integer from 1 to 100; ``dpi`` out of :func:`check_dpi`'s range or
+        too large for the machine; a bad ``solid``.
     """
 
     def __init__(
@@ -201,7 +376,7 @@ class PoinsotAnimation:
         motion,
         times,
         *,
-        fps=20,
+        fps=DEFAULT_FPS,
         solid="auto",
         title=None,
         size=(9.0, 4.0),
@@ -210,10 +385,11 @@ class PoinsotAnimation:
         subsamples=8,
     ):
         self.motion = motion
-        self.fps = int(fps)
-        # a positive dpi whose frame buffers fit the machine (limits.check_animation)
+        self.fps = check_fps(fps)
+        times = frame_times(times)
+        # a dpi that draws the text and whose frame buffers fit the machine
+        self.dpi = check_dpi(dpi, size=size)
         check_animation(len(times), dpi, size, keep_frames=False)
-        self.dpi = float(dpi)
         self.scene = PoinsotScene(motion, times, solid=solid, subsamples=subsamples)
         self.times = self.scene.times
         self.plane_height = self.scene.plane_height
@@ -416,10 +592,27 @@ class PoinsotAnimation:
         return self.to_html()
 
     def render(self, k):
-        """Frame ``k`` as an RGB array (height, width, 3), uint8."""
+        """Frame ``k`` as an RGB array (height, width, 3), uint8.
+
+        Raises
+        ------
+        InputError
+            A text too small for FreeType at this dpi (a ``title`` with
+            nested sub- or superscripts: :func:`min_dpi` covers the
+            frames' own texts).
+        """
         self.frame(k)
         canvas = self.figure.canvas
-        canvas.draw()
+        try:
+            canvas.draw()
+        except RuntimeError as error:
+            if "FT_Set_Char_Size" not in str(error):
+                raise
+            raise InputError(
+                f"dpi {self.dpi:g} is too small for a text of the frames (FreeType cannot "
+                "set a font below 1 pixel; nested sub- or superscripts of the title are "
+                "smallest): give a larger dpi or a simpler title"
+            ) from None
         return np.asarray(canvas.buffer_rgba())[..., :3].copy()
 
     def save(self, path, *, fmt=None):
@@ -440,18 +633,12 @@ class PoinsotAnimation:
         Raises
         ------
         InputError
-            Unknown format, unwritable path, or MP4 without an ffmpeg writer.
+            Unknown format, unwritable path or one with a control character,
+            MP4 without an ffmpeg writer, or a GIF at an ``fps`` it cannot
+            play (:func:`check_fps`).
         """
-        path = Path(path)
-        fmt = (fmt or path.suffix.lstrip(".")).lower()
-        if fmt not in FORMATS:
-            raise InputError(f"unknown animation format {fmt!r}; use {', '.join(FORMATS)}")
-        if fmt == "mp4" and not mp4_available():
-            raise InputError(
-                "MP4 needs an ffmpeg writer: pip install 'orbits[animation]' "
-                "(imageio-ffmpeg), or write a .gif"
-            )
-        ensure_writable(path)
+        path, fmt = check_output(path, "path", fmt)
+        check_fps(self.fps, fmt)
         with atomic_path(path) as temporary:
             if fmt == "gif":
                 self._write_gif(temporary)
@@ -479,7 +666,8 @@ class PoinsotAnimation:
             format="GIF",
             save_all=True,
             append_images=indexed[1:],
-            duration=int(round(1000.0 / self.fps)),
+            # whole hundredths of a second: self.fps is one of GIF_FPS
+            duration=1000 // self.fps,
             loop=0,
             optimize=False,
         )
@@ -550,7 +738,7 @@ def poinsot_animation(
     speed=1.0,
     periods=None,
     frames=None,
-    fps=20,
+    fps=DEFAULT_FPS,
     out=None,
     solid="auto",
     title=None,
@@ -579,7 +767,10 @@ def poinsot_animation(
         Number of frames (>= 2), evenly spaced in time, both ends included
         (default 120; not with ``seconds``).
     fps : int
-        Frames per second of the written file.
+        Frames per second of the written file, 1 to 100 (default 20); a
+        GIF plays only 1, 2, 4, 5, 10, 20, 25 or 50 at their speed (its
+        frame delays are whole hundredths of a second, and 1 plays as 10):
+        other rates are refused for a ``.gif``.
     seconds : float, optional
         Real time: the animation lasts ``seconds`` of the motion's time
         (seconds when omega is in rad/s) and plays at that speed,
@@ -588,15 +779,17 @@ def poinsot_animation(
     out : path, optional
         Write the animation there (``.gif``, or ``.mp4`` with an ffmpeg
         writer); atomic and deterministic (the same call gives the same
-        bytes).
+        bytes).  Checked before anything is drawn (:func:`check_output`).
     solid : "auto", "ellipsoid" or tuple
         The solid drawn; see :func:`solid_faces`.
     title : str, optional
     dpi : float
         Pixel density of the frames (figure 9 x 4 in; the default 120 gives
-        1080 x 480 px): from 0.25 to 7281 (matplotlib's Agg draws at most
-        65535 pixels a side), and one frame's buffers must fit half the
-        machine's memory.
+        1080 x 480 px): from 7 to 7281 (:func:`check_dpi`: FreeType
+        cannot set the smallest text, a subscript of the captions, below 7
+        at matplotlib's default font size; Agg draws at most 65535 pixels
+        a side), and one frame's buffers must fit half the machine's
+        memory.
     pyplot : bool
         Create the figure through ``matplotlib.pyplot`` (for notebooks and
         sphinx-gallery's animation scraper); default headless Agg.
@@ -614,9 +807,11 @@ def poinsot_animation(
     Raises
     ------
     InputError
-        Bad ``frames``, ``fps``, ``periods``, ``dpi`` or output path;
-        frames whose memory or drawing time would exceed the machine
-        (:func:`orbits.limits.check_animation`; a GIF holds every frame).
+        Bad ``frames``, ``fps``, ``periods``, ``seconds`` (fewer than 2 or
+        more than 2000 frames), ``dpi``, ``solid`` or output path (a
+        control character in its name); frames whose memory or drawing
+        time would exceed the machine (:func:`orbits.limits.check_animation`;
+        a GIF holds every frame).
     AngleError, SeparatrixError
         Bad spin, as :meth:`Motion.from_spin`.
 
@@ -628,43 +823,32 @@ def poinsot_animation(
     >>> anim = poinsot_animation(orbit_row(body, n=5, branch="SAM"), out="n5.gif")
     >>> flip = poinsot_animation(flip_motion(), out="flip.gif")   # Dzhanibekov
     """
-    if isinstance(fps, bool) or int(fps) != fps or not 1 <= fps <= 100:
-        raise InputError(f"fps must be an integer in 1..100, got {fps!r}")
+    fmt = None
+    if out is not None:
+        path, fmt = check_output(out)
+    fps = check_fps(fps, fmt)
     motion, default_periods, label = _motion_from(source, theta, dtheta, phi, speed, body)
     if seconds is not None:
         if periods is not None or frames is not None:
             raise InputError("give seconds (real time) or periods and frames, not both")
-        if not (np.isfinite(seconds) and seconds > 0):
-            raise InputError(f"seconds must be positive, got {seconds!r}")
-        frames = int(round(seconds * fps)) + 1
-        if frames > MAX_FRAMES:
-            raise InputError(
-                f"{seconds:g} s at {fps} frames/s is {frames} frames, more than "
-                f"{MAX_FRAMES}; lower seconds or fps"
-            )
-        periods = seconds / motion.period
-    frames = 120 if frames is None else frames
-    if isinstance(frames, bool) or int(frames) != frames or frames < 2:
-        raise InputError(f"frames must be an integer >= 2, got {frames!r}")
-    periods = default_periods if periods is None else periods
+        frames = check_real_time(seconds, fps)
+        periods = float(seconds) / motion.period
+    frames = 120 if frames is None else integer("frames", frames, minimum=2)
+    periods = default_periods if periods is None else real_scalar("periods", periods)
     if not (np.isfinite(periods) and periods > 0):
         raise InputError(f"periods must be positive, got {periods!r}")
-    fmt = None
-    if out is not None:
-        path = Path(out)
-        fmt = path.suffix.lstrip(".").lower()
-        if fmt not in FORMATS:
-            raise InputError(f"unknown animation format {path.suffix!r}; use .gif or .mp4")
-    # before any array of frames exists: the frames must fit memory and a day
+    duration = periods * motion.period
+    if not np.isfinite(duration):
+        raise InputError(f"periods {periods:g} of T = {motion.period:g} s overflow a double")
+    # before any array of frames exists: the text draws, the frames fit memory and a day
+    check_dpi(dpi)
     check_animation(frames, dpi, keep_frames=fmt == "gif")
-    times = np.linspace(0.0, float(periods) * motion.period, int(frames))
-    if out is not None:
-        ensure_writable(path)
+    times = np.linspace(0.0, duration, frames)
     animation = PoinsotAnimation(
         motion, times, fps=fps, solid=solid, title=title or label, dpi=dpi, pyplot=pyplot
     )
     if out is not None:
-        animation.save(out)
+        animation.save(path, fmt=fmt)
     return animation
 
 
@@ -725,10 +909,16 @@ def _as_row(source):
 
 
 __all__ = [
+    "GIF_FPS",
     "FrameData",
     "PoinsotAnimation",
+    "check_dpi",
+    "check_fps",
+    "check_output",
+    "check_real_time",
     "flip_motion",
     "inertia_ellipsoid_lines",
+    "min_dpi",
     "mp4_available",
     "orbit_row",
     "poinsot_animation",

@@ -16,9 +16,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._args import finite_array, integer, real_array
 from .bodies import Body, cylinder_moments
-from .errors import InputError
-from .motion import as_body
+from .errors import ArgumentTypeError, InputError
+from .motion import Motion, as_body
 from .plotting import box_faces
 
 
@@ -46,6 +47,13 @@ def solid_faces(body, solid="auto"):
     kind : str
     faces : list of ndarray, each (k, 3)
         Polygons in the sorted principal frame (length units of the body).
+
+    Raises
+    ------
+    InputError
+        An unknown solid; lengths that are not three positive finite
+        numbers; a mesh whose vertices are not finite (k, 3) or whose faces
+        are not lists of at least 3 vertex indices.
     """
     body = as_body(body)
     spec = solid
@@ -59,26 +67,25 @@ def solid_faces(body, solid="auto"):
         spec = (spec.get("kind"),) + tuple(v for k, v in spec.items() if k != "kind")
     if isinstance(spec, str):
         spec = (spec,)
-    kind = spec[0] if spec else None
+    kind = spec[0] if isinstance(spec, (tuple, list)) and spec else None
     if kind == "ellipsoid":
         semi = np.array(body.equivalent_ellipsoid())
         # semi-axes (a, b, c) lie along the principal axes I1, I2, I3
         return "ellipsoid", _ellipsoid_faces(np.maximum(semi, 1e-3 * semi.max()))
     if kind == "t-handle":
-        l1, l2, w = (float(v) for v in spec[1:4])
+        l1, l2, w = _lengths(spec, ("l1", "l2", "w"))
         faces = _t_handle_faces(l1, l2, w)
         frame = Body.t_handle(l1, l2, w).frame
     elif kind == "box":
-        a, b, c = (float(v) for v in spec[1:4])
+        a, b, c = _lengths(spec, ("a", "b", "c"))
         faces = box_faces((-a / 2, -b / 2, -c / 2), (a / 2, b / 2, c / 2))
         frame = Body((b * b + c * c, a * a + c * c, a * a + b * b)).frame
     elif kind == "cylinder":
-        a, length, b = (float(v) for v in spec[1:4])
+        a, length, b = _lengths(spec, ("a", "length", "b"))
         faces = _cylinder_faces(a, b, length)
         frame = Body(cylinder_moments(a, length, radius_y=b)).frame
     elif kind == "mesh":
-        vertices = np.asarray(spec[1], dtype=float)
-        faces = [vertices[np.asarray(f)] for f in spec[2]]
+        faces = _mesh_faces(spec)
         frame = body.frame
     else:
         raise InputError(
@@ -88,6 +95,74 @@ def solid_faces(body, solid="auto"):
         )
     # caller's axes -> sorted principal axes: v_principal = frame @ v
     return kind, [face @ frame.T for face in faces]
+
+
+def _lengths(spec, names):
+    """The three positive finite lengths of a ``(kind, x, y, z)`` solid."""
+    kind = spec[0]
+    usage = f"({kind!r}, {', '.join(names)})"
+    if len(spec) != 4:
+        raise InputError(f"solid {usage} takes three lengths, got {len(spec) - 1}: {spec!r}")
+    lengths = finite_array(f"solid {usage}", list(spec[1:]))
+    if not np.all(lengths > 0.0):
+        raise InputError(f"solid {usage} needs positive lengths, got {spec!r}")
+    return (float(v) for v in lengths)
+
+
+def _mesh_faces(spec):
+    """The polygons of a ``("mesh", vertices, faces)`` solid, checked."""
+    usage = "solid ('mesh', vertices, faces)"
+    if len(spec) != 3:
+        raise InputError(f"{usage} takes vertices and faces, got {len(spec) - 1} of them")
+    vertices = finite_array(f"{usage}: vertices", spec[1])
+    if vertices.ndim != 2 or vertices.shape[1] != 3 or len(vertices) < 3:
+        raise InputError(
+            f"{usage}: vertices must be an array (k, 3) of k >= 3 points, "
+            f"got shape {vertices.shape}"
+        )
+    try:
+        face_list = list(spec[2])
+    except TypeError:
+        raise ArgumentTypeError(f"{usage}: faces must be a list of index lists") from None
+    faces = []
+    for number, face in enumerate(face_list):
+        index = real_array(f"{usage}: face {number}", face)
+        if (
+            index.ndim != 1
+            or len(index) < 3
+            or not np.all(index == np.floor(index))
+            or not np.all((index >= 0) & (index < len(vertices)))
+        ):
+            raise InputError(
+                f"{usage}: face {number} must list at least 3 vertex indices "
+                f"0..{len(vertices) - 1}, got {face!r}"
+            )
+        faces.append(vertices[index.astype(int)])
+    if not faces:
+        raise InputError(f"{usage}: no faces")
+    return faces
+
+
+def frame_times(times):
+    """The frame times as a float array: finite, at least 2, increasing.
+
+    Raises
+    ------
+    InputError
+        Anything else (the message names ``times``).
+    """
+    times = finite_array("times", times)
+    if times.ndim != 1 or len(times) < 2:
+        raise InputError(
+            f"times must be a 1-D array of at least 2 frame times, got shape {times.shape}"
+        )
+    if not np.all(np.diff(times) > 0.0):
+        k = int(np.argmin(np.diff(times) > 0.0))
+        raise InputError(
+            f"times must increase from frame to frame, got times[{k}] = {times[k]:g} "
+            f"then times[{k + 1}] = {times[k + 1]:g}"
+        )
+    return times
 
 
 def t_handle_boxes(l1, l2, w):
@@ -232,11 +307,17 @@ class PoinsotScene:
     ----------
     motion : Motion
     times : array_like (frames,)
-        Frame times, increasing from the first to the last.
+        Frame times (at least 2), finite and increasing from frame to frame.
     solid : "auto", "ellipsoid" or tuple
         The solid; see :func:`solid_faces`.
     subsamples : int
-        Steps of the traced curves per frame interval.
+        Steps of the traced curves per frame interval (>= 1).
+
+    Raises
+    ------
+    InputError
+        Bad ``times`` (:func:`frame_times`), ``subsamples`` or ``solid``;
+        a ``motion`` that is not a :class:`~orbits.Motion`.
 
     Attributes
     ----------
@@ -267,8 +348,13 @@ class PoinsotScene:
     """
 
     def __init__(self, motion, times, *, solid="auto", subsamples=8):
+        if not isinstance(motion, Motion):
+            raise ArgumentTypeError(
+                f"motion must be an orbits.Motion, got {type(motion).__name__}"
+            )
         self.motion = motion
-        self.times = np.asarray(times, dtype=float)
+        self.times = frame_times(times)
+        subsamples = integer("subsamples", subsamples)
         body = motion.body
         moments = body.moments
         two_e = 2.0 * motion.energy
@@ -347,6 +433,7 @@ class PoinsotScene:
 __all__ = [
     "FrameData",
     "PoinsotScene",
+    "frame_times",
     "inertia_ellipsoid_lines",
     "solid_faces",
     "t_handle_boxes",

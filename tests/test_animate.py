@@ -4,14 +4,18 @@ import matplotlib
 
 matplotlib.use("Agg")
 
+import os  # noqa: E402
+import sys  # noqa: E402
+from pathlib import Path  # noqa: E402
+
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
-from PIL import Image  # noqa: E402
+from PIL import Image, ImageSequence  # noqa: E402
 
 import orbits  # noqa: E402
 from orbits import Body, Motion, animate  # noqa: E402
 from orbits.cli import main  # noqa: E402
-from orbits.errors import InputError  # noqa: E402
+from orbits.errors import ArgumentTypeError, InputError  # noqa: E402
 
 FIG6 = Body.preset("fig6")
 T_HANDLE = Body.preset("t-handle")
@@ -321,7 +325,7 @@ class TestCli:
             (["--preset", "fig6", "--flip", "2", "--out", "a.gif"], "(0, pi/4)"),
             (
                 ["--preset", "fig6", "--theta", "0.5", "--frames", "1", "--out", "a.gif"],
-                "frames must be",
+                "--frames: must be an integer >= 2, got 1",
             ),
             (
                 ["--preset", "fig6", "--theta", "0.5", "--out", "/nonexistent/a.gif"],
@@ -369,3 +373,310 @@ def test_the_drawing_shows_the_scene_geometry(orbit_anim):
         np.testing.assert_array_equal(line, alone.herpolhode)
     with pytest.raises(InputError, match="out of range"):
         scene.frame(len(anim.times))
+
+
+# ----------------------------------------------------------------- checked inputs
+def _one_line_refusal(capsys, directory, argv):
+    """Run ``orbits animate argv`` in ``directory``: exit 2, one stderr line, nothing written."""
+    before = sorted(os.listdir(directory))
+    code = main(["animate", *argv])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1, err  # no "estimated ... working..." line before it
+    assert err[0].startswith("orbits: error: ") and "Traceback" not in err[0]
+    assert sorted(os.listdir(directory)) == before
+    return err[0]
+
+
+def test_dpi_below_the_smallest_text_is_refused(tmp_path, capsys, monkeypatch):
+    """FreeType cannot set the captions' subscripts ($I_1$, small) at 6 dpi: the
+    smallest dpi is 7 at matplotlib's default font size, and 6 is refused up front."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    with matplotlib.rc_context({"font.size": 10.0}):
+        assert animate.min_dpi() == 7
+        # the bound is FreeType's own: the subscript fails at 6 and draws at 7
+        for dpi, draws in ((6, False), (7, True)):
+            figure = Figure(figsize=(1, 1), dpi=dpi)
+            FigureCanvasAgg(figure)
+            figure.text(0.5, 0.5, "$I_1$", fontsize="small")
+            if draws:
+                figure.canvas.draw()
+            else:
+                with pytest.raises(RuntimeError, match="FT_Set_Char_Size"):
+                    figure.canvas.draw()
+        assert animate.poinsot_animation(FIG6, 0.5, frames=2, dpi=7).render(1).shape == (
+            28,
+            63,
+            3,
+        )
+        for dpi in (6.99, 6, 1, 0.25):
+            with pytest.raises(InputError, match=r"^dpi must be a number from 7 to 7281 \("):
+                animate.poinsot_animation(FIG6, 0.5, frames=2, dpi=dpi)
+        motion = Motion.from_spin(FIG6, 0.5)
+        with pytest.raises(InputError, match="dpi must be a number from 7 "):
+            animate.PoinsotAnimation(motion, [0.0, 1.0], dpi=5)
+        # a title's nested subscripts are smaller still: refused when drawn, not a crash
+        anim = animate.PoinsotAnimation(motion, [0.0, 1.0], dpi=7, title="$x_{a_{b}}$")
+        with pytest.raises(InputError, match="dpi 7 is too small for a text"):
+            anim.render(0)
+    # larger fonts draw at a lower dpi
+    with matplotlib.rc_context({"font.size": 20.0}):
+        assert animate.min_dpi() == 4
+    monkeypatch.chdir(tmp_path)
+    argv = ["--preset", "fig6", "--theta", "0.5", "--frames", "2", "--out", "a.gif"]
+    message = _one_line_refusal(capsys, tmp_path, [*argv, "--dpi", "5"])
+    assert "--dpi must be a number from 7 to 7281" in message and message.endswith("got 5")
+
+
+@pytest.mark.parametrize("fps", [4, 25, 50])
+def test_gif_plays_at_its_fps(tmp_path, fps):
+    """Every frame's stored delay is 1000/fps ms exactly (whole hundredths)."""
+    out = tmp_path / "a.gif"
+    animate.poinsot_animation(FIG6, 0.5, frames=3, fps=fps, dpi=10, out=out)
+    with Image.open(out) as image:
+        durations = [frame.info["duration"] for frame in ImageSequence.Iterator(image)]
+    assert durations == [1000 / fps] * 3
+
+
+def test_gif_refuses_rates_it_cannot_play(tmp_path, capsys, monkeypatch):
+    # delays 100/fps cs: whole and >= 2 only for these (1 cs plays as 10 cs)
+    assert animate.GIF_FPS == tuple(f for f in range(1, 101) if 100 % f == 0 and 100 // f >= 2)
+    # the defaults (library and command line) are one of them
+    assert animate.DEFAULT_FPS in animate.GIF_FPS
+    from orbits.cli import build_parser
+
+    parsed = build_parser().parse_args(
+        ["animate", "--preset", "fig6", "--theta", "1"] + ["--out", "a.gif"]
+    )
+    assert parsed.fps == animate.DEFAULT_FPS
+    motion = Motion.from_spin(FIG6, 0.5)
+    for fps in (3, 30, 40, 60, 100):
+        with pytest.raises(InputError, match=rf"^fps {fps} cannot play at its speed in a GIF"):
+            animate.poinsot_animation(motion, frames=2, dpi=10, fps=fps, out=tmp_path / "a.gif")
+        with pytest.raises(InputError, match="or write an .mp4"):
+            animate.PoinsotAnimation(motion, [0.0, 1.0], dpi=10, fps=fps).save(tmp_path / "a.gif")
+    assert list(tmp_path.iterdir()) == []
+    monkeypatch.chdir(tmp_path)
+    argv = [
+        "--preset",
+        "fig6",
+        "--theta",
+        "0.5",
+        "--seconds",
+        "3",
+        "--fps",
+        "40",
+        "--out",
+        "a.gif",
+    ]
+    message = _one_line_refusal(capsys, tmp_path, argv)
+    assert "--fps 40 cannot play at its speed in a GIF" in message
+    assert "1, 2, 4, 5, 10, 20, 25 or 50, or write an .mp4" in message
+    if animate.mp4_available():  # an MP4 takes any rate
+        out = tmp_path / "a.mp4"
+        animate.poinsot_animation(motion, frames=2, dpi=10, fps=40, out=out)
+        assert out.read_bytes()[4:8] == b"ftyp"
+
+
+THROW = ["--preset", "fig6", "--omega"]
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--theta", "0.5", "--fps", "101"], "--fps must be an integer from 1 to 100, got 101"),
+        (["--theta", "0.5", "--periods", "0"], "--periods must be positive, got 0"),
+        (["--theta", "0.5", "--periods", "-1"], "--periods must be positive, got -1"),
+        (
+            ["--theta", "0.5", "--seconds", "200"],
+            "--seconds 200 at --fps 20 is 4001 frames (round(seconds x fps) + 1), more than "
+            "2000: lower --seconds (at most 99.95) or --fps",
+        ),
+        (
+            ["--theta", "0.5", "--seconds", "0.01"],
+            "--seconds 0.01 at --fps 20 is 1 frame (round(seconds x fps) + 1), and an "
+            "animation needs at least 2: give --seconds of at least 0.05 (one frame at --fps 20)",
+        ),
+        (
+            ["--omega", "1e-3", "0", "1e-3"],
+            "--omega plays one period T = 7427.04 s in real time: at --fps 20 that is 148542 "
+            "frames, more than 2000: give --seconds of at most 99.95 or --periods of at most "
+            "0.01345",
+        ),
+        (
+            ["--omega", "1e4", "1", "1e4"],
+            "--omega plays one period T = 0.000742704 s in real time: at --fps 20 that is 1 "
+            "frame, and an animation needs at least 2: give --seconds of at least 0.05 or "
+            "--periods of at least 67.32",
+        ),
+        (
+            ["--omega", "1", "0", "1", "--periods", "0.005", "--fps", "10"],
+            "--omega plays --periods 0.005 of T = 7.42704 s (0.0371352 s) in real time: at "
+            "--fps 10 that is 1 frame, and an animation needs at least 2: give --seconds of "
+            "at least 0.1 or --periods of at least 0.01346, or a higher --fps",
+        ),
+        (["--theta", "0.5", "--frames", "0"], "argument --frames: must be an integer >= 2, got 0"),
+        (["--theta", "0.5", "--periods", "1e308"], "--periods 1e+308 of T = 7.742 s is beyond"),
+    ],
+)
+def test_refused_before_the_estimate(tmp_path, capsys, monkeypatch, argv, message):
+    monkeypatch.chdir(tmp_path)
+    full = ["--preset", "fig6", *argv, "--out", "a.gif"]
+    assert message in _one_line_refusal(capsys, tmp_path, full)
+
+
+def test_throw_plays_its_periods_in_real_time(tmp_path, capsys):
+    """--omega with --periods X: X periods in real time (docs: no --frames with --omega)."""
+    usage = next(
+        line
+        for line in (Path(__file__).resolve().parents[1] / "docs" / "cli.md")
+        .read_text()
+        .splitlines()
+        if line.startswith("orbits animate BODY --omega")
+    )
+    assert "--periods X]" in usage and "--frames" not in usage
+    out = tmp_path / "a.gif"
+    argv = ["animate", *THROW, "1", "0", "1", "--periods", "0.5", "--fps", "4", "--dpi", "10"]
+    assert main([*argv, "--out", str(out)]) == 0
+    period = Motion.from_omega(FIG6, np.array([1.0, 0.0, 1.0]), axes="body").period
+    frames = round(0.5 * period * 4) + 1
+    with Image.open(out) as image:
+        assert image.n_frames == frames and image.info["duration"] == 250
+    err = capsys.readouterr().err
+    assert (
+        f"{frames} frames over {0.5 * period:.4g} s = 0.5 periods at 4 frames/s (real time)" in err
+    )
+    message = _one_line_refusal(
+        capsys, tmp_path, [*THROW, "1", "0", "1", "--frames", "5", "--out", "b.gif"]
+    )
+    assert "not --frames" in message
+
+
+def test_mp4_without_ffmpeg_is_refused_first(tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "imageio_ffmpeg", None)  # as if not installed
+    assert not animate.mp4_available()
+    monkeypatch.chdir(tmp_path)
+    message = _one_line_refusal(
+        capsys, tmp_path, ["--preset", "fig6", "--theta", "0.5", "--out", "a.mp4"]
+    )
+    assert "MP4 needs an ffmpeg writer" in message
+    with pytest.raises(InputError, match="MP4 needs an ffmpeg writer"):
+        animate.poinsot_animation(FIG6, 0.5, frames=2, dpi=10, out="a.mp4")
+
+
+def test_output_path_messages(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    Path("afile").write_text("x")
+    os.mkfifo("ff.gif")
+    argv = ["--preset", "fig6", "--theta", "0.5", "--frames", "2", "--out"]
+    for out in ("afile/a.gif", "afile/deeper/a.gif"):
+        message = _one_line_refusal(capsys, tmp_path, [*argv, out])
+        assert message.endswith(f"cannot write {out}: afile is not a directory")
+    message = _one_line_refusal(capsys, tmp_path, [*argv, "ff.gif"])
+    assert "it is a FIFO" in message and "--out -" not in message  # animate has no '-'
+    for out in ("a\nb.gif", tmp_path / "a\tb.gif"):
+        with pytest.raises(InputError, match="contains the control character"):
+            animate.poinsot_animation(FIG6, 0.5, frames=2, dpi=10, out=out)
+        with pytest.raises(InputError, match="^path .* contains the control character"):
+            animate.PoinsotAnimation(Motion.from_spin(FIG6, 0.5), [0.0, 1.0], dpi=10).save(out)
+    assert sorted(os.listdir(tmp_path)) == ["afile", "ff.gif"]
+
+
+MOTION = Motion.from_spin(FIG6, 0.5)
+SQUARE = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
+
+
+@pytest.mark.parametrize(
+    "call, error, message",
+    [
+        (lambda: animate.poinsot_animation(FIG6, 0.5, fps=float("nan")), InputError, "^fps must"),
+        (lambda: animate.poinsot_animation(FIG6, 0.5, fps=float("inf")), InputError, "^fps must"),
+        (lambda: animate.poinsot_animation(FIG6, 0.5, fps=None), InputError, "^fps must"),
+        (lambda: animate.poinsot_animation(FIG6, 0.5, frames=float("nan")), InputError, "^frames"),
+        (lambda: animate.poinsot_animation(FIG6, 0.5, frames=float("inf")), InputError, "^frames"),
+        (lambda: animate.poinsot_animation(FIG6, 0.5, frames="3"), ArgumentTypeError, "^frames"),
+        (lambda: animate.poinsot_animation(FIG6, 0.5, periods="1"), ArgumentTypeError, "^periods"),
+        (lambda: animate.poinsot_animation(FIG6, 0.5, seconds="1"), ArgumentTypeError, "^seconds"),
+        (
+            lambda: animate.poinsot_animation(FIG6, 0.5, seconds=0.01),
+            InputError,
+            "^seconds 0.01 at fps 20 is 1 frame",
+        ),
+        (
+            lambda: animate.orbit_row(FIG6, n=float("nan")),
+            InputError,
+            "^n must be an integer >= 1",
+        ),
+        (lambda: animate.orbit_row(FIG6, p=2, q="1"), ArgumentTypeError, "^q must be an integer"),
+        (
+            lambda: animate.solid_faces(FIG6, ("box", 1)),
+            InputError,
+            r"^solid \('box', a, b, c\) takes three lengths, got 1",
+        ),
+        (
+            lambda: animate.solid_faces(FIG6, ("box", -1, 2, 3)),
+            InputError,
+            r"^solid \('box', a, b, c\) needs positive lengths",
+        ),
+        (
+            lambda: animate.solid_faces(FIG6, ("t-handle", 0, 0, 0)),
+            InputError,
+            "^solid .'t-handle', l1, l2, w. needs positive",
+        ),
+        (
+            lambda: animate.solid_faces(FIG6, ("cylinder", 1, np.nan, 1)),
+            InputError,
+            "must be finite",
+        ),
+        (
+            lambda: animate.solid_faces(FIG6, ("mesh", SQUARE, [[0, 1, 5]])),
+            InputError,
+            "face 0 must list at least 3 vertex indices 0..2",
+        ),
+        (
+            lambda: animate.solid_faces(FIG6, ("mesh", SQUARE, [[0, 1]])),
+            InputError,
+            "face 0 must list",
+        ),
+        (
+            lambda: animate.solid_faces(FIG6, ("mesh", SQUARE[:2], [[0, 1, 1]])),
+            InputError,
+            r"vertices must be an array \(k, 3\)",
+        ),
+        (
+            lambda: animate.solid_faces(FIG6, ("mesh", SQUARE)),
+            InputError,
+            "takes vertices and faces",
+        ),
+        (lambda: animate.solid_faces(FIG6, 5), InputError, "^unknown solid 5"),
+        (
+            lambda: animate.PoinsotAnimation(MOTION, []),
+            InputError,
+            r"^times must be a 1-D array of at least 2 frame times, got shape \(0,\)",
+        ),
+        (
+            lambda: animate.PoinsotAnimation(MOTION, [1.0, 0.5], dpi=10),
+            InputError,
+            r"^times must increase from frame to frame, got times\[0\] = 1 then times\[1\] = 0.5",
+        ),
+        (
+            lambda: animate.PoinsotAnimation(MOTION, [0.0, np.inf], dpi=10),
+            InputError,
+            "^times must be finite",
+        ),
+        (
+            lambda: animate.PoinsotAnimation(MOTION, [0.0, 1.0], fps=0, dpi=10),
+            InputError,
+            "^fps must be an integer from 1 to 100, got 0",
+        ),
+        (
+            lambda: animate.PoinsotAnimation(FIG6, [0.0, 1.0], dpi=10),
+            ArgumentTypeError,
+            "^motion must be an orbits.Motion",
+        ),
+    ],
+)
+def test_api_refusals_name_the_argument(call, error, message):
+    with pytest.raises(error, match=message):
+        call()

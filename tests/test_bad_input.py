@@ -670,7 +670,7 @@ CLI_CASES = [
         "animate-frames-zero",
         [A] + FIG6 + ["--theta", "1", "--frames", "0", "--out", "{d}/a.gif"],
         {},
-        ">= 1",
+        "argument --frames: must be an integer >= 2",
     ),
     ("animate-suffix", [A] + FIG6 + ["--theta", "1", "--out", "{d}/a.txt"], {}, ""),
     (
@@ -821,7 +821,7 @@ CLI_CASES = [
         "animate-dpi-20000",
         [A] + FIG6 + ["--theta", "1", "--dpi", "20000", "--out", "{d}/a.gif"],
         {},
-        "--dpi must be a number from 0.25 to 7281",
+        "--dpi must be a number from 7 to 7281",
     ),
     (
         "animate-dpi-7000-memory",

@@ -6,9 +6,16 @@ import sys
 
 from ..cells import literal_text
 from ..errors import InputError
-from ..limits import check_animation
+from ..limits import check_animation, short_number
 from ..units import OMEGA_UNITS
-from .shared import add_body_options, announce, body_from_args, finite, positive_int
+from .shared import (
+    add_body_options,
+    announce,
+    body_from_args,
+    finite,
+    integer_at_least,
+    positive_int,
+)
 
 
 def _cmd_animate(args):
@@ -20,17 +27,23 @@ def _cmd_animate(args):
 
     # sizes first, with the options' own names: nothing is computed for a run
     # that cannot fit the machine (a real-time run's frames: round(S x fps) + 1)
-    if args.seconds is not None and math.isfinite(args.seconds):
-        planned = int(min(round(args.seconds * args.fps), 2**62)) + 1
+    gif = str(args.out).lower().endswith(".gif")
+    animate.check_fps(args.fps, "gif" if gif else None, "--fps")
+    animate.check_dpi(args.dpi, "--dpi")
+    if args.periods is not None and args.periods <= 0:
+        raise InputError(f"--periods must be positive, got {args.periods:g}")
+    if args.seconds is not None:
+        planned = animate.check_real_time(args.seconds, args.fps, "--seconds", "--fps")
     else:
         planned = 120 if args.frames is None else args.frames
-    memory, seconds_estimate = check_animation(
-        planned,
-        args.dpi,
-        keep_frames=str(args.out).lower().endswith(".gif"),
-        frames_name="--seconds" if args.seconds is not None else "--frames",
-        dpi_name="--dpi",
-    )
+    if args.omega is None or args.seconds is not None:
+        memory, seconds_estimate = check_animation(
+            planned,
+            args.dpi,
+            keep_frames=gif,
+            frames_name="--seconds" if args.seconds is not None else "--frames",
+            dpi_name="--dpi",
+        )
     body = body_from_args(args)
     spins = [
         args.theta is not None,
@@ -75,12 +88,33 @@ def _cmd_animate(args):
         source = Motion.from_omega(body, np.array(args.omega) * factor, axes="body")
     else:
         source = Motion.from_spin(body, args.theta, dtheta=args.dtheta, phi=args.phi, speed=speed)
-    _check_out(args.out)
+    if args.periods is not None and args.omega is None:
+        # a catalog row is drawn as the body's motion at the row's dtheta
+        motion = (
+            source
+            if isinstance(source, Motion)
+            else Motion.from_spin(body, dtheta=float(source["dtheta"]))
+        )
+        if not math.isfinite(args.periods * motion.period):
+            raise InputError(
+                f"--periods {args.periods:g} of T = {motion.period:.4g} s is beyond a "
+                "double's range; give fewer --periods"
+            )
+    seconds = args.seconds
+    if args.omega is not None and seconds is None:
+        # a throw plays in real time: one period, or --periods of them
+        seconds = (1.0 if args.periods is None else args.periods) * source.period
+        planned = _throw_frames(args, seconds, source.period, gif)
+        memory, seconds_estimate = check_animation(
+            planned,
+            args.dpi,
+            keep_frames=gif,
+            frames_name="--seconds or --periods",
+            dpi_name="--dpi",
+        )
+    animate.check_output(args.out, "--out")
     # every input checked: say how long the drawing will take
     announce("animate", seconds_estimate, memory)
-    seconds = args.seconds
-    if args.omega is not None and seconds is None and args.periods is None:
-        seconds = source.period
     title = None
     if args.flip is not None:
         title = (
@@ -104,7 +138,7 @@ def _cmd_animate(args):
         )
     drawn = animate.poinsot_animation(
         source,
-        periods=args.periods,
+        periods=args.periods if args.omega is None else None,
         frames=args.frames,
         fps=args.fps,
         dpi=args.dpi,
@@ -127,17 +161,36 @@ def _cmd_animate(args):
     return 0
 
 
-def _check_out(path):
-    """The output's format and directory, checked before the estimate is announced."""
-    from pathlib import Path
+def _throw_frames(args, seconds, period, gif):
+    """The frames of --omega in real time (``seconds`` of it), from 2 to MAX_FRAMES."""
+    from ..animate import GIF_FPS, MAX_FRAMES, real_time_frames
 
-    from ..animate import FORMATS
-    from ..atomic import ensure_writable
-
-    suffix = Path(path).suffix
-    if suffix.lstrip(".").lower() not in FORMATS:
-        raise InputError(f"unknown animation format {suffix!r}; use .gif or .mp4")
-    ensure_writable(path)
+    fps = args.fps
+    frames = real_time_frames(seconds, fps)
+    if args.periods is None:
+        span = f"one period T = {period:.6g} s"
+    else:
+        span = f"--periods {args.periods:g} of T = {period:.6g} s ({seconds:.6g} s)"
+    what = (
+        f"--omega plays {span} in real time: at --fps {fps} that is "
+        f"{short_number(frames)} {'frame' if frames == 1 else 'frames'}"
+    )
+    if frames > MAX_FRAMES:
+        # the suggested bounds keep half a frame's margin from round(S x fps)
+        lower_fps = ", or a lower --fps" if real_time_frames(seconds, 1) <= MAX_FRAMES else ""
+        raise InputError(
+            f"{what}, more than {MAX_FRAMES}: give --seconds of at most "
+            f"{(MAX_FRAMES - 1) / fps:g} or --periods of at most "
+            f"{(MAX_FRAMES - 2) / (fps * period):.4g}{lower_fps}"
+        )
+    if frames < 2:
+        top = max(GIF_FPS) if gif else 100
+        higher_fps = ", or a higher --fps" if real_time_frames(seconds, top) >= 2 else ""
+        raise InputError(
+            f"{what}, and an animation needs at least 2: give --seconds of at least "
+            f"{1 / fps:g} or --periods of at least {1 / (fps * period):.4g}{higher_fps}"
+        )
+    return frames
 
 
 def _positive(text):
@@ -188,8 +241,8 @@ def add_parser(subparsers):
         type=finite,
         metavar=("W1", "W2", "W3"),
         help="a real throw: the angular velocity along the body's own axes (x y z "
-        "of --box, the order of --moments), in --units; plays in real time "
-        "(one period T unless --seconds or --periods)",
+        "of --box, the order of --moments), in --units; plays in real time: "
+        "one period T, --periods X of them, or --seconds S (not --frames)",
     )
     spin.add_argument(
         "--flip",
@@ -224,7 +277,9 @@ def add_parser(subparsers):
         help="|omega0| of --theta, --dtheta or --flip, in --units (default 1 rad/s)",
     )
     parser.add_argument(
-        "--periods", type=finite, help="duration in periods T (default q for an orbit, else 1)"
+        "--periods",
+        type=finite,
+        help="duration in periods T (default q for an orbit, else 1; in real time with --omega)",
     )
     parser.add_argument(
         "--seconds",
@@ -234,10 +289,16 @@ def add_parser(subparsers):
         "(round(S x fps) + 1 frames); not with --frames/--periods",
     )
     parser.add_argument(
-        "--frames", type=positive_int, help="number of frames (default 120; not with --seconds)"
+        "--frames",
+        type=integer_at_least(2),
+        help="number of frames, >= 2 (default 120; not with --seconds or --omega)",
     )
     parser.add_argument(
-        "--fps", type=positive_int, default=20, help="frames per second (default 20)"
+        "--fps",
+        type=positive_int,
+        default=20,
+        help="frames per second, 1 to 100 (default 20); a .gif plays only "
+        "1, 2, 4, 5, 10, 20, 25 or 50 at their speed",
     )
     parser.add_argument(
         "--dpi",
