@@ -3,7 +3,7 @@
 # Deterministic: the same versions of orbits, matplotlib and Pillow give the same bytes.
 set -euo pipefail
 out=figures/animations
-small=(--frames 48 --fps 12 --dpi 72)
+small=(--frames 48 --fps 10 --dpi 72)
 # the Dzhanibekov / tennis-racket flip of the paper's T-handle near its intermediate axis
 orbits animate --preset t-handle --flip "${small[@]}" --out "$out/t_handle_flip.gif"
 # a closed orbit of the catalog: Fig. 6's body, 2 pi * 3 on SAM, back at its start after T
