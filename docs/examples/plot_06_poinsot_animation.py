@@ -32,7 +32,7 @@ print(row[["branch", "n", "theta", "dtheta", "period", "closes_after"]])
 # ``pyplot=True`` creates the figure through pyplot (for notebooks and this
 # gallery); ``.animation`` is a matplotlib ``FuncAnimation``.  Keep it in
 # a variable, or it is garbage-collected before it plays.
-poinsot = poinsot_animation(row, frames=36, fps=12, dpi=96, pyplot=True)
+poinsot = poinsot_animation(row, frames=36, fps=10, dpi=96, pyplot=True)
 anim = poinsot.animation
 
 # %%

@@ -20,7 +20,7 @@ from orbits.animate import flip_motion, poinsot_animation
 motion = flip_motion(offset=0.05)
 print(f"branch {motion.branch}, period T = {motion.period:.3f} (1/|omega0|)")
 
-poinsot = poinsot_animation(motion, periods=1.0, frames=40, fps=12, dpi=96, pyplot=True)
+poinsot = poinsot_animation(motion, periods=1.0, frames=40, fps=10, dpi=96, pyplot=True)
 anim = poinsot.animation
 
 # %%
