@@ -96,33 +96,11 @@ def as_body(body_or_moments):
 
 
 def _separatrix_gap(i1, i2, i3, omega):
-    """``M^2 - 2 E I2`` of a unit spin as the factors ``(scale, offset, closing)``.
-
-    :func:`orbits.core.phase.vector_gap` evaluates ``I3 (I3-I2) w3^2 - I1
-    (I2-I1) w1^2`` exactly and rounds it once, but where ``w1`` and ``w3``
-    are below ~1e-150 their squares are subnormal and the gap loses its
-    relative precision (and with it ``kc``: a spin within 1e-161 of the I2
-    axis started 23 % off in its smallest component).  There ``w1, w3``
-    are scaled by ``2^k`` (exact), and the factor ``2^-2k`` is carried by
-    ``scale`` and ``closing`` with ``|offset| <= 1e-200``, so that
-    :func:`orbits.core.phase.orbit_constants` takes the square roots factor
-    by factor and nothing underflows.
-    """
+    """``M^2 - 2 E I2`` of a unit spin as the factors ``(scale, offset, closing)``
+    of :func:`orbits.core.phase.vector_gap` (exact, and free of underflow
+    for components near the I2 axis down to the smallest doubles)."""
     w1, w2, w3 = (float(v) for v in omega)
-    small = max(abs(w1), abs(w3))
-    if small == 0.0 or small >= 2.0**-480:
-        return _phase.vector_gap(i1, i2, i3, w1, w2, w3)
-    k = -math.frexp(small)[1]
-    _, offset, _ = _phase.vector_gap(i1, i2, i3, math.ldexp(w1, k), w2, math.ldexp(w3, k))
-    if offset == 0.0:
-        return 1.0, 0.0, 1.0
-    shift = max(0, math.frexp(offset)[1] + 700)  # |offset| 2^-shift near 2^-700
-    rest = 2 * k - shift  # the gap is offset 2^-(shift + rest)
-    return (
-        math.ldexp(1.0, -(rest // 2)),
-        math.ldexp(offset, -shift),
-        math.ldexp(1.0, rest // 2 - rest),
-    )
+    return _phase.vector_gap(i1, i2, i3, w1, w2, w3)
 
 
 def _does_not_fit(what):

@@ -699,3 +699,34 @@ def test_phone_energy_is_one_convention():
     assert unit.period / speed == pytest.approx(motion.period, rel=1e-13)
     assert list(orbits.spin_phases(phone, omega).columns[:3]) == ["I1", "I2", "I3"]
     assert row.I3 == i[2]
+
+
+@pytest.mark.parametrize(
+    "omega",
+    [
+        (1e-160, 1.0, 1e-160),
+        (1e-161, 1.0, 1e-161),
+        (0.0, 1.0, 1e-170),
+        (3e-162, 1.0, 3e-162),
+        (1e-100, 1e100, 1e-100),
+        (1e-156, 1.0, 1e-156),
+    ],
+)
+def test_spin_phases_near_the_intermediate_axis(omega):
+    """Spins within 1e-150 of the I2 axis, whose small components square to
+    subnormals: the separatrix gap is carried in factors (core.phase.vector_gap).
+
+    Before, (1e-160, 1, 1e-160) was 6.8e-6 off and (0, 1, 1e-170) was
+    refused as the separatrix; Motion had its own fix, now shared.  Reference:
+    eqn:GeometricPhase in mpmath at 450 digits from the exact double spin.
+    """
+    i1, i2, i3 = (mp.mpf(float(v)) for v in FIG6.moments)
+    with mp.workdps(450):
+        w = [mp.mpf(v) for v in omega]
+        two_e = i1 * w[0] ** 2 + i2 * w[1] ** 2 + i3 * w[2] ** 2
+        m_sq = (i1 * w[0]) ** 2 + (i2 * w[1]) ** 2 + (i3 * w[2]) ** 2
+        _, expected = period_and_total_phase(i1, i2, i3, two_e, m_sq)
+        expected = float(expected)
+    row = orbits.spin_phases(FIG6, omega).iloc[0]
+    assert row["total_phase"] == pytest.approx(expected, rel=1e-13)
+    assert orbits.Motion(FIG6, omega).total_phase() == pytest.approx(expected, rel=1e-13)

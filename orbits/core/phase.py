@@ -240,8 +240,27 @@ def vector_gap(i1, i2, i3, w1, w2, w3):
     The orbit through a spin given in doubles is exact, and so is its
     separatrix gap ``I3 (I3-I2) w3^2 - I1 (I2-I1) w1^2``: it is evaluated in
     double-double arithmetic and rounded once (:mod:`orbits.core.exact`).
+
+    Where ``w1`` and ``w3`` are below ~1e-150 their squares are subnormal
+    and the gap would lose its relative precision (and with it ``kc``:
+    ``spin_phases`` of (1e-160, 1, 1e-160) on the Fig. 6 body was 6.8e-6
+    off, and (0, 1, 1e-170) was called the separatrix).  There ``w1, w3``
+    are scaled by ``2^k`` (exact) and the factor ``2^-2k`` is carried by
+    ``scale`` and ``closing``, with ``|offset|`` near ``2^-700`` so that
+    :func:`orbit_constants` takes the square roots factor by factor and
+    nothing underflows.
     """
-    return 1.0, -separatrix_gap_exact(i1, i2, i3, w1, w3), 1.0
+    small = max(abs(w1), abs(w3))
+    if small == 0.0 or small >= 2.0**-480:
+        return 1.0, -separatrix_gap_exact(i1, i2, i3, w1, w3), 1.0
+    k = -math.frexp(small)[1]
+    offset = -separatrix_gap_exact(i1, i2, i3, math.ldexp(w1, k), math.ldexp(w3, k))
+    if offset == 0.0:
+        return 1.0, 0.0, 1.0
+    shift = max(0, math.frexp(offset)[1] + 700)  # |offset| 2^-shift near 2^-700
+    rest = 2 * k - shift  # the gap is offset 2^-(shift + rest)
+    half = rest // 2
+    return math.ldexp(1.0, -half), math.ldexp(offset, -shift), math.ldexp(1.0, half - rest)
 
 
 @njit(cache=True, nogil=True)
