@@ -40,6 +40,7 @@ from .core import grid as _grid_kernels
 from .core import motion as _kernels
 from .core import phase as _phase
 from .errors import AngleError, InputError, SeparatrixError
+from .phases import total_phase
 from .threads import size_aware
 
 MotionState = namedtuple("MotionState", ["t", "omega", "euler", "rotation", "omega_space"])
@@ -316,6 +317,10 @@ class Motion:
             "dtheta" if from_offset else "theta", dtheta if from_offset else theta, AngleError
         )
         if not from_offset and math.isfinite(angle) and not 0.0 <= angle <= 0.5 * np.pi:
+            # refused as total_phase refuses it: folded within rounding of
+            # theta_c, or within the fold's rounding of the separatrix (a
+            # spin there was computed 0.45 % off instead)
+            total_phase(body, angle, phi=phi)
             # the spin as given (not folded: the motion differs by signs; its
             # T, E, M and total phase are those of the folded spin)
             return cls(

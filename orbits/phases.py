@@ -230,6 +230,58 @@ def _fast_inputs(moments, theta, dtheta, phi):
     return from_offset, angle, phi, shape
 
 
+def _refuse_folded_near_separatrix(moments, theta, phi, phi_folded, shape):
+    """SeparatrixError where folding ``theta`` or ``phi`` could have moved the
+    spin across the separatrix.
+
+    A folded angle is correctly rounded (:func:`fold_angle`), but the
+    reduced angle itself is not a double: near ``theta_c``, or near the I2
+    axis (``theta, phi -> pi/2``), that half ulp can decide the branch, and
+    the fold gave the wrong one silently (e.g. theta = pi/2 with phi one ulp
+    above pi/2).  The side is the sign of ``f = sqrt(I3 (I3-I2)) cos theta -
+    sqrt(I1 (I2-I1)) sin theta cos phi``, decreasing in theta and
+    increasing in phi on ``[0, pi/2]``: it is refused where ``f`` over the
+    box of folded angles +- 2 ulps (0 where not folded) can take either sign.
+    Angles in ``[0, pi/2]`` are not folded and never refused here.
+    """
+    theta = np.asarray(theta, dtype=float)
+    phi = np.asarray(phi, dtype=float)
+    half_pi = 0.5 * np.pi
+    moved = [
+        (np.broadcast_to(a, shape) < 0.0) | (np.broadcast_to(a, shape) > half_pi)
+        for a in (theta, phi)
+    ]
+    if not (moved[0].any() or moved[1].any()):
+        return
+    where = np.flatnonzero((moved[0] | moved[1]).ravel())
+    raw = _flat(theta, shape)[where]
+    theta_f = fold_angle(raw)
+    phi_f = _flat(phi_folded, shape)[where]
+    i1, i2, i3 = (_flat(moments[..., k], shape)[where] for k in range(3))
+    a = np.sqrt(i3 * (i3 - i2))
+    b = np.sqrt(i1 * (i2 - i1))
+    d_theta = np.where(moved[0].ravel()[where], 2.0 * np.spacing(theta_f), 0.0)
+    d_phi = np.where(moved[1].ravel()[where], 2.0 * np.spacing(phi_f), 0.0)
+
+    def side(t, p):
+        t, p = np.clip(t, 0.0, half_pi), np.clip(p, 0.0, half_pi)
+        return a * np.cos(t) - b * np.sin(t) * np.cos(p)
+
+    high = side(theta_f - d_theta, phi_f + d_phi)
+    low = side(theta_f + d_theta, phi_f - d_phi)
+    slack = 8.0 * np.finfo(float).eps * (a + b)
+    bad = (low <= slack) & (high >= -slack)
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        given_phi = float(_flat(phi, shape)[where[k]])
+        raise SeparatrixError(
+            f"theta = {exact_number(raw[k])}, phi = {exact_number(given_phi)} fold into "
+            f"[0, pi/2] within the fold's rounding of the separatrix M^2 = 2 E I2 "
+            "(its side, SAM or LAM, cannot be told); give theta and phi within "
+            "[0, pi/2], or the offset dtheta"
+        )
+
+
 def _raise_for(status, moments, theta, dtheta, phi):
     """Raise the error of the reference path for inputs the kernels flagged."""
     from_offset, angle, phi, shape = _spin_inputs(moments, theta, dtheta, phi)
@@ -281,7 +333,10 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0, device="cp
         ``dtheta == 0``, or a ``theta`` within the rounding error of
         ``theta_c`` (``|theta - theta_c| <= 16 * 2**-53 * min(theta_c,
         pi/2 - theta_c)``): on the separatrix, or too near it for double
-        precision to tell its branch; pass ``dtheta`` there.
+        precision to tell its branch; pass ``dtheta`` there.  Also a
+        ``theta`` or ``phi`` outside ``[0, pi/2]`` whose fold (rounded once)
+        could have moved the spin across the separatrix (near ``theta_c``,
+        or near the I2 axis ``theta, phi -> pi/2``).
     DeviceError
         ``device`` not ``"cpu"``/``"cuda"``, or ``"cuda"`` unavailable (no
         GPU, no numba-cuda, or a numba-cuda that does not compile here).
@@ -341,6 +396,8 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0, device="cp
         kernel(*args)
     if status.any():  # the rare case: the reference path names the error
         _raise_for(status, moments, theta, dtheta, phi)
+    if not from_offset:
+        _refuse_folded_near_separatrix(moments, angle, phi, phi_folded, shape)
     return out
 
 
@@ -443,6 +500,8 @@ def phases_of_unit_moments(moments, theta=None, phi=0.0, *, dtheta=None, device=
         _table.phases_columns(*args)
     if status.any():  # the rare case: the reference path names the error
         _raise_for(status.reshape(shape), moments, theta, dtheta, phi)
+    if not from_offset:
+        _refuse_folded_near_separatrix(moments, angle, phi, phi_folded, shape)
     # every column computed in the kernel (phase_table.phases_row): the
     # frame only wraps them
     table = dict(zip(_table.COLUMNS, columns))

@@ -730,3 +730,54 @@ def test_spin_phases_near_the_intermediate_axis(omega):
     row = orbits.spin_phases(FIG6, omega).iloc[0]
     assert row["total_phase"] == pytest.approx(expected, rel=1e-13)
     assert orbits.Motion(FIG6, omega).total_phase() == pytest.approx(expected, rel=1e-13)
+
+
+@pytest.mark.parametrize(
+    "moments, theta, phi",
+    [
+        # the I2 axis reached through phi one ulp above pi/2 (the fold rounds
+        # pi - phi): it gave 261.077 on SAM, the exact double is LAM 263.880
+        ((0.26, 0.55, 0.793662), np.pi / 2, np.nextafter(np.pi / 2, 4.0)),
+        ((0.26, 0.55, 0.793662), np.pi / 2, np.radians(270.0)),
+        # theta folding to theta_c - 2e-17: it gave LAM 107049.84, exact SAM 111576.45
+        ((0.5, 0.5000004768371582, 0.8065832883512922), 1.5717782361483235, 0.0),
+    ],
+)
+def test_folded_angles_within_rounding_of_the_separatrix_are_refused(moments, theta, phi):
+    """A folded angle is rounded once; where that rounding can move the spin
+    across the separatrix the side cannot be told: SeparatrixError, as for an
+    angle within rounding of theta_c given in [0, pi/2] (Motion.from_spin too)."""
+    for call in (
+        lambda: orbits.total_phase(moments, theta, phi=phi),
+        lambda: orbits.phases(moments, theta, phi=phi),
+    ):
+        with pytest.raises(SeparatrixError, match="separatrix"):
+            call()
+    if 0.0 <= theta <= np.pi / 2:
+        # Motion does not fold phi (cos and sin of the angle as given): its
+        # side is the exact one, the sign of the gap of the exact angles
+        with mp.workdps(60):
+            i1, i2, i3 = (mp.mpf(v) for v in moments)
+            t, p = mp.mpf(theta), mp.mpf(phi)
+            w1, w3 = mp.sin(t) * mp.cos(p), mp.cos(t)
+            gap = i3 * (i3 - i2) * w3**2 - i1 * (i2 - i1) * w1**2
+        motion = orbits.Motion.from_spin(Body(moments), theta, phi=phi)
+        assert motion.branch == ("SAM" if gap > 0 else "LAM")
+    else:
+        with pytest.raises(SeparatrixError, match="separatrix"):
+            orbits.Motion.from_spin(Body(moments), theta, phi=phi)
+
+
+def test_folded_angles_away_from_the_separatrix_are_kept():
+    """Folding elsewhere is exact to rounding: the same value as the angle in range."""
+    theta = np.array([-0.5, np.pi - 0.5, 0.5 + np.pi, 2.0])
+    folded = np.array([0.5, 0.5, 0.5, np.pi - 2.0])
+    np.testing.assert_allclose(
+        orbits.total_phase(FIG6, theta, phi=-0.3),
+        orbits.total_phase(FIG6, folded, phi=0.3),
+        rtol=4e-15,
+    )
+    # Motion.from_spin of theta = -theta_c is refused as total_phase refuses it
+    # (it returned 134.726, 0.45 % off the value at that double)
+    with pytest.raises(SeparatrixError):
+        orbits.Motion.from_spin(FIG6, -FIG6.critical_angle())
