@@ -22,6 +22,9 @@ directory, is flushed and fsync'ed, and then replaces the target with
   temporaries of a live process are never touched.
 * A write that fails (disk full, quota, I/O error) raises
   :class:`~orbits.errors.InputError` naming the path.
+* :func:`make_directories` returns the directories it made for a target,
+  so that :func:`remove_directories` removes them again after an error or
+  a stop (only those, and only while empty).
 """
 
 import errno
@@ -238,15 +241,17 @@ def atomic_path(path):
         raise
 
 
-# set while file_set moves its files into place (see committing)
+# set while file_set moves its files into place, or make_directories makes
+# one (see committing)
 _COMMITTING = []
 
 
 def committing():
-    """Whether a :func:`file_set` is moving its files into place right now.
+    """Whether a :func:`file_set` is moving its files into place right now
+    (or :func:`make_directories` is making and recording a directory).
 
     The command line puts a stop signal off until it is done, so that a set
-    is written whole or not at all.
+    is written whole or not at all (and no directory made goes unrecorded).
     """
     return bool(_COMMITTING)
 
@@ -271,7 +276,10 @@ def file_set(directory, names):
     Raises
     ------
     InputError
-        A target that cannot be written, or a missing file at the end.
+        A target that cannot be written, or a missing file at the end.  An
+        :class:`InputError` raised in the block that names the staging
+        directory (a write into it failed: disk full) names ``directory``
+        instead, the user's target.
     """
     import shutil
 
@@ -299,8 +307,67 @@ def file_set(directory, names):
                 os.replace(stage / name, target)
         finally:
             _COMMITTING.clear()
+    except InputError as error:
+        # a write that failed in the stage (disk full) names the user's target,
+        # not the private staging directory
+        text = str(error)
+        if str(stage) not in text:
+            raise
+        error.args = (text.replace(str(stage), str(directory)),)
+        raise
     finally:
         shutil.rmtree(stage, ignore_errors=True)
+
+
+def make_directories(path, made=None):
+    """Create the directory ``path`` and its missing parents; return those made.
+
+    Each is made with ``os.mkdir`` in turn, top first, and added to
+    ``made`` (a list, new if omitted) at once, a stop signal waiting
+    meanwhile (:func:`committing`): the list holds exactly the directories
+    this call created, even when it is stopped (``.`` and ``..`` are never
+    made, an existing one is kept).  Give it to :func:`remove_directories`
+    to undo the call.
+
+    Returns
+    -------
+    list of Path
+        ``made``: the real paths (``os.path.realpath``) of the directories
+        made, top first (none when ``path`` existed).
+
+    Raises
+    ------
+    OSError
+        As ``os.mkdir`` (``FileExistsError`` for a file in the way); the
+        directories made before are left in ``made``.
+    """
+    path = Path(path)
+    made = [] if made is None else made
+    for step in [*reversed(path.parents), path]:
+        if step.name in ("", ".", "..") or os.path.isdir(step):
+            continue
+        _COMMITTING.append(True)
+        try:
+            os.mkdir(step)
+            # its real path: one after a ".." still names it once the
+            # directory before the ".." is removed
+            made.append(Path(os.path.realpath(step)))
+        finally:
+            _COMMITTING.pop()
+    return made
+
+
+def remove_directories(made):
+    """Remove the directories ``made`` by :func:`make_directories`, deepest first.
+
+    Only those still empty: a directory that holds anything (files written,
+    or put there by someone else) is kept, and so are those above it.
+    """
+    for directory in reversed(made):
+        try:
+            os.rmdir(directory)
+        except OSError:
+            pass
 
 
 def check_targets(directory, names):

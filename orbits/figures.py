@@ -7,6 +7,7 @@ SVG or PDF metadata, a fixed SVG hash salt).
 """
 
 import math
+from contextlib import contextmanager
 from pathlib import Path
 
 import matplotlib as mpl
@@ -15,7 +16,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from . import plotting
-from .atomic import atomic_path, file_set
+from ._args import integer, path_argument
+from .atomic import file_set
 from .bodies import Body
 from .cells import literal_text
 from .errors import InputError
@@ -29,6 +31,10 @@ _METADATA = {
     "svg": {"Date": None},
     "pdf": {"CreationDate": None, "ModDate": None},
 }
+# a fixed SVG hash salt and text as paths (the same bytes everywhere); a
+# line of more than 10^5 samples (a herpolhode of hundreds of turns) is
+# rasterized in pieces of that many, else Agg's cell limit refuses it
+_RC = {"svg.hashsalt": "orbits", "svg.fonttype": "path", "agg.path.chunksize": 100_000}
 
 
 def new_figure(width=6.4, height=4.8):
@@ -39,20 +45,89 @@ def new_figure(width=6.4, height=4.8):
 
 
 def save_figure(figure, stem, formats=("png", "svg")):
-    """Save ``figure`` as ``stem.<format>`` for each format, atomically.
+    """Save ``figure`` as ``stem.<format>`` for each format: all of them or none.
 
-    Returns the list of paths written.
+    Every format is checked before anything is written, and the files are
+    moved into place together (:func:`orbits.atomic.file_set`): an error or
+    a stop leaves none of them.  The layout is computed once, at
+    :data:`DPI`, before the first file and kept for all: each file's bytes
+    depend on the figure and its format only, not on the other formats or
+    their order.
+
+    Parameters
+    ----------
+    figure : matplotlib.figure.Figure
+    stem : path
+        The files' path without the extension; its directory must exist.
+    formats : str or sequence of str
+        Any of ``png``, ``svg``, ``pdf`` (each written once).
+
+    Returns
+    -------
+    list of Path
+        The paths written, in the order of ``formats``.
+
+    Raises
+    ------
+    InputError
+        An unknown or no format, or a target that cannot be written.
     """
-    written = []
-    for fmt in dict.fromkeys(formats):  # each format once
+    formats = _formats(formats)
+    stem = Path(path_argument("stem", stem))
+    names = [f"{stem.name}.{fmt}" for fmt in formats]
+    with file_set(stem.parent, names) as stage, _fixed_layout(figure):
+        for name, fmt in zip(names, formats):
+            try:
+                with mpl.rc_context(_RC):
+                    figure.savefig(stage / name, format=fmt, dpi=DPI, metadata=_METADATA[fmt])
+            except OSError as error:  # disk full, quota, I/O error: name the target
+                raise InputError(
+                    f"cannot write {stem.parent / name}: {error.strerror or error}"
+                ) from None
+    return [stem.parent / name for name in names]
+
+
+def _formats(formats):
+    """``formats`` as a tuple of known formats, each once (a str is one format)."""
+    if isinstance(formats, str):
+        formats = (formats,)
+    try:
+        formats = tuple(dict.fromkeys(formats))
+    except TypeError:
+        raise InputError(
+            f"formats must be a sequence of {', '.join(FORMATS)}, got {formats!r}"
+        ) from None
+    for fmt in formats:
         if fmt not in FORMATS:
             raise InputError(f"unknown figure format {fmt!r}; use {', '.join(FORMATS)}")
-        path = Path(f"{stem}.{fmt}")
-        with mpl.rc_context({"svg.hashsalt": "orbits", "svg.fonttype": "path"}):
-            with atomic_path(path) as temporary:
-                figure.savefig(temporary, format=fmt, dpi=DPI, metadata=_METADATA[fmt])
-        written.append(path)
-    return written
+    if not formats:
+        raise InputError(f"formats is empty; give at least one of {', '.join(FORMATS)}")
+    return formats
+
+
+@contextmanager
+def _fixed_layout(figure):
+    """Run the figure's layout once at :data:`DPI`, and keep it while the files are saved.
+
+    A layout engine moves the axes a little on every draw (constrained
+    layout: by ~0.4 pt between successive saves), so that without this a
+    file's bytes depended on the formats saved before it.
+    """
+    engine = figure.get_layout_engine()
+    if engine is None:
+        yield
+        return
+    dpi = figure.dpi
+    figure.set_dpi(DPI)
+    try:
+        figure.draw_without_rendering()
+    finally:
+        figure.set_dpi(dpi)
+    figure.set_layout_engine("none")
+    try:
+        yield
+    finally:
+        figure.set_layout_engine(engine)
 
 
 def _stem(row):
@@ -61,8 +136,15 @@ def _stem(row):
 
 
 def figure_files(stems, formats=("png", "svg")):
-    """``stem.format`` for each stem, in every format (each format once)."""
-    return [f"{stem}.{fmt}" for stem in stems for fmt in dict.fromkeys(formats)]
+    """``stem.format`` for each stem, in every format (each format once).
+
+    Raises
+    ------
+    InputError
+        An unknown or no format.
+    """
+    formats = _formats(formats)
+    return [f"{stem}.{fmt}" for stem in stems for fmt in formats]
 
 
 def set_file_names(orbits, formats=("png", "svg")):
@@ -117,7 +199,7 @@ def herpolhode_set(
     if orbits is None:
         orbits = closed_orbits(body, n_max=n_max, q_max=q_max)
     orbits = _paper_order(orbits)
-    check_figure_set(len(orbits), formats)
+    check_figure_set(len(orbits), formats, turns=drawn_turns(orbits))
     name = body.name or "body"
     files = set_file_names(orbits, formats)
     # all or none: a stop or an error leaves the directory as it was
@@ -238,32 +320,59 @@ def _sheet_columns(count):
     return max(1, min(8, math.ceil(math.sqrt(count * 1.5))))
 
 
+def _sheet_size(count, columns):
+    """Width and height (in) of a contact sheet of ``count`` panels in ``columns``."""
+    return 2.0 * columns, 2.2 * math.ceil(count / columns) + 1.0
+
+
 # measured here (2-core VM, 2026-11-24): herpolhode_set of fig6 with n_max = 6
 # (10 orbits and the contact sheet) took 1.2 s a figure and format
 _SECONDS_PER_FIGURE = 1.2
+# and for long curves (2-core VM, 2026-11-25), per sample of a drawn curve:
+# computing it and drawing it in its figure and on the contact sheet, a
+# format; and held by the contact sheet, which keeps every curve
+_SECONDS_PER_POINT = 2e-6
+_BYTES_PER_POINT = 120
 
 
-def figure_set_estimate(count, formats):
+def drawn_turns(orbits):
+    """The turns of each closed orbit's herpolhode as drawn.
+
+    ``|Delta alpha| / 2 pi`` a period, over the periods it closes in
+    (:func:`orbits.plotting.drawn_periods`), for each row of ``orbits``.
+    """
+    return [
+        abs(row.total_phase) / plotting.TWO_PI * plotting.drawn_periods(row)
+        for row in orbits.itertuples()
+    ]
+
+
+def figure_set_estimate(count, formats, turns=()):
     """Rough memory (bytes) and time (s) of :func:`herpolhode_set` for ``count`` orbits.
 
     The contact sheet dominates the memory: 2 x 2.2 in a panel, 8 columns,
-    at :data:`DPI`, a few buffers of 4 bytes a pixel.
+    at :data:`DPI`, a few buffers of 4 bytes a pixel, and every curve's
+    samples (:func:`orbits.plotting.herpolhode_points` of each of
+    ``turns``, from :func:`drawn_turns`).
     """
     columns = _sheet_columns(max(count, 1))
     rows = math.ceil(max(count, 1) / columns)
     pixels = (2.0 * columns * DPI) * ((2.2 * rows + 1.0) * DPI)
-    memory = 3 * 4.0 * pixels
-    seconds = (count + 1) * max(1, len(formats)) * _SECONDS_PER_FIGURE
+    points = float(sum(plotting.herpolhode_points(turn) for turn in turns))
+    memory = 3 * 4.0 * pixels + points * _BYTES_PER_POINT
+    formats = max(1, len(formats))
+    seconds = (count + 1) * formats * _SECONDS_PER_FIGURE + points * formats * _SECONDS_PER_POINT
     return memory, seconds
 
 
-def check_figure_set(count, formats, advice="lower n_max or q_max"):
+def check_figure_set(count, formats, advice="lower n_max or q_max", turns=()):
     """Refuse a figure set that matplotlib cannot draw or that would take a day.
 
     The contact sheet of every orbit must stay below Agg's 65535 pixels a
-    side (at most 1584 orbits at :data:`DPI` = 150); memory and time as
-    :func:`figure_set_estimate`.  ``advice`` ends the message (the command
-    line names its options).
+    side (at most 1584 orbits at :data:`DPI` = 150); no curve may make more
+    than :data:`orbits.plotting.MAX_TURNS` turns (``turns``, from
+    :func:`drawn_turns`); memory and time as :func:`figure_set_estimate`.
+    ``advice`` ends the message (the command line names its options).
 
     Returns
     -------
@@ -273,6 +382,7 @@ def check_figure_set(count, formats, advice="lower n_max or q_max"):
     ------
     InputError
     """
+    formats = _formats(formats)
     columns = _sheet_columns(max(count, 1))
     height = (2.2 * math.ceil(max(count, 1) / columns) + 1.0) * DPI
     most = int((AGG_MAX_PIXELS / DPI - 1.0) / 2.2) * 8
@@ -282,7 +392,9 @@ def check_figure_set(count, formats, advice="lower n_max or q_max"):
             f"more than the {AGG_MAX_PIXELS} matplotlib can draw (at most {most} orbits); "
             f"{advice}"
         )
-    memory, seconds = figure_set_estimate(count, formats)
+    if len(turns):
+        plotting.check_turns(max(turns), "the longest closed herpolhode", advice)
+    memory, seconds = figure_set_estimate(count, formats, turns)
     if memory > memory_budget():
         raise InputError(
             f"the figures of {count} closed orbits would need {format_bytes(memory)} of "
@@ -302,14 +414,38 @@ def contact_sheet(body, orbits, columns=None):
     over the time in which it closes, with start, direction, L axis and
     its r_min, r_max circles; a title with theta, or theta - theta_c in
     scientific notation when theta rounds to theta_c.
+
+    Parameters
+    ----------
+    body : Body
+    orbits : DataFrame
+        Catalog rows (:func:`orbits.closed_orbits`), at least one.
+    columns : int, optional
+        Panels a row (default: up to 8, about 1.2 sqrt(count)); the sheet
+        must stay within the 65535 pixels a side Agg draws at :data:`DPI`.
+
+    Raises
+    ------
+    InputError
+        No orbit, ``columns`` not a positive integer, or a sheet too large.
     """
     orbits = _paper_order(orbits)
     count = len(orbits)
     if count == 0:
         raise InputError("the contact sheet needs at least one closed orbit")
-    columns = columns or _sheet_columns(count)
+    if columns is None:
+        columns = _sheet_columns(count)
+    columns = integer("columns", columns, minimum=1)
+    width, height = _sheet_size(count, columns)
+    if max(width, height) * DPI > AGG_MAX_PIXELS:
+        raise InputError(
+            f"a contact sheet of {count} orbits in columns={columns} would be "
+            f"{width * DPI:.0f} x {height * DPI:.0f} pixels, more than the {AGG_MAX_PIXELS} "
+            "a side matplotlib can draw; give fewer columns"
+            + ("" if height * DPI <= AGG_MAX_PIXELS else " or fewer orbits")
+        )
     rows = math.ceil(count / columns)
-    figure = new_figure(2.0 * columns, 2.2 * rows + 1.0)
+    figure = new_figure(width, height)
     grid = figure.subplots(rows, columns, squeeze=False, sharex=True, sharey=True)
     radii = [plotting.herpolhode_radii(body, dtheta=row.dtheta) for row in orbits.itertuples()]
     limit = _common_limit(radii)
@@ -554,9 +690,18 @@ def paper_figures(out_dir, *, formats=("png", "svg"), survey_grid=None, progress
     """Write the paper's figures as ``fig1`` ... ``fig6`` (or those in ``names``).
 
     ``survey_grid``: optional (i1, i2, minimum) for Fig. 2 (from a survey).
+
+    Raises
+    ------
+    InputError
+        A name not in :data:`PAPER_FIGURES`, an unknown format, or a
+        directory that does not exist or cannot be written.
     """
     out_dir = _directory(out_dir)
-    names = list(names or PAPER_FIGURES)
+    names = [names] if isinstance(names, str) else list(names or PAPER_FIGURES)
+    unknown = [name for name in names if not isinstance(name, str) or name not in PAPER_FIGURES]
+    if unknown:
+        raise InputError(f"unknown paper figure {unknown[0]!r}; use {', '.join(PAPER_FIGURES)}")
     files = figure_files(names, formats)
     with file_set(out_dir, files) as stage:  # all or none
         for name in names:

@@ -17,9 +17,12 @@ import math
 
 import numpy as np
 
+from ._args import integer, real_scalar
 from .bodies import REGION_BOX, Body, region_moments
 from .cells import literal_text
-from .motion import Motion, as_body, herpolhode, polhode
+from .errors import InputError
+from .limits import check_resolution
+from .motion import MAX_POINTS, Motion, as_body, herpolhode, polhode
 from .phases import critical_angle, phase_limits, phases, total_phase
 
 TWO_PI = 2.0 * np.pi
@@ -32,9 +35,46 @@ STYLES = {
 }
 
 
+# samples a turn of a drawn herpolhode: 600, fewer beyond CURVE_POINTS samples
+# (3333 turns), never fewer than 100: a turn's chord then stays within
+# 1 - cos(pi/100) = 5e-4 of its radius (0.15 pixel at the 300 pixels of
+# r_max in a single figure at 150 dpi), and the turns of so long a curve lie
+# far closer together than a pixel
+SAMPLES_PER_TURN = 600
+MIN_SAMPLES_PER_TURN = 100
+CURVE_POINTS = 2_000_000
+# the most turns a drawn herpolhode may make: MAX_POINTS samples at the least
+MAX_TURNS = (MAX_POINTS - 1) // MIN_SAMPLES_PER_TURN
+
+
 def herpolhode_points(n, q=1):
-    """Samples enough to draw a herpolhode of ``n`` turns over ``q`` periods."""
-    return int(max(2001, 600 * n * q + 1))
+    """Samples enough to draw a herpolhode of ``n`` turns over ``q`` periods.
+
+    :data:`SAMPLES_PER_TURN` a turn up to :data:`CURVE_POINTS` samples;
+    a longer curve keeps that many, but never fewer than
+    :data:`MIN_SAMPLES_PER_TURN` a turn; at least 2001.  It may exceed
+    :data:`orbits.motion.MAX_POINTS` (more than :data:`MAX_TURNS` turns):
+    callers refuse such a curve (:func:`check_turns`).
+    """
+    turns = n * q
+    wanted = min(SAMPLES_PER_TURN * turns, max(CURVE_POINTS, MIN_SAMPLES_PER_TURN * turns))
+    return int(max(2001, wanted + 1))
+
+
+def check_turns(turns, what="this herpolhode", advice="lower periods"):
+    """Refuse a herpolhode of more than :data:`MAX_TURNS` turns (samples beyond MAX_POINTS).
+
+    Raises
+    ------
+    InputError
+        Naming ``what`` and ending with ``advice`` (the caller's option).
+    """
+    # herpolhode_points(turns) <= MAX_POINTS; also refuses NaN and inf
+    if not MIN_SAMPLES_PER_TURN * turns + 1 <= MAX_POINTS:
+        raise InputError(
+            f"{what} makes about {turns:.4g} turns, more than the {MAX_TURNS} a drawn "
+            f"curve may have ({MAX_POINTS} samples, {MIN_SAMPLES_PER_TURN} a turn); {advice}"
+        )
 
 
 def plot_herpolhode(
@@ -47,8 +87,8 @@ def plot_herpolhode(
     ax : matplotlib.axes.Axes
     body, theta, dtheta, phi : as :func:`orbits.herpolhode`
         Or ``body`` a :class:`orbits.Motion` (no angles): its own spin.
-    periods : int
-        Periods to draw (a p/q orbit closes after q).
+    periods : float
+        Periods to draw, positive (a p/q orbit closes after q).
     points : int, optional
         Samples; by default enough for the curve's turns.
     label_axes : bool
@@ -60,14 +100,34 @@ def plot_herpolhode(
     -------
     matplotlib.lines.Line2D
         Its data are the curve: ``line.get_xydata()``.
+
+    Raises
+    ------
+    InputError
+        ``periods`` not positive and finite, ``points`` not an integer from
+        2 to :data:`orbits.motion.MAX_POINTS`, or (``points`` omitted) a
+        curve of more than :data:`MAX_TURNS` turns.
     """
+    periods = real_scalar("periods", periods)
+    if not (math.isfinite(periods) and periods > 0):
+        raise InputError(f"periods must be positive and finite, got {periods}")
+    if points is not None:
+        points = integer("points", points, minimum=2, maximum=MAX_POINTS)
     if isinstance(body, Motion):
         if points is None:
-            points = herpolhode_points(abs(body.total_phase()) / TWO_PI, periods)
-        omega = body.omega_space(np.linspace(0.0, periods * body.period, int(points)))
+            turns = abs(body.total_phase()) / TWO_PI * periods
+            check_turns(turns, f"the herpolhode over periods={periods:g}", "lower periods")
+            points = herpolhode_points(turns)
+        end = periods * body.period
+        if not math.isfinite(end):
+            raise InputError(f"periods = {periods!r} periods overflow the time axis")
+        omega = body.omega_space(np.linspace(0.0, end, points))
     else:
         if points is None:
             turns = abs(float(total_phase(body, theta, dtheta=dtheta, phi=phi))) / TWO_PI
+            check_turns(
+                turns * periods, f"the herpolhode over periods={periods:g}", "lower periods"
+            )
             points = herpolhode_points(turns, periods)
         _, omega = herpolhode(body, theta, dtheta=dtheta, phi=phi, periods=periods, points=points)
     style = dict(color="tab:purple", linewidth=0.8)
@@ -232,12 +292,18 @@ def plot_phase_curves(ax, body, *, points=1500, period_axis=True):
     a gray vertical line.  Each curve is broken (a NaN point) at theta_c,
     where the geometric phase jumps: no segment joins the two branches.
 
+    Parameters
+    ----------
+    points : int
+        Samples of theta, from 4 to :data:`MAX_THETA_POINTS`.
+
     Returns
     -------
     dict
         The lines by name (``total``, ``dynamic``, ``geometric``,
         ``period``) and the twin axes under ``period_axes``.
     """
+    points = _theta_points(points)
     body = as_body(body)
     theta_c = critical_angle(body)
     grid = _theta_grid(theta_c, points)
@@ -275,6 +341,17 @@ def plot_phase_curves(ax, body, *, points=1500, period_axis=True):
     return lines
 
 
+# the most samples of theta in a phase plot: the grid clusters at theta_c as
+# s^3 (s = 2/points at the nearest sample), which must stay clear of its
+# rounding error (4 ulp, ~1e-15 relative): s^3 = 8e-15 at 10^5 samples
+MAX_THETA_POINTS = 100_000
+
+
+def _theta_points(points):
+    """``points`` of a phase plot: an integer from 4 to :data:`MAX_THETA_POINTS`."""
+    return integer("points", points, minimum=4, maximum=MAX_THETA_POINTS)
+
+
 def _theta_grid(theta_c, points):
     """Theta over [0, pi/2], clustered (cubically) at theta_c, never on it."""
     s = np.linspace(0.0, 1.0, points // 2)[1:]
@@ -282,6 +359,10 @@ def _theta_grid(theta_c, points):
     right = theta_c + (0.5 * np.pi - theta_c) * s**3
     grid = np.unique(np.concatenate([left, right]))
     return grid[grid != theta_c]
+
+
+# the most levels 2 pi n drawn (a line and a named tick each: ~30 s for 1000)
+MAX_LEVELS = 1000
 
 
 def plot_total_phase(ax, body, orbits=None, *, n_levels=None, points=2000, legend=True):
@@ -292,7 +373,10 @@ def plot_total_phase(ax, body, orbits=None, *, n_levels=None, points=2000, legen
     orbits : DataFrame, optional
         Catalog rows (:func:`orbits.closed_orbits`) to mark as dots.
     n_levels : int, optional
-        Draw the levels 2 pi n for n up to this (default: those in view).
+        Draw the levels 2 pi n for n up to this, at most
+        :data:`MAX_LEVELS` (default: those in view).
+    points : int
+        Samples of theta, from 4 to :data:`MAX_THETA_POINTS`.
 
     Returns
     -------
@@ -301,6 +385,9 @@ def plot_total_phase(ax, body, orbits=None, *, n_levels=None, points=2000, legen
         (PathCollection or None), ``level_axis`` (the right-hand axis that
         names the levels).
     """
+    points = _theta_points(points)
+    if n_levels is not None:
+        n_levels = integer("n_levels", n_levels, minimum=1, maximum=MAX_LEVELS)
     body = as_body(body)
     theta_c = critical_angle(body)
     theta = _theta_grid(theta_c, points)
@@ -414,6 +501,9 @@ def plot_body_space(ax, grid=None, *, resolution=300, levels=None, colorbar=True
     ----------
     grid : tuple (i1, i2, minimum), optional
         From :func:`body_space_grid` or a survey; computed if omitted.
+    resolution : int
+        Grid points a side when ``grid`` is omitted, from 2 up to what
+        :func:`orbits.limits.check_resolution` allows.
     levels : array_like, optional
         Contour levels of the minimum total phase (rad).
 
@@ -423,7 +513,9 @@ def plot_body_space(ax, grid=None, *, resolution=300, levels=None, colorbar=True
         ``contours`` (ContourSet), ``boundaries`` (dict of Line2D), ``kink``
         (Line2D), ``filled`` (the filled ContourSet), ``colorbar``.
     """
-    i1, i2, minimum = grid if grid is not None else body_space_grid(resolution)
+    if grid is None:
+        grid = body_space_grid(check_resolution(resolution))
+    i1, i2, minimum = grid
     levels = DEFAULT_CONTOURS if levels is None else np.asarray(levels)
     ceiling = TWO_PI * 8.0
     filled = ax.contourf(
@@ -511,6 +603,11 @@ def plot_t_handle(ax3d, l1=8.0, l2=4.0, w=1.0, *, shrink=0.25, bars="solid", ell
 
     Parameters
     ----------
+    l1, l2, w : float
+        Lengths of the cross piece and the shaft, and the section's side
+        (positive, as :meth:`Body.t_handle`).
+    shrink : float
+        Scale of the drawn ellipsoid, positive.
     bars : {"solid", "outline"}
         Shaded bars, or their edges only (to show the ellipsoid inside).
     ellipsoid : bool
@@ -525,6 +622,14 @@ def plot_t_handle(ax3d, l1=8.0, l2=4.0, w=1.0, *, shrink=0.25, bars="solid", ell
     """
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
+    if bars not in ("solid", "outline"):
+        raise InputError(f"bars must be 'solid' or 'outline', got {bars!r}")
+    shrink = real_scalar("shrink", shrink)
+    if not (math.isfinite(shrink) and shrink > 0):
+        raise InputError(f"shrink must be positive and finite, got {shrink}")
+    # checks l1, l2, w (positive, finite) before they are used
+    semi = Body.t_handle(l1, l2, w).equivalent_ellipsoid()
+    l1, l2, w = (real_scalar(name, value) for name, value in (("l1", l1), ("l2", l2), ("w", w)))
     total = l1 + l2
     com_y = (l2 / total) * 0.5 * (w + l2)
     boxes = [
@@ -541,7 +646,6 @@ def plot_t_handle(ax3d, l1=8.0, l2=4.0, w=1.0, *, shrink=0.25, bars="solid", ell
             faces, facecolor="tab:green", edgecolor="darkgreen", alpha=0.35, linewidths=0.8
         )
     ax3d.add_collection3d(drawn)
-    semi = Body.t_handle(l1, l2, w).equivalent_ellipsoid()
     surface = None
     if ellipsoid:
         x, y, z = _ellipsoid_surface(np.array(semi) * shrink, resolution=60)
@@ -626,6 +730,8 @@ def plot_omega_components(ax, body, theta=None, *, dtheta=None, phi=0.0, periods
     """The body-frame components of omega against time, period marked (Fig. 3b).
 
     ``body`` may be a :class:`orbits.Motion` (no angles): its spin as given.
+    ``periods`` (positive) periods drawn with ``points`` samples (2 to
+    :data:`orbits.motion.MAX_POINTS`).
 
     Returns
     -------
@@ -634,11 +740,18 @@ def plot_omega_components(ax, body, theta=None, *, dtheta=None, phi=0.0, periods
         blue, as the paper), ``period`` (the gray vertical line's x) and
         ``period_axis`` (the top axis whose one tick names T).
     """
+    periods = real_scalar("periods", periods)
+    if not (math.isfinite(periods) and periods > 0):
+        raise InputError(f"periods must be positive and finite, got {periods}")
+    points = integer("points", points, minimum=2, maximum=MAX_POINTS)
     if isinstance(body, Motion):
         motion = body
     else:
         motion = Motion.from_spin(as_body(body), theta, dtheta=dtheta, phi=phi)
-    t = np.linspace(0.0, periods * motion.period, points)
+    end = periods * motion.period
+    if not math.isfinite(end):
+        raise InputError(f"periods = {periods!r} periods overflow the time axis")
+    t = np.linspace(0.0, end, points)
     omega = motion.omega(t)
     styles = (
         dict(color="tab:red", linestyle="-"),
@@ -667,6 +780,10 @@ def plot_omega_components(ax, body, theta=None, *, dtheta=None, phi=0.0, periods
     return {"lines": lines, "period": motion.period, "period_axis": marker}
 
 
+# the most polhodes in a foliation (each drawn as up to four lines of 600 samples)
+MAX_POLHODES = 1000
+
+
 def plot_polhode_foliation(
     ax3d, body, *, count=28, energy=0.5, cmap="twilight", elev=22.0, azim=-62.0
 ):
@@ -679,6 +796,15 @@ def plot_polhode_foliation(
     pointing away from the viewer at ``elev``, ``azim``) are drawn thin
     and faint.  The 3-D box is replaced by the three principal axes.
 
+    Parameters
+    ----------
+    count : int
+        Spins drawn, half on each branch: 2 to :data:`MAX_POLHODES`.
+    energy : float
+        The energy ``E`` all polhodes are scaled to (J), positive.
+    cmap : str
+        A matplotlib colormap's name.
+
     Returns
     -------
     dict
@@ -688,6 +814,14 @@ def plot_polhode_foliation(
     """
     import matplotlib as mpl
 
+    count = integer("count", count, minimum=2, maximum=MAX_POLHODES)
+    energy = real_scalar("energy", energy)
+    if not (math.isfinite(energy) and energy > 0):
+        raise InputError(f"energy must be positive and finite, got {energy}")
+    try:
+        colormap = mpl.colormaps[cmap]
+    except (KeyError, TypeError):
+        raise InputError(f"cmap {cmap!r} is not the name of a matplotlib colormap") from None
     body = as_body(body)
     unit = body.normalized_moments
     theta_c = critical_angle(unit)
@@ -698,7 +832,6 @@ def plot_polhode_foliation(
         ]
     )
     table = phases(unit, thetas)
-    colormap = mpl.colormaps[cmap]
     norm = mpl.colors.Normalize(0.0, TWO_PI)
     semi = np.sqrt(2.0 * energy * unit)
     ax3d.view_init(elev=elev, azim=azim)
@@ -733,7 +866,7 @@ def plot_polhode_foliation(
                     zorder=3 if alpha == 1.0 else 1,
                 )
                 drawn.append((line, phase))
-    for k, name in enumerate(("$M_1$", "$M_2$", "$M_3$")):
+    for k, name in enumerate(("$M_1$ (J s)", "$M_2$ (J s)", "$M_3$ (J s)")):
         tip = np.zeros(3)
         tip[k] = 1.3 * semi[k]
         ax3d.plot(*np.stack([-tip, tip]).T, color="0.3", linewidth=0.7)

@@ -74,7 +74,10 @@ class TestPhase:
                 ["not allowed with"],
             ),
             (["phase", "--preset", "fig6", "--dtheta", "0"], ["separatrix"]),
-            (["phase", "--t-handle", "8", "-4", "1", "--theta", "1"], ["positive length"]),
+            (
+                ["phase", "--t-handle", "8", "-4", "1", "--theta", "1"],
+                ["T-handle l2 must be a finite positive number"],
+            ),
             (["bench", "--only", "nope"], ["unknown benchmark"]),
             (["nonsense"], ["invalid choice"]),
         ],

@@ -318,3 +318,175 @@ def test_a_figure_set_is_written_whole_or_not_at_all(tmp_path, monkeypatch, caps
         + [f"herpolhode_{b}_n00{n}.png" for b in ("SAM", "LAM") for n in (2, 3)]
     )
     assert (out / "herpolhode_SAM_n002.png").read_bytes()[:4] == b"\x89PNG"
+
+
+# ------------------------------------------------------------------ long curves
+NEAR_SPHERE = Body((1.0, 1.00001, 1.00002))
+
+
+def test_a_set_whose_curves_are_too_long_is_refused_before_anything(tmp_path, capsys):
+    """--n-max 100000 on a body that closes there: 10^5 turns, more than a
+    curve may have; refused before the search's estimate and the directory."""
+    out = tmp_path / "made" / "here"
+    argv = ["figures", "--moments", "1", "1.00001", "1.00002", "--n-max", "100000"]
+    assert main(argv + ["--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        "orbits: error: the closed herpolhode at n = 100000 makes about 1e+05 turns, more "
+        "than the 99999 a drawn curve may have (10000000 samples, 100 a turn); lower --n-max"
+    ]
+    assert list(tmp_path.iterdir()) == []
+    # p/q orbits are checked with the catalog, naming both options
+    with pytest.raises(orbits.errors.InputError, match="99999 a drawn curve.*; lower --n-max or"):
+        figures.check_figure_set(3, ["png"], "lower --n-max or --q-max", turns=[2.0, 1.5e5])
+
+
+@pytest.mark.slow
+def test_a_curve_that_fills_its_ring_is_saved(tmp_path):
+    """35,000 turns (3.5 * 10^6 samples) on a 150-dpi figure: Agg refused the
+    path whole ("Exceeded cell block limit"); it is rasterized in pieces."""
+    figure = figures.new_figure(5.2, 5.9)
+    ax = figure.add_subplot()
+    line = orbits.plotting.plot_herpolhode(ax, NEAR_SPHERE, 0.01, periods=0.5)
+    assert len(line.get_xydata()) > 3_000_000
+    (path,) = figures.save_figure(figure, tmp_path / "ring", "png")
+    image = mpimg.imread(path)[..., :3]
+    # the ring is drawn solid in the curve's colour between r_min and r_max
+    colour = np.array(matplotlib.colors.to_rgb("tab:purple"))
+    close = np.abs(image - colour).max(axis=-1) < 0.05
+    assert close.mean() > 0.1
+
+
+# ------------------------------------------------------------------ paths, errors, stops
+@pytest.mark.parametrize("option", ["--out", "--survey"])
+def test_an_empty_path_is_refused(tmp_path, capsys, monkeypatch, option):
+    """--out "" wrote the set into the current directory."""
+    monkeypatch.chdir(tmp_path)
+    if option == "--out":
+        argv = ["figures", "--preset", "fig6", "--n-max", "2", "--out", ""]
+    else:
+        argv = ["figures", "--survey", "", "--out", "d"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"orbits: error: {option} must be a non-empty path, got '' (str)"]
+    assert list(tmp_path.iterdir()) == []
+
+
+def _fault(kind):
+    import errno
+    import signal
+
+    from orbits.atomic import Terminated
+
+    if kind == "error":
+        return orbits.errors.InputError("a fault")
+    if kind == "full":
+        return OSError(errno.ENOSPC, "No space left on device")
+    return KeyboardInterrupt() if kind == "interrupt" else Terminated(signal.SIGTERM)
+
+
+@pytest.mark.parametrize(
+    "kind, code, message",
+    [
+        ("error", 2, "orbits: error: a fault"),
+        ("full", 2, None),
+        ("interrupt", 130, "orbits: interrupted; no partial output was written"),
+        ("terminate", 143, "orbits: stopped by SIGTERM; no partial output was written"),
+    ],
+)
+def test_the_directories_a_run_made_are_removed_after_an_error_or_a_stop(
+    tmp_path, monkeypatch, capsys, kind, code, message
+):
+    """nd/sub/dir was left behind, empty, after a stop, a full disk or an error;
+    a full disk named the private staging directory."""
+    from matplotlib.figure import Figure
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "kept").mkdir()
+
+    def broken(*args, **kwargs):
+        raise _fault(kind)
+
+    monkeypatch.setattr(Figure, "savefig", broken)
+    argv = ["figures", "--preset", "fig6", "--n-max", "3", "--formats", "png"]
+    assert main(argv + ["--out", "kept/nd/sub/dir"]) == code
+    err = capsys.readouterr().err.strip().splitlines()
+    if kind == "full":
+        # the first figure of the set, in the paper's order
+        message = (
+            "orbits: error: cannot write kept/nd/sub/dir/herpolhode_SAM_n002.png: "
+            "No space left on device"
+        )
+    assert err[-1] == message
+    assert [p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*")] == ["kept"]
+
+
+def test_a_read_only_directory_is_named(tmp_path, monkeypatch, capsys):
+    """The message named DIR/probe, a file the user never gave."""
+    import os
+
+    target = tmp_path / "ro"
+    target.mkdir()
+    access = os.access
+    monkeypatch.setattr(os, "access", lambda path, mode: access(path, mode) and path != target)
+    argv = ["figures", "--preset", "fig6", "--n-max", "2", "--out", str(target)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        f"orbits: error: cannot write into output directory {target}: it is not writable"
+    ]
+    assert list(target.iterdir()) == []
+
+
+def test_save_figure_writes_every_format_or_none(tmp_path, monkeypatch):
+    figure = figures.figure5()
+    with pytest.raises(orbits.errors.InputError, match="unknown figure format 'jpg'"):
+        figures.save_figure(figure, tmp_path / "f", ("png", "jpg"))
+    with pytest.raises(orbits.errors.InputError, match="formats is empty"):
+        figures.save_figure(figure, tmp_path / "f", ())
+    assert list(tmp_path.iterdir()) == []
+    # a failure on the second format leaves no first one either
+    original = type(figure).savefig
+
+    def no_svg(self, path, **kwargs):
+        if kwargs["format"] == "svg":
+            raise OSError(28, "No space left on device")
+        return original(self, path, **kwargs)
+
+    monkeypatch.setattr(type(figure), "savefig", no_svg)
+    with pytest.raises(orbits.errors.InputError) as caught:
+        figures.save_figure(figure, tmp_path / "f", ("png", "svg"))
+    assert str(caught.value) == f"cannot write {tmp_path / 'f.svg'}: No space left on device"
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_each_file_is_the_same_whatever_the_other_formats(tmp_path):
+    """svg pdf png and pdf svg png gave different SVG and PDF bytes: the
+    constrained layout moved ~0.4 pt between saves of one figure."""
+    figure = figures.figure5()
+    engine = figure.get_layout_engine()
+    first = figures.save_figure(figure, tmp_path / "a", ("svg", "pdf", "png"))
+    second = figures.save_figure(figures.figure5(), tmp_path / "b", ("pdf", "svg", "png"))
+    alone = [
+        figures.save_figure(figures.figure5(), tmp_path / f"c{k}", fmt)[0]
+        for k, fmt in enumerate(("png", "svg", "pdf"))
+    ]
+    by_format = {path.suffix: path.read_bytes() for path in first}
+    for path in second + alone:
+        assert path.read_bytes() == by_format[path.suffix], path.name
+    # and the figure keeps its layout engine
+    assert figure.get_layout_engine() is engine
+
+
+def test_unknown_paper_figures_and_bad_columns_are_refused(tmp_path):
+    with pytest.raises(orbits.errors.InputError, match="unknown paper figure 'fig7'; use fig1"):
+        figures.paper_figures(tmp_path, names=["fig7"])
+    catalog = orbits.closed_orbits(FIG6, n_max=3)
+    for columns, message in (
+        (-1, "columns must be an integer >= 1, got -1"),
+        (0, "columns must be an integer >= 1, got 0"),
+        (10**6, "a contact sheet of 4 orbits in columns=1000000 would be 300000000 x 480"),
+    ):
+        with pytest.raises(orbits.errors.InputError, match=message):
+            figures.contact_sheet(FIG6, catalog, columns=columns)
+    assert list(tmp_path.iterdir()) == []

@@ -7,6 +7,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import time
 
 import pandas as pd
 import pytest
@@ -477,3 +478,47 @@ def test_name_lists_are_hashed_unambiguously(tmp_path):
     one.run()
     with pytest.raises(orbits.InputError, match="different parameters.*names_sha256"):
         two.run()
+
+
+def test_a_stopped_figure_set_leaves_no_directory_it_made(tmp_path):
+    """`timeout -s TERM 3 orbits figures ... --out nd/sub/dir` left the empty
+    chain nd/sub/dir behind."""
+    out = tmp_path / "nd" / "sub" / "dir"
+    argv = [sys.executable, "-m", "orbits", "figures", "--preset", "fig6", "--n-max", "10"]
+    argv += ["--formats", "png", "--out", str(out)]
+    proc = subprocess.Popen(argv, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    # the directory is made once every input is checked: the set is being drawn
+    while proc.poll() is None and not out.is_dir() and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert proc.poll() is None, "the run ended before it could be stopped"
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143
+    assert err.strip().splitlines()[-1] == (
+        "orbits: stopped by SIGTERM; no partial output was written"
+    )
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_only_the_directories_made_are_removed_and_only_while_empty(tmp_path):
+    from orbits.atomic import make_directories, remove_directories
+
+    (tmp_path / "a").mkdir()
+    made = make_directories(tmp_path / "a" / "b" / ".." / "c" / "d")
+    real = tmp_path.resolve() / "a"
+    assert made == [real / "b", real / "c", real / "c" / "d"]
+    assert (tmp_path / "a" / "c" / "d").is_dir()
+    (tmp_path / "a" / "c" / "d" / "kept.txt").write_text("someone's file")
+    remove_directories(made)
+    # b was empty; d holds a file, and c holds d
+    assert sorted(p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*")) == [
+        "a",
+        "a/c",
+        "a/c/d",
+        "a/c/d/kept.txt",
+    ]
+    (tmp_path / "a" / "c" / "d" / "kept.txt").unlink()
+    remove_directories(made)
+    assert [p.name for p in tmp_path.iterdir()] == ["a"]
+    assert list((tmp_path / "a").iterdir()) == []

@@ -281,3 +281,144 @@ def test_closed_herpolhode_marks():
         later = np.flatnonzero((xy == head).all(axis=1))
         assert later.size and 0 < later[0] < len(xy) // 4
         assert ax.get_xlim() == (-0.6, 0.6) and ax.get_ylim() == (-0.6, 0.6)
+
+
+# ------------------------------------------------------------------ long curves, bad input
+NEAR_SPHERE = Body((1.0, 1.0001, 1.0002))
+
+
+def test_a_curve_of_many_turns_keeps_at_least_100_samples_a_turn():
+    """600 samples a turn stopped at 16,666 turns (10^7 samples, a figure set
+    of such a body failed half-way); a longer curve now keeps 2*10^6 samples,
+    never fewer than 100 a turn, up to MAX_TURNS."""
+    assert plotting.herpolhode_points(1) == 2001
+    assert plotting.herpolhode_points(3000) == 1_800_001
+    assert plotting.herpolhode_points(10_000) == 2_000_001
+    assert plotting.herpolhode_points(50_000) == 5_000_001
+    assert plotting.herpolhode_points(plotting.MAX_TURNS) <= orbits.motion.MAX_POINTS
+    turns = 3 * float(orbits.total_phase(NEAR_SPHERE, 0.01)) / (2 * np.pi)
+    assert 16_667 < turns < 50_000
+    ax = new_figure().add_subplot()
+    xy = plotting.plot_herpolhode(ax, NEAR_SPHERE, 0.01, periods=3).get_xydata()
+    assert len(xy) == plotting.herpolhode_points(turns) == round(100 * turns) + 1
+    # the curve drawn winds as many times about the L axis (one more a
+    # period: the polhode's own turn), each step a hundredth of a turn
+    angle = np.unwrap(np.arctan2(xy[:, 1], xy[:, 0]))
+    assert (angle[-1] - angle[0]) / (2 * np.pi) == pytest.approx(turns + 3, abs=0.01)
+    assert np.abs(np.diff(angle)).max() <= 1.01 * 2 * np.pi / 100
+    # and touches both of its bounding circles
+    radius = np.hypot(xy[:, 0], xy[:, 1])
+    r_min, r_max = plotting.herpolhode_radii(NEAR_SPHERE, 0.01)
+    assert radius.min() == pytest.approx(r_min, rel=1e-4)
+    assert radius.max() == pytest.approx(r_max, rel=1e-4)
+
+
+def test_too_many_turns_are_refused_naming_the_argument():
+    ax = new_figure().add_subplot()
+    motion = orbits.Motion.from_spin(T_HANDLE, 0.5)
+    for body, angle in ((motion, None), (T_HANDLE, 0.5)):
+        with pytest.raises(orbits.errors.InputError) as caught:
+            plotting.plot_herpolhode(ax, body, angle, periods=1e7)
+        assert str(caught.value).startswith("the herpolhode over periods=1e+07 makes about 1.")
+        assert "more than the 99999 a drawn curve may have" in str(caught.value)
+    assert not ax.get_lines()
+
+
+def _axes(projection=None):
+    return new_figure().add_subplot(projection=projection)
+
+
+@pytest.mark.parametrize(
+    "draw, message",
+    [
+        (
+            lambda: plotting.plot_phase_curves(_axes(), T_HANDLE, points=0),
+            "points must be an integer >= 4",
+        ),
+        (
+            lambda: plotting.plot_phase_curves(_axes(), T_HANDLE, points=1),
+            "points must be an integer >= 4",
+        ),
+        (
+            lambda: plotting.plot_phase_curves(_axes(), T_HANDLE, points=10**9),
+            "points must be an integer <= 100000",
+        ),
+        (
+            lambda: plotting.plot_total_phase(_axes(), T_HANDLE, n_levels=10**6),
+            "n_levels must be an integer <= 1000",
+        ),
+        (
+            lambda: plotting.plot_total_phase(_axes(), T_HANDLE, points=2),
+            "points must be an integer >= 4",
+        ),
+        (
+            lambda: plotting.plot_polhode_foliation(_axes("3d"), T_HANDLE, energy=-1),
+            "energy must be positive and finite, got -1.0",
+        ),
+        (
+            lambda: plotting.plot_polhode_foliation(_axes("3d"), T_HANDLE, cmap="nope"),
+            "cmap 'nope' is not the name of a matplotlib colormap",
+        ),
+        (
+            lambda: plotting.plot_omega_components(_axes(), T_HANDLE, 0.5, points=0),
+            "points must be an integer >= 2",
+        ),
+        (
+            lambda: plotting.plot_omega_components(_axes(), T_HANDLE, 0.5, points=10**9),
+            "points must be an integer <= 10000000",
+        ),
+        (
+            lambda: plotting.plot_omega_components(_axes(), T_HANDLE, 0.5, periods=0),
+            "periods must be positive and finite, got 0.0",
+        ),
+        (
+            lambda: plotting.plot_omega_components(_axes(), T_HANDLE, 0.5, periods=-2),
+            "periods must be positive and finite, got -2.0",
+        ),
+        (
+            lambda: plotting.plot_herpolhode(
+                _axes(), orbits.Motion.from_spin(T_HANDLE, 0.5), periods=0
+            ),
+            "periods must be positive and finite, got 0.0",
+        ),
+        (
+            lambda: plotting.plot_herpolhode(
+                _axes(), orbits.Motion.from_spin(T_HANDLE, 0.5), points=1
+            ),
+            "points must be an integer >= 2",
+        ),
+        (
+            lambda: plotting.plot_body_space(_axes(), resolution=0),
+            "resolution must be an integer >= 2",
+        ),
+        (
+            lambda: plotting.plot_body_space(_axes(), resolution=1),
+            "resolution must be an integer >= 2",
+        ),
+        (
+            lambda: plotting.plot_t_handle(_axes("3d"), 0, 0, 0),
+            "T-handle l1 must be a finite positive number, got 0",
+        ),
+        (
+            lambda: plotting.plot_t_handle(_axes("3d"), bars="wire"),
+            "bars must be 'solid' or 'outline', got 'wire'",
+        ),
+        (
+            lambda: plotting.plot_t_handle(_axes("3d"), shrink=0),
+            "shrink must be positive and finite, got 0.0",
+        ),
+    ],
+)
+def test_bad_arguments_are_refused_up_front(draw, message):
+    """Each was a NaN-limit ValueError, an IndexError, a TypeError, a
+    ZeroDivisionError, a MemoryError, minutes of work, or silently accepted."""
+    with pytest.raises(orbits.errors.OrbitsError) as caught:
+        draw()
+    assert str(caught.value).startswith(message), str(caught.value)
+
+
+def test_the_foliation_axes_state_their_unit():
+    ax = _axes("3d")
+    plotting.plot_polhode_foliation(ax, T_HANDLE)
+    names = sorted(text.get_text() for text in ax.texts)
+    assert names == ["$M_1$ (J s)", "$M_2$ (J s)", "$M_3$ (J s)"]

@@ -168,6 +168,16 @@ def test_resume_after_a_kill(tmp_path):
     assert not list(target.rglob("*.part"))
 
 
+def _cluster_survey(cluster, out):
+    """The command line of the grid-60 survey (n <= 8, chunks of 500) on ``cluster``."""
+    return ["survey", "--resolution", "60", "--n-max", "8", "--chunk", "500"] + [
+        "--scheduler",
+        cluster.scheduler_address,
+        "--out",
+        str(out),
+    ]
+
+
 def test_distributed_equals_local(tmp_path):
     distributed = pytest.importorskip("distributed")
     local = tmp_path / "local"
@@ -178,21 +188,7 @@ def test_distributed_equals_local(tmp_path):
         with distributed.Client(cluster) as client:
             Survey.grid(tmp_path / "client", 60, 8, chunk=500).run(scheduler=client)
         # and by address, as --scheduler tcp://host:port does
-        code = main(
-            [
-                "survey",
-                "--resolution",
-                "60",
-                "--n-max",
-                "8",
-                "--chunk",
-                "500",
-                "--scheduler",
-                cluster.scheduler_address,
-                "--out",
-                str(tmp_path / "address"),
-            ]
-        )
+        code = main(_cluster_survey(cluster, tmp_path / "address"))
         assert code == 0
         # workers whose orbits differ from this process's (another version or
         # edited sources) are refused, not mixed in under this version
@@ -237,21 +233,7 @@ def test_distributed_lost_chunk_is_one_error_and_resumes(tmp_path, capsys):
         ) as cluster:
             with distributed.Client(cluster) as client:
                 client.run(_patch_worker_chunk)
-            code = main(
-                [
-                    "survey",
-                    "--resolution",
-                    "60",
-                    "--n-max",
-                    "8",
-                    "--chunk",
-                    "500",
-                    "--scheduler",
-                    cluster.scheduler_address,
-                    "--out",
-                    str(tmp_path / "lost"),
-                ]
-            )
+            code = main(_cluster_survey(cluster, tmp_path / "lost"))
     err = capsys.readouterr().err
     assert code == 2
     lines = [line for line in err.splitlines() if line.startswith("orbits: error:")]

@@ -15,14 +15,18 @@ from .shared import (
 )
 
 
-def _output_directory(path, names=()):
+def _output_directory(path, names, made):
     """Create (or check) the output directory and every file to be written in it.
 
     Done before the long part, so that a bad target is one line at once.
+    The directories made for it are added to ``made`` as they are made
+    (:func:`orbits.atomic.make_directories`), for the caller to remove
+    after an error or a stop.
     """
+    import os
     from pathlib import Path
 
-    from ..atomic import check_targets, ensure_writable, refuse_link
+    from ..atomic import check_targets, make_directories, refuse_link
 
     if str(path) == "-":
         raise InputError(
@@ -34,24 +38,55 @@ def _output_directory(path, names=()):
     if directory.exists() and not directory.is_dir():
         raise InputError(f"output path {directory} exists and is not a directory")
     try:
-        directory.mkdir(parents=True, exist_ok=True)
+        make_directories(directory, made)
     except OSError as error:
         raise InputError(f"cannot create output directory {directory}: {error.strerror}") from None
     if not directory.is_dir():
         raise InputError(f"output path {directory} is not a directory")
-    ensure_writable(directory / "probe")
+    if not os.access(directory, os.W_OK | os.X_OK):
+        raise InputError(f"cannot write into output directory {directory}: it is not writable")
     check_targets(directory, names)
     return directory
 
 
+def _refuse_long_curves(body, n_max):
+    """Refuse, before the search, an ``n_max`` whose orbits no figure can draw.
+
+    The orbit at the largest even ``n <= n_max`` closes after one period:
+    its herpolhode makes ``n`` turns, drawn only up to
+    :data:`orbits.plotting.MAX_TURNS` (p/q orbits are checked after the
+    search, by :func:`orbits.figures.check_figure_set`).
+    """
+    from ..plotting import MAX_TURNS, check_turns
+    from ..search import minimum_phase
+
+    even = n_max // 2 * 2
+    if even > MAX_TURNS and minimum_phase(body)[0] <= math.tau * even:
+        check_turns(even, f"the closed herpolhode at n = {even}", "lower --n-max")
+
+
 def _cmd_figures(args):
+    from ..atomic import remove_directories
+
+    # the directories made for --out: after an error or a stop they are
+    # removed again (those still empty: a set is written whole or not at all)
+    made = []
+    try:
+        return _figures(args, made)
+    except BaseException:
+        remove_directories(made)
+        raise
+
+
+def _figures(args, made):
     import time
 
     from .. import figures
+    from .._args import path_argument
 
     selectors = [
         args.paper,
-        bool(args.survey),
+        args.survey is not None,
         any(getattr(args, name) is not None for name in BODY_SELECTORS),
     ]
     if sum(selectors) != 1:
@@ -60,15 +95,16 @@ def _cmd_figures(args):
             "--t-handle, --ellipsoid, --preset), --paper or --survey DIR"
         )
     # every input is checked before the output directory is created
+    path_argument("--out", args.out)
     start = time.perf_counter()
-    if args.paper or args.survey:
+    if args.paper or args.survey is not None:
         grid = None
-        if args.survey:
+        if args.survey is not None:
             from ..survey import survey_grid
 
-            grid = survey_grid(args.survey)
-        names = ["fig2"] if args.survey else list(figures.PAPER_FIGURES)
-        out = _output_directory(args.out, figures.figure_files(names, args.formats))
+            grid = survey_grid(path_argument("--survey", args.survey))
+        names = ["fig2"] if args.survey is not None else list(figures.PAPER_FIGURES)
+        out = _output_directory(args.out, figures.figure_files(names, args.formats), made)
         with progress_bar(len(names), "figures", unit="figure") as bar:
             written = figures.paper_figures(
                 out, formats=args.formats, survey_grid=grid, progress=bar.update, names=names
@@ -77,16 +113,13 @@ def _cmd_figures(args):
         if args.n_max is None:
             raise InputError("orbits figures: --n-max is required with a body")
         body = body_from_args(args)
-        from ..search import closed_orbits
+        from ..search import closed_orbits, minimum_phase
 
-        announce(
-            "figures",
-            *reversed(check_search_bounds(args.n_max, args.q_max, 1, "the figures' search")),
-        )
+        memory, seconds = check_search_bounds(args.n_max, args.q_max, 1, "the figures' search")
+        _refuse_long_curves(body, args.n_max)
+        announce("figures", seconds, memory)
         orbits_table = closed_orbits(body, n_max=args.n_max, q_max=args.q_max)
         if len(orbits_table) == 0:
-            from ..search import minimum_phase
-
             low, _ = minimum_phase(body)
             raise InputError(
                 f"orbits figures: this body has no closed orbit with n <= {args.n_max}"
@@ -96,9 +129,12 @@ def _cmd_figures(args):
             )
         # drawing is the long part: estimated (and refused) before any file
         memory, seconds = figures.check_figure_set(
-            len(orbits_table), args.formats, "lower --n-max or --q-max"
+            len(orbits_table),
+            args.formats,
+            "lower --n-max or --q-max",
+            turns=figures.drawn_turns(orbits_table),
         )
-        out = _output_directory(args.out, figures.set_file_names(orbits_table, args.formats))
+        out = _output_directory(args.out, figures.set_file_names(orbits_table, args.formats), made)
         announce("figures", seconds, memory)
         with progress_bar(len(orbits_table) + 1, "figures", unit="figure") as bar:
             written = figures.herpolhode_set(
