@@ -6,6 +6,7 @@ wrong type (a string, a complex number, ``None``, a ragged list) becomes an
 of a TypeError or ValueError from inside NumPy or numba.
 """
 
+import math
 import numbers
 import os
 import sys
@@ -87,6 +88,14 @@ def real_scalar(name, value, error=InputError):
             return float(array.reshape(()))
         raise error(f"{name} must be one number, got shape {array.shape}")
     return float(array)
+
+
+def positive_finite(name, value, error=InputError):
+    """One positive, finite real number as a Python float, or an error naming ``name``."""
+    number = real_scalar(name, value, error)
+    if not (math.isfinite(number) and number > 0.0):
+        raise error(f"{name} must be positive and finite, got {number}")
+    return number
 
 
 def integer(name, value, minimum=1, maximum=None):

@@ -236,12 +236,7 @@ def check_output(out, name="out", fmt=None):
             if not os.path.isdir(folder):
                 raise InputError(f"cannot write {path}: {folder} is not a directory")
             break
-    try:
-        ensure_writable(path)
-    except InputError as error:
-        # an animation has no standard-output form: do not suggest one
-        message = str(error).replace(" (use '--out -' for standard output)", "")
-        raise type(error)(message) from None
+    ensure_writable(path, stdout_hint=False)  # an animation has no standard-output form
     return path, fmt
 
 

@@ -62,11 +62,14 @@ class Terminated(BaseException):
         self.signum = signum
 
 
-def ensure_writable(path):
+def ensure_writable(path, stdout_hint=True):
     """Raise :class:`InputError` now if ``path`` could not be written later.
 
     ``path`` may be a string: a trailing ``/`` names a directory, which
     cannot take a file's contents, and is refused with a clear message.
+    With ``stdout_hint`` a target that is no regular file is refused with
+    the hint "use '--out -' for standard output" (False for an output that
+    has no standard-output form).
     """
     text = os.fspath(path)
     if isinstance(text, str) and text.endswith(os.sep) and text != os.sep:
@@ -82,11 +85,12 @@ def ensure_writable(path):
         raise InputError(f"cannot write {path}: directory {directory} is not writable")
     if path.is_dir():
         raise InputError(f"cannot write {path}: it is a directory")
-    _refuse_special(path)
+    _refuse_special(path, stdout_hint)
 
 
-def _refuse_special(path):
+def _refuse_special(path, stdout_hint=True):
     """Refuse a target that exists and is not a regular file (after symlinks)."""
+    hint = " (use '--out -' for standard output)" if stdout_hint else ""
     try:
         mode = os.stat(path).st_mode
     except FileNotFoundError:
@@ -100,8 +104,7 @@ def _refuse_special(path):
         if through:
             raise InputError(
                 f"cannot write {path}: it is a symbolic link into {through} "
-                "(a process's stream or a device); orbits only replaces "
-                "regular files (use '--out -' for standard output)"
+                f"(a process's stream or a device); orbits only replaces regular files{hint}"
             )
         return
     kind = (
@@ -119,8 +122,7 @@ def _refuse_special(path):
     )
     link = " (through a symbolic link)" if os.path.islink(path) else ""
     raise InputError(
-        f"cannot write {path}: it is {kind}{link}; orbits only "
-        "replaces regular files (use '--out -' for standard output)"
+        f"cannot write {path}: it is {kind}{link}; orbits only replaces regular files{hint}"
     )
 
 

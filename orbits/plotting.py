@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from ._args import integer, real_scalar
+from ._args import integer, positive_finite, real_scalar
 from .bodies import REGION_BOX, Body, region_moments
 from .cells import literal_text
 from .errors import InputError
@@ -77,6 +77,14 @@ def check_turns(turns, what="this herpolhode", advice="lower periods"):
         )
 
 
+def _end_time(periods, period):
+    """The end of a time axis of ``periods`` periods ``period``, or an InputError."""
+    end = periods * period
+    if not math.isfinite(end):
+        raise InputError(f"periods = {periods!r} periods overflow the time axis")
+    return end
+
+
 def plot_herpolhode(
     ax, body, theta=None, *, dtheta=None, phi=0.0, periods=1, points=None, label_axes=True, **line
 ):
@@ -108,9 +116,7 @@ def plot_herpolhode(
         2 to :data:`orbits.motion.MAX_POINTS`, or (``points`` omitted) a
         curve of more than :data:`MAX_TURNS` turns.
     """
-    periods = real_scalar("periods", periods)
-    if not (math.isfinite(periods) and periods > 0):
-        raise InputError(f"periods must be positive and finite, got {periods}")
+    periods = positive_finite("periods", periods)
     if points is not None:
         points = integer("points", points, minimum=2, maximum=MAX_POINTS)
     if isinstance(body, Motion):
@@ -118,10 +124,7 @@ def plot_herpolhode(
             turns = abs(body.total_phase()) / TWO_PI * periods
             check_turns(turns, f"the herpolhode over periods={periods:g}", "lower periods")
             points = herpolhode_points(turns)
-        end = periods * body.period
-        if not math.isfinite(end):
-            raise InputError(f"periods = {periods!r} periods overflow the time axis")
-        omega = body.omega_space(np.linspace(0.0, end, points))
+        omega = body.omega_space(np.linspace(0.0, _end_time(periods, body.period), points))
     else:
         if points is None:
             turns = abs(float(total_phase(body, theta, dtheta=dtheta, phi=phi))) / TWO_PI
@@ -624,9 +627,7 @@ def plot_t_handle(ax3d, l1=8.0, l2=4.0, w=1.0, *, shrink=0.25, bars="solid", ell
 
     if bars not in ("solid", "outline"):
         raise InputError(f"bars must be 'solid' or 'outline', got {bars!r}")
-    shrink = real_scalar("shrink", shrink)
-    if not (math.isfinite(shrink) and shrink > 0):
-        raise InputError(f"shrink must be positive and finite, got {shrink}")
+    shrink = positive_finite("shrink", shrink)
     # checks l1, l2, w (positive, finite) before they are used
     semi = Body.t_handle(l1, l2, w).equivalent_ellipsoid()
     l1, l2, w = (real_scalar(name, value) for name, value in (("l1", l1), ("l2", l2), ("w", w)))
@@ -740,18 +741,13 @@ def plot_omega_components(ax, body, theta=None, *, dtheta=None, phi=0.0, periods
         blue, as the paper), ``period`` (the gray vertical line's x) and
         ``period_axis`` (the top axis whose one tick names T).
     """
-    periods = real_scalar("periods", periods)
-    if not (math.isfinite(periods) and periods > 0):
-        raise InputError(f"periods must be positive and finite, got {periods}")
+    periods = positive_finite("periods", periods)
     points = integer("points", points, minimum=2, maximum=MAX_POINTS)
     if isinstance(body, Motion):
         motion = body
     else:
         motion = Motion.from_spin(as_body(body), theta, dtheta=dtheta, phi=phi)
-    end = periods * motion.period
-    if not math.isfinite(end):
-        raise InputError(f"periods = {periods!r} periods overflow the time axis")
-    t = np.linspace(0.0, end, points)
+    t = np.linspace(0.0, _end_time(periods, motion.period), points)
     omega = motion.omega(t)
     styles = (
         dict(color="tab:red", linestyle="-"),
@@ -815,9 +811,7 @@ def plot_polhode_foliation(
     import matplotlib as mpl
 
     count = integer("count", count, minimum=2, maximum=MAX_POLHODES)
-    energy = real_scalar("energy", energy)
-    if not (math.isfinite(energy) and energy > 0):
-        raise InputError(f"energy must be positive and finite, got {energy}")
+    energy = positive_finite("energy", energy)
     try:
         colormap = mpl.colormaps[cmap]
     except (KeyError, TypeError):

@@ -14,20 +14,13 @@ import warnings
 
 import numpy as np
 
-from ._args import real_scalar
+from ._args import positive_finite
 from .bodies import unit_moments
 from .cells import exact_number
 from .errors import InputError
 from .limits import plural
 
 TWO_PI = 2.0 * math.pi
-
-
-def _positive_finite(name, value):
-    value = real_scalar(name, value)
-    if not (math.isfinite(value) and value > 0.0):
-        raise InputError(f"{name} must be finite and positive, got {value!r}")
-    return value
 
 
 # the search's smallest offset: roots nearer the separatrix are unresolved
@@ -176,7 +169,7 @@ def spins_with_total_phase(body_or_moments, total_phase):
     moments, _ = unit_moments(body_or_moments)
     if moments.shape != (3,):
         raise InputError("spins_with_total_phase takes one body")
-    target = _positive_finite("total_phase", total_phase)
+    target = positive_finite("total_phase", total_phase)
     described = f"total phase {exact_number(target)} rad"
     offsets = _solve(moments, {"SAM": target, "LAM": target}, described)
     return _table(moments, offsets, {"SAM": target, "LAM": target})
@@ -222,7 +215,7 @@ def spins_with_period_ratio(body_or_moments, ratio):
     moments, _ = unit_moments(body_or_moments)
     if moments.shape != (3,):
         raise InputError("spins_with_period_ratio takes one body")
-    ratio = _positive_finite("ratio", ratio)
+    ratio = positive_finite("ratio", ratio)
     targets = {
         "SAM": TWO_PI * (ratio - 1.0) if ratio > 1.0 else None,
         "LAM": TWO_PI * (ratio + 1.0),
@@ -280,8 +273,8 @@ def spins_with_periods(body_or_moments, p_psi, p_phi):
     from .motion import Motion, as_body
 
     body = as_body(body_or_moments)
-    p_psi = _positive_finite("P_psi", p_psi)
-    p_phi = _positive_finite("P_phi", p_phi)
+    p_psi = positive_finite("P_psi", p_psi)
+    p_phi = positive_finite("P_phi", p_phi)
     table = spins_with_period_ratio(body, p_psi / p_phi)
     rows = []
     i3 = float(body.moments[2])
