@@ -355,9 +355,8 @@ def figure_set_estimate(count, formats, turns=()):
     samples (:func:`orbits.plotting.herpolhode_points` of each of
     ``turns``, from :func:`drawn_turns`).
     """
-    columns = _sheet_columns(max(count, 1))
-    rows = math.ceil(max(count, 1) / columns)
-    pixels = (2.0 * columns * DPI) * ((2.2 * rows + 1.0) * DPI)
+    width, height = _sheet_size(max(count, 1), _sheet_columns(max(count, 1)))
+    pixels = (width * DPI) * (height * DPI)
     points = float(sum(plotting.herpolhode_points(turn) for turn in turns))
     memory = 3 * 4.0 * pixels + points * _BYTES_PER_POINT
     formats = max(1, len(formats))
@@ -383,8 +382,7 @@ def check_figure_set(count, formats, advice="lower n_max or q_max", turns=()):
     InputError
     """
     formats = _formats(formats)
-    columns = _sheet_columns(max(count, 1))
-    height = (2.2 * math.ceil(max(count, 1) / columns) + 1.0) * DPI
+    height = _sheet_size(max(count, 1), _sheet_columns(max(count, 1)))[1] * DPI
     most = int((AGG_MAX_PIXELS / DPI - 1.0) / 2.2) * 8
     if height > AGG_MAX_PIXELS:
         raise InputError(
