@@ -317,6 +317,11 @@ def _held(path, handle):
     )
 
 
+def _not_regular(path):
+    """The error for a lock file ``path`` that is not a regular file (a FIFO, a directory)."""
+    return InputError(f"cannot lock {path.parent}: {path} is not a regular file")
+
+
 def check_unlocked(directory):
     """Refuse at once a directory another run holds (see :class:`_DirectoryLock`).
 
@@ -342,7 +347,7 @@ def check_unlocked(directory):
         return  # no lock file (or a link, refused when the run locks)
     if not stat.S_ISREG(os.fstat(descriptor).st_mode):
         os.close(descriptor)
-        raise InputError(f"cannot lock {path.parent}: {path} is not a regular file")
+        raise _not_regular(path)
     with os.fdopen(descriptor, "r") as handle:
         try:
             fcntl.flock(handle, fcntl.LOCK_SH | fcntl.LOCK_NB)
@@ -375,11 +380,12 @@ class _DirectoryLock:
         except OSError as error:
             if error.errno == errno.ELOOP:
                 refuse_link(self.path)
-            why = f"{self.path} is not a regular file" if error.errno == errno.EISDIR else None
-            raise InputError(f"cannot lock {self.path.parent}: {why or error.strerror}") from None
+            if error.errno == errno.EISDIR:
+                raise _not_regular(self.path) from None
+            raise InputError(f"cannot lock {self.path.parent}: {error.strerror}") from None
         if not stat.S_ISREG(os.fstat(descriptor).st_mode):
             os.close(descriptor)
-            raise InputError(f"cannot lock {self.path.parent}: {self.path} is not a regular file")
+            raise _not_regular(self.path)
         self.handle = os.fdopen(descriptor, "r+")
         try:
             fcntl.flock(self.handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
