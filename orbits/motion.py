@@ -96,14 +96,6 @@ def as_body(body_or_moments):
     return Body(moments.reshape(-1) if moments.shape == (1, 3) else moments)
 
 
-def _separatrix_gap(i1, i2, i3, omega):
-    """``M^2 - 2 E I2`` of a unit spin as the factors ``(scale, offset, closing)``
-    of :func:`orbits.core.phase.vector_gap` (exact, and free of underflow
-    for components near the I2 axis down to the smallest doubles)."""
-    w1, w2, w3 = (float(v) for v in omega)
-    return _phase.vector_gap(i1, i2, i3, w1, w2, w3)
-
-
 def _does_not_fit(what):
     return InputError(
         f"the {what} of this motion does not fit a double at this "
@@ -190,7 +182,8 @@ class Motion:
         unit_omega = np.ldexp(omega0, -speed)
         i1, i2, i3 = body.unit_moments
         if _gap is None:
-            _gap = _separatrix_gap(i1, i2, i3, unit_omega)
+            # M^2 - 2 E I2 exactly, in factors free of underflow near the I2 axis
+            _gap = _phase.vector_gap(i1, i2, i3, *(float(w) for w in unit_omega))
         orbit = np.zeros(_kernels.ORBIT_SIZE)
         branch = _kernels.orbit_setup(i1, i2, i3, *unit_omega, *_gap, orbit)
         if branch == _phase.BRANCH_SEPARATRIX:
