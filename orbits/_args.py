@@ -6,6 +6,7 @@ wrong type (a string, a complex number, ``None``, a ragged list) becomes an
 of a TypeError or ValueError from inside NumPy or numba.
 """
 
+import itertools
 import math
 import numbers
 import os
@@ -21,6 +22,31 @@ def _describe(value):
     if len(text) > 60:
         text = text[:57] + "..."
     return f"{text} ({type(value).__name__})"
+
+
+def _bool_inside(value):
+    """A bool (Python or NumPy) anywhere in nested lists/tuples, or ``None``.
+
+    ``np.asarray([True, 2.0])`` is ``[1.0, 2.0]``: the boolean is lost before
+    the dtype can show it, so sequences are searched first.
+    """
+    level = [value]
+    while level:
+        kinds = set(map(type, level))
+        if bool in kinds or np.bool_ in kinds:
+            return next(v for v in level if isinstance(v, (bool, np.bool_)))
+        if any(issubclass(kind, np.ndarray) for kind in kinds):
+            for v in level:
+                if isinstance(v, np.ndarray) and v.dtype.kind == "b":
+                    return v
+        sequences = [kind for kind in kinds if issubclass(kind, (list, tuple))]
+        if not sequences:
+            return None
+        if len(kinds) == len(sequences):  # a level of sequences only: flatten it whole
+            level = list(itertools.chain.from_iterable(level))
+        else:
+            level = [item for v in level if isinstance(v, (list, tuple)) for item in v]
+    return None
 
 
 def real_array(name, value, error=InputError):
@@ -40,6 +66,11 @@ def real_array(name, value, error=InputError):
             f"{name} is a masked array with masked entries, which would be computed "
             f"as if unmasked; pass {name}.compressed() or {name}.filled(value)"
         )
+    if isinstance(value, (list, tuple)):
+        flag = _bool_inside(value)
+        if flag is not None:
+            what = "booleans: " if isinstance(flag, np.ndarray) else ""
+            raise ArgumentTypeError(f"{name} must be real numbers, got {what}{_describe(flag)}")
     try:
         array = np.asarray(value)
     except (ValueError, TypeError):

@@ -216,6 +216,30 @@ def test_type_faults_are_argument_type_errors_naming_the_argument():
     assert issubclass(ArgumentTypeError, InputError)
 
 
+def test_booleans_mixed_into_numbers_are_refused():
+    """np.asarray([True, 2, 1]) is [1, 2, 1]: the boolean would be read as 1."""
+    cases = [
+        (lambda: orbits.Body([True, 2, 3]), "moments"),
+        (lambda: orbits.total_phase([0.3, 0.6, 0.9], [0.2, True]), "theta"),
+        (
+            lambda: orbits.total_phase([[0.3, 0.6, 0.9], [0.3, np.bool_(False), 0.9]], 0.2),
+            "moments",
+        ),
+        (
+            lambda: orbits.spin_phases(FIG6, [[1.0, 0.2, 0.1], (0.5, np.array([True]), 1.0)]),
+            "omega",
+        ),
+    ]
+    for call, name in cases:
+        with pytest.raises(ArgumentTypeError, match=f"{name} must be real numbers, got .*bool"):
+            call()
+    # nested sequences of plain numbers are still numbers
+    np.testing.assert_array_equal(
+        orbits.total_phase([[0.3, 0.6, 0.9], (1, 2, 2.5)], 0.2),
+        orbits.total_phase(np.array([[0.3, 0.6, 0.9], [1.0, 2.0, 2.5]]), 0.2),
+    )
+
+
 def test_masked_entries_are_refused_not_computed():
     """np.asarray drops a mask: the hidden values would be computed silently."""
     hidden = np.ma.array([0.5, 1.2], mask=[False, True])
