@@ -164,20 +164,44 @@ def herpolhode_radii(body, theta=None, *, dtheta=None, phi=0.0):
     Returns
     -------
     r_min, r_max : float
-        In rad/s for ``|omega0| = 1``.  The subtraction loses about
-        ``1e-16 / r`` relative accuracy for tiny radii (drawing only).
+        In rad/s for ``|omega0| = 1``.  ``r = |omega x M| / M`` at the
+        crossing, with ``|omega x M| = |omega_i omega_j (I_j - I_i)|``: no
+        difference of nearly equal numbers, also for a near-spherical body.
     """
     motion = Motion.from_spin(as_body(body), theta, dtheta=dtheta, phi=phi)
-    moments = motion.body.moments
-    two_e, m2 = 2.0 * motion.energy, motion.momentum**2
-    zeros = (0, 1) if motion.branch == "SAM" else (1, 2)
+    i1, i2, i3 = motion.body.unit_moments.tolist()
+    m1, m2, m3 = (motion.body.unit_moments * motion.omega0).tolist()  # M(0), principal axes
+    # M_k^2 at the crossings, in sums of positive terms (eqn:MM, eqn:EM):
+    # the moment differences are exact, so nothing cancels for a
+    # near-spherical body, and the crossing next to the I2 axis (M_k^2 ~
+    # M^2 - 2 E I2 -> 0 at the separatrix) goes through the factored 1 - k^2
+    m_sq = m1 * m1 + m2 * m2 + m3 * m3
+    crossing_2 = (  # M_2 = 0, on both branches: (M_1^2, M_3^2)
+        m1 * m1 + m2 * m2 * (i3 - i2) * i1 / (i2 * (i3 - i1)),
+        m3 * m3 + m2 * m2 * (i2 - i1) * i3 / (i2 * (i3 - i1)),
+    )
+    if motion.branch == "SAM":  # M_1 = 0 next to I2: M_3^2 = (M^2 - 2E I2) I3/(I3 - I2)
+        above = m2 * m2 * (i2 - i1) / i2 + m3 * m3 * (i3 - i1) / i3  # M^2 - 2 E I1
+        small = motion.one_minus_m * above * i3 / (i3 - i1)
+        middle = m2 * m2 + m1 * m1 * (i3 - i1) * i2 / (i1 * (i3 - i2))  # M_2^2
+        crossings = (crossing_2, (middle, small))
+        pairs = ((i1, i3), (i2, i3))
+    else:  # M_3 = 0 next to I2: M_1^2 = (2E I2 - M^2) I1/(I2 - I1)
+        below = m1 * m1 * (i3 - i1) / i1 + m2 * m2 * (i3 - i2) / i2  # 2 E I3 - M^2
+        small = motion.one_minus_m * below * i1 / (i3 - i1)
+        middle = m2 * m2 + m3 * m3 * (i3 - i1) * i2 / (i3 * (i2 - i1))  # M_2^2
+        crossings = (crossing_2, (small, middle))
+        pairs = ((i1, i3), (i1, i2))
     radii = []
-    for zero in zeros:
-        i, j = (k for k in range(3) if k != zero)
-        mi2 = (two_e - m2 / moments[j]) / (1.0 / moments[i] - 1.0 / moments[j])
-        mj2 = m2 - mi2
-        omega2 = max(mi2, 0.0) / moments[i] ** 2 + max(mj2, 0.0) / moments[j] ** 2
-        radii.append(math.sqrt(max(omega2 - two_e**2 / m2, 0.0)))
+    for (mi2, mj2), (a, b) in zip(crossings, pairs):
+        # r = |omega x M| / M = |omega_i omega_j (I_j - I_i)| / M, omega_k = M_k / I_k
+        r = (
+            math.sqrt(max(mi2, 0.0))
+            * math.sqrt(max(mj2, 0.0))
+            * (b - a)
+            / (a * b * math.sqrt(m_sq))
+        )
+        radii.append(r)
     return min(radii), max(radii)
 
 

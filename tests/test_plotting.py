@@ -250,6 +250,55 @@ def test_herpolhode_radii_bound_the_curve_and_are_reached():
             assert sign * found.fun == pytest.approx(target, abs=1e-11)
 
 
+def _radii_mp(moments, theta=None, dtheta=None, phi=0.0):
+    """r_min, r_max from |omega|^2 - (2E/M)^2 at the crossings, in mpmath at
+    700 digits (enough for the cancellation at dtheta = 1e-300)."""
+    import mpmath as mp
+
+    with mp.workdps(700):
+        body = moments if isinstance(moments, Body) else Body(moments)
+        i = [mp.mpf(x) for x in body.moments]
+        phi = mp.mpf(phi)
+        theta_c = mp.atan(
+            mp.sqrt(i[2] * (i[2] - i[1]) / (i[0] * (i[1] - i[0]) * mp.cos(phi) ** 2))
+        )
+        theta = theta_c + mp.mpf(dtheta) if dtheta is not None else mp.mpf(theta)
+        w = [mp.sin(theta) * mp.cos(phi), mp.sin(theta) * mp.sin(phi), mp.cos(theta)]
+        m2 = sum((i[k] * w[k]) ** 2 for k in range(3))
+        two_e = sum(i[k] * w[k] ** 2 for k in range(3))
+        radii = []
+        for zero in range(3):
+            a, b = (k for k in range(3) if k != zero)
+            ma2 = (two_e - m2 / i[b]) / (1 / i[a] - 1 / i[b])
+            if ma2 >= 0 and m2 - ma2 >= 0:  # the polhode crosses M_zero = 0
+                radii.append(mp.sqrt(ma2 / i[a] ** 2 + (m2 - ma2) / i[b] ** 2 - two_e**2 / m2))
+        return float(min(radii)), float(max(radii))
+
+
+@pytest.mark.parametrize(
+    "moments, kwargs",
+    [
+        (FIG6, dict(theta=0.6)),
+        (FIG6, dict(theta=0.4, phi=0.7)),
+        (FIG6, dict(theta=1e-9)),  # next to the I3 axis: old form gave 0
+        (FIG6, dict(theta=np.pi / 2 - 1e-9)),  # next to I1: old form 7x too large
+        ((1.0, 1.0001, 1.0002), dict(theta=0.01)),  # old form 5e-6 off
+        ((1.0, 1.0 + 1e-10, 1.0 + 2e-10), dict(theta=0.3)),  # old form gave 0
+        ((1.0, 2.0, 2.5), dict(theta=0.8)),
+        (FIG6, dict(dtheta=1e-12)),  # old form 5e-5 off
+        (FIG6, dict(dtheta=-1e-12)),
+        (FIG6, dict(dtheta=1e-300)),  # r_min ~ 1e-151: old form gave 0
+        (FIG6, dict(dtheta=-1e-300)),
+    ],
+)
+def test_herpolhode_radii_are_accurate_to_a_few_ulps(moments, kwargs):
+    """Factored form (no 2E - M^2/I_j) against mpmath: 1.3e-15 measured at
+    worst; bound 1e-14."""
+    got = plotting.herpolhode_radii(moments, **kwargs)
+    want = _radii_mp(moments, **kwargs)
+    assert got == pytest.approx(want, rel=1e-14, abs=0.0)
+
+
 def test_theta_text_switches_to_dtheta_near_the_separatrix():
     theta_c = orbits.critical_angle(FIG6)
     assert plotting.theta_text(theta_c - 8.371e-7, -8.371e-7) == (
