@@ -35,6 +35,7 @@ from .core.exact import separatrix_gap_exact
 from .core.ode import STATE_SIZE, euler_rhs
 from .errors import AngleError, InputError
 from .motion import Motion, as_body
+from .threads import threads_for
 
 TOLERANCE = 1e-9
 # longest closure check: q periods integrated at rtol 1e-13
@@ -367,13 +368,14 @@ def closure_errors(moments, dtheta, periods, rtol=1e-13):
     moments = np.broadcast_to(moments, shape + (3,))
     periods = np.broadcast_to(periods.astype(np.int64), shape)
     out = np.empty(dtheta.shape)
-    _checks.closure_batch(
-        np.ascontiguousarray(moments),
-        np.ascontiguousarray(dtheta),
-        np.ascontiguousarray(periods),
-        rtol,
-        out,
-    )
+    with threads_for(out.size, serial_below=2):
+        _checks.closure_batch(
+            np.ascontiguousarray(moments),
+            np.ascontiguousarray(dtheta),
+            np.ascontiguousarray(periods),
+            rtol,
+            out,
+        )
     bad = ~np.isfinite(out)
     if bad.any():
         k = int(np.flatnonzero(bad)[0])
@@ -496,15 +498,16 @@ def _verify_grid(bodies, n_angles, tolerance, progress, chunk):
     out = np.empty((theta.size, len(_checks.CHECK_COLUMNS)))
     for start in range(0, theta.size, chunk):
         stop = min(start + chunk, theta.size)
-        _checks.check_batch(
-            moments[start:stop],
-            theta[start:stop],
-            phi[start:stop],
-            1e-12,
-            1e-14,
-            1e-14,
-            out[start:stop],
-        )
+        with threads_for(stop - start, serial_below=2):
+            _checks.check_batch(
+                moments[start:stop],
+                theta[start:stop],
+                phi[start:stop],
+                1e-12,
+                1e-14,
+                1e-14,
+                out[start:stop],
+            )
         if progress is not None:
             progress(stop - start)
     table = pd.DataFrame(out, columns=_checks.CHECK_COLUMNS)

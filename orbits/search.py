@@ -22,6 +22,7 @@ from .device import check_device, cuda_kernels, run_cuda
 from .errors import InputError
 from .limits import check_search_bounds, plural
 from .phases import phases_of_unit_moments
+from .threads import threads_for
 
 #: The catalog's columns, in order: name -> (unit, meaning).  The one
 #: definition of the schema: :data:`CATALOG_COLUMNS` is its keys, and the
@@ -285,7 +286,8 @@ def search_bodies(moments, levels, *, capacity=None, device="cpu"):
     if device == "cuda":
         run_cuda(cuda_kernels().search_many, moments, levels, *rows)
     else:
-        _kernels.search_many(moments, levels, *rows)
+        with threads_for(count, serial_below=2):
+            _kernels.search_many(moments, levels, *rows)
     return rows
 
 

@@ -51,7 +51,11 @@ def set_num_threads(count):
         raise ArgumentTypeError(
             f"threads must be an integer from 1 to {top}, got {count!r} ({type(count).__name__})"
         )
-    if not np.isfinite(count) or not float(count).is_integer() or not 1 <= count <= top:
+    try:
+        whole = float(count).is_integer()  # False for inf and NaN
+    except (OverflowError, ValueError):  # an int or Fraction beyond a double
+        whole = False
+    if not whole or not 1 <= count <= top:
         raise InputError(
             f"threads must be an integer from 1 to {top} (NUMBA_NUM_THREADS), got {count!r}"
         )
@@ -67,8 +71,11 @@ def get_num_threads():
     -------
     int
         The count set by :func:`set_num_threads`, else numba's
-        ``NUMBA_NUM_THREADS``.  Calls on fewer than 20,000 elements run on
-        one thread whatever this says.
+        ``NUMBA_NUM_THREADS``.  It holds in every Python thread (numba's
+        own count is per thread).  Element-wise calls (phases, motion,
+        critical angles) on fewer than 20,000 elements run on one thread
+        whatever this says; searches and checks (about 0.1 ms or more an
+        element) use this many from two elements on.
 
     Examples
     --------
@@ -91,10 +98,18 @@ def using_threads(count):
 
 
 @contextmanager
-def threads_for(size):
-    """Run the enclosed kernels serially when ``size < SERIAL_BELOW``."""
+def threads_for(size, serial_below=SERIAL_BELOW):
+    """Run the enclosed kernels serially when ``size < serial_below``, else on
+    :func:`get_num_threads` threads.
+
+    numba's thread count belongs to the Python thread that launches a
+    kernel: :func:`set_num_threads` in the main thread does not reach a
+    kernel launched from another (a survey's pool, a user's thread), so
+    every parallel kernel runs inside this.  Heavy kernels (a search or an
+    integration per element) pass ``serial_below=2``.
+    """
     numba = _numba()
-    wanted = 1 if size < SERIAL_BELOW else get_num_threads()
+    wanted = 1 if size < serial_below else get_num_threads()
     before = numba.get_num_threads()
     if wanted == before:
         yield

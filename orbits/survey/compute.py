@@ -24,6 +24,7 @@ from ..limits import (
 )
 from ..phases import phase_limits
 from ..search import catalog_rows, phase_levels, search_bodies, searched
+from ..threads import threads_for
 
 BODY_COLUMNS = (
     "body",
@@ -129,7 +130,8 @@ def search_chunk(moments, n_max, q_max=1, device="cpu"):
     level = np.empty((count, capacity), dtype=np.int64)
     offset = np.empty((count, capacity))
     found = np.empty(count, dtype=np.int64)
-    _kernels.search_many(moments, levels, branch, level, offset, found, info)
+    with threads_for(count, serial_below=2):
+        _kernels.search_many(moments, levels, branch, level, offset, found, info)
     return ChunkSearch(moments, p, q, levels, info, (branch, level, offset, found))
 
 

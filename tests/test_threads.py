@@ -1,0 +1,101 @@
+"""Thread control (orbits.threads): the requested count reaches every
+parallel kernel, from whichever Python thread launches it."""
+
+import threading
+from fractions import Fraction
+
+import numba
+import numpy as np
+import pytest
+
+import orbits
+from orbits import ArgumentTypeError, InputError
+from orbits.core import checks as core_checks
+from orbits.core import search as core_search
+from orbits.survey import compute_chunk
+
+FIG6 = (0.26, 0.55, 0.793662)
+TOP = numba.config.NUMBA_NUM_THREADS
+
+
+@pytest.fixture
+def restore_threads():
+    before = orbits.get_num_threads()
+    yield
+    orbits.set_num_threads(before)
+
+
+@pytest.mark.parametrize(
+    "value",
+    [2**64, 10**400, Fraction(10**400, 3), -(2**70), 0, TOP + 1, 1.5],
+    ids=["2**64", "10**400", "Fraction(10**400, 3)", "-2**70", "0", "TOP+1", "1.5"],
+)
+def test_counts_out_of_range_are_input_errors(value, restore_threads):
+    """Huge ints and Fractions were a TypeError from np.isfinite."""
+    before = orbits.get_num_threads()
+    with pytest.raises(InputError, match="threads must be an integer from 1 to") as caught:
+        orbits.set_num_threads(value)
+    assert not isinstance(caught.value, ArgumentTypeError)
+    assert orbits.get_num_threads() == before
+
+
+def test_whole_numbers_of_any_real_type_are_counts(restore_threads):
+    for value in (Fraction(1, 1), np.int8(1), np.float32(1.0), 1.0):
+        orbits.set_num_threads(value)
+        assert orbits.get_num_threads() == 1 and type(orbits.get_num_threads()) is int
+
+
+def _threads_seen(monkeypatch, module, name):
+    """Record numba's thread count at each launch of ``module.name``."""
+    seen = []
+    kernel = getattr(module, name)
+
+    def recording(*args):
+        seen.append(numba.get_num_threads())
+        return kernel(*args)
+
+    monkeypatch.setattr(module, name, recording)
+    return seen
+
+
+CALLS = {
+    "search_bodies": (
+        core_search,
+        "search_many",
+        lambda: orbits.search.search_bodies([FIG6, (1.0, 2.0, 2.5)], [2 * np.pi * 2.5]),
+    ),
+    "compute_chunk": (core_search, "search_many", lambda: compute_chunk([FIG6, FIG6], 3)),
+    "closure_errors": (
+        core_checks,
+        "closure_batch",
+        lambda: orbits.closure_errors(FIG6, [0.01, -0.01], 1),
+    ),
+    "verify_body": (core_checks, "check_batch", lambda: orbits.checks.verify_body(FIG6, 2)),
+}
+
+
+@pytest.mark.parametrize("call", sorted(CALLS))
+@pytest.mark.parametrize("count", sorted({1, TOP}))
+def test_the_count_reaches_kernels_launched_from_another_thread(
+    call, count, monkeypatch, restore_threads
+):
+    """numba's own count is per Python thread: set_num_threads(1) in the main
+    thread did not reach a search launched from another (2 threads ran)."""
+    module, name, run = CALLS[call]
+    seen = _threads_seen(monkeypatch, module, name)
+    orbits.set_num_threads(count)
+    errors = []
+
+    def work():
+        try:
+            run()
+        except Exception as error:  # noqa: BLE001 - re-raised below
+            errors.append(error)
+
+    other = threading.Thread(target=work)
+    other.start()
+    other.join()
+    if errors:
+        raise errors[0]
+    run()  # and from this thread
+    assert seen and set(seen) == {count}
