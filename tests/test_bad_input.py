@@ -531,6 +531,18 @@ CLI_CASES = [
         {},
         "",
     ),
+    (
+        "survey-threads-scheduler",  # the workers' processes never see --threads
+        ["--threads", "1"] + GRID + ["--out", "{d}/s", "--scheduler", "tcp://127.0.0.1:9"],
+        {},
+        "--threads sets this machine's threads",
+    ),
+    (
+        "survey-cuda-scheduler",
+        GRID + ["--out", "{d}/s", "--device", "cuda", "--scheduler", "tcp://127.0.0.1:9"],
+        {},
+        "give one or the other",
+    ),
     ("survey-no-source", [S, "--n-max", "2", "--out", "{d}/s"], {}, "--resolution"),
     ("survey-no-n-max", [S, "--resolution", "4", "--out", "{d}/s"], {}, "--n-max"),
     ("survey-no-out", [S, "--resolution", "4", "--n-max", "2"], {}, "--out"),

@@ -45,6 +45,12 @@ def _cmd_survey(args):
             "--device cuda searches on this machine's GPU; the workers of --scheduler "
             "search on their CPUs: give one or the other"
         )
+    if args.scheduler is not None and getattr(args, "threads", None) is not None:
+        # the chunks run in the workers' processes, which never see it
+        raise InputError(
+            "--threads sets this machine's threads; the workers of --scheduler search "
+            "with their own (dask worker --nthreads N, NUMBA_NUM_THREADS on the worker)"
+        )
     options = dict(
         q_max=args.q_max,
         fmt=args.format,
