@@ -29,6 +29,29 @@ def _ignore(signum, frame):
     """A signal once the run is over (not SIG_IGN: see orbits.cli._hold_signals)."""
 
 
+def _numba_environment():
+    """Why ``NUMBA_NUM_THREADS`` is unusable, or '' when it is unset or a positive count.
+
+    numba raises inside its import for a count <= 0 (a traceback) and
+    warns and ignores any other value it cannot read as an integer.
+    """
+    import os
+
+    text = os.environ.get("NUMBA_NUM_THREADS")
+    if text is None:
+        return ""
+    try:
+        count = int(text)  # as numba reads it
+    except ValueError:
+        count = None
+    if count is not None and count > 0:
+        return ""
+    return (
+        f"NUMBA_NUM_THREADS={text.strip()!r} is not a positive whole number of threads; "
+        "unset it or give one (--threads N chooses fewer for one command)"
+    )
+
+
 def entry():
     """Run the command line; returns the exit code."""
     previous = {}
@@ -37,6 +60,10 @@ def entry():
         if number is not None:
             previous[number] = signal.signal(number, _stop)
     try:
+        refusal = _numba_environment()
+        if refusal:  # numba would raise inside its import: a traceback
+            print(f"orbits: error: {refusal}", file=sys.stderr)
+            return 2
         from .cli import main
 
         # main installs its own handlers and gives ours back when it ends

@@ -70,3 +70,24 @@ def test_every_public_name_resolves():
         getattr(orbits, name)
     with pytest.raises(AttributeError):
         orbits.no_such_name
+
+
+@pytest.mark.parametrize("value", ["0", "-2", "abc", ""])
+def test_an_unusable_numba_thread_count_is_one_line(value):
+    """NUMBA_NUM_THREADS=0 was a ValueError traceback from inside numba's import;
+    a value numba cannot read was a warning holding a traceback, then ignored."""
+    import os
+
+    env = dict(os.environ, NUMBA_NUM_THREADS=value)
+    result = subprocess.run(
+        [sys.executable, "-m", "orbits", "phase", "--preset", "fig6", "--theta", "0.5"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=env,
+    )
+    assert result.returncode == 2, result.stderr
+    assert result.stdout == ""
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in result.stderr
+    assert lines[0].startswith(f"orbits: error: NUMBA_NUM_THREADS={value!r} is not a positive")
