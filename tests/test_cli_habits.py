@@ -365,3 +365,16 @@ def test_an_endless_input_file_is_refused_within_the_memory_budget(monkeypatch, 
         assert main(argv) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and "holds more than 1 MiB" in err[0], err
+
+
+def test_usage_errors_name_the_program_once(capsys):
+    """The top-level parser's errors read "orbits: error: orbits: ..." before."""
+    code, _, err = run(capsys, "--threads", "abc", "phase", "--preset", "fig6", "--theta", "0.3")
+    assert code == 2 and err == "orbits: error: argument --threads: not an integer: 'abc'\n"
+    code, _, err = run(capsys, "nope")
+    assert code == 2 and err.startswith("orbits: error: argument command: invalid choice: 'nope'")
+    # a subcommand's errors say which one
+    code, _, err = run(capsys, "phase", "--preset", "fig6", "--theta", "x")
+    assert (
+        code == 2 and err == "orbits: error: orbits phase: argument --theta: not a number: 'x'\n"
+    )

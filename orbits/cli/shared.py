@@ -40,6 +40,10 @@ class Parser(argparse.ArgumentParser):
         )
 
     def error(self, message):
+        # the top-level parser's name is the "orbits: error:" prefix already;
+        # a subcommand's ("orbits phase") says where the fault is
+        if " " not in self.prog:
+            raise InputError(message)
         raise InputError(f"{self.prog}: {message}")
 
     def parse_known_args(self, args=None, namespace=None):
