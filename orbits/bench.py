@@ -1,14 +1,34 @@
-"""``orbits bench``: our kernels against the obvious alternatives, same process.
+"""``orbits bench``: our kernels and commands against named baselines.
 
-Each row times one task two ways, best of several repeats after a warm-up
-(so numba compilation is excluded), and reports the ratio.  No test ever
-asserts on these timings; the README quotes a run.
+Each row times one task two ways and reports the ratio (the baseline's
+time over ours); its ``baseline`` says what it is compared with (the SciPy
+route, ``import numpy``, the same command warm, the bracketing search it
+replaced, a Python loop, one CPU or one numba thread, ``--columns all``, or
+nothing) and its ``timed`` says what each figure is:
+
+* most rows run both sides in this process, best of several runs after an
+  untimed warm-up run (so numba compilation is excluded);
+* ``search_evaluations``, ``survey_threads`` and ``survey_bytes`` time one
+  run of each side, after a warm-up;
+* ``survey``'s baseline is not run on every body: a loop over every k-th
+  body of the grid, ``k = count // 500`` (500 to 999 bodies, or all when
+  fewer), is timed once and scaled to the whole grid;
+* ``startup`` (medians), ``cold_compile`` (one cold and one warm run) and
+  ``survey_scaling`` (best of several) time fresh processes; the children
+  import this same package and get the thread count in effect
+  (:func:`orbits.get_num_threads`) as ``--threads``.
+
+With the under-load check (:func:`load_check`) each row's own task is timed
+again beside a CPU-bound process and must slow down by at most
+:data:`LOAD_LIMIT` (``orbits bench`` exits 1 when a row does not).  No test
+ever asserts on these timings.
 """
 
 import json
 import math
 import os
 import platform
+import sys
 import time
 
 import numba
@@ -17,7 +37,14 @@ import scipy
 from scipy import special
 
 from .bodies import Body
+from .errors import InputError, OrbitsError
 from .phases import critical_angle, total_phase
+from .threads import SERIAL_BELOW, get_num_threads
+
+
+class BenchError(OrbitsError):
+    """A benchmark that cannot run here: a child process failed, or the
+    platform lacks what the row needs (the CLI: exit 2, one line)."""
 
 
 def best_time(function, repeats):
@@ -89,18 +116,22 @@ def bench_total_phase(points=1_000_000, repeats=7, seed=0):
     ours = best_time(lambda: total_phase(body, theta), repeats)
     scalar = best_time(lambda: _scalar_total_phase(body.moments, theta), repeats)
     theirs = best_time(lambda: scipy_total_phase(body.moments, theta), repeats)
-    agree = np.max(np.abs(total_phase(body, theta) / scipy_total_phase(body.moments, theta) - 1))
+    difference = np.abs(total_phase(body, theta) / scipy_total_phase(body.moments, theta) - 1)
+    worst = int(np.argmax(difference))
+    offset = float(theta[worst] - critical_angle(body))
     return {
         "_ours": (lambda: total_phase(body, theta), repeats),
         "task": f"total phase, {points:.0e} random theta (fig6 body)",
+        "timed": f"best of {repeats} runs of each after a warm-up run, in this process",
         "ours_s": ours,
         "baseline": "NumPy + scipy.special ellipk/elliprf/elliprj",
         "baseline_s": theirs,
         "speedup": theirs / ours,
         "scalar_s": scalar,
         "note": f"scalar-cel kernel path {_seconds(scalar)} ({theirs / scalar:.1f}x); "
-        f"max relative difference {agree:.1e} (near theta_c the baseline "
-        "loses digits to 1 - m)",
+        f"max relative difference ours vs baseline {difference[worst]:.1e}, at "
+        f"theta - theta_c = {offset:.1e} (next to theta_c the phase is "
+        "ill-conditioned in theta)",
     }
 
 
@@ -170,6 +201,12 @@ def bench_motion(points=2001, repeats=5, dtheta=None):
     theirs = best_time(lambda: _herpolhode_by_integration(motion, times), repeats)
     note = "accuracy vs mpmath: "
     try:
+        import mpmath  # noqa: F401  (only whether it is there)
+    except ImportError as error:
+        if error.name != "mpmath":
+            raise
+        note += "n/a (install mpmath)"
+    else:
         from .checks import exact_motion_mpmath
 
         sample = np.arange(0, points, max(1, points // 40))
@@ -177,8 +214,6 @@ def bench_motion(points=2001, repeats=5, dtheta=None):
         err_ours = np.max(np.abs(herpolhode(body, theta, points=points)[1][sample] - reference))
         err_theirs = np.max(np.abs(_herpolhode_by_integration(motion, times)[sample] - reference))
         note += f"ours {err_ours:.1e}, solve_ivp {err_theirs:.1e} (max |omega| error)"
-    except Exception:  # mpmath missing: no accuracy column
-        note += "n/a (install mpmath)"
     rate = points / ours
     where = "theta 0.9" if dtheta is None else f"1 - m = {motion.one_minus_m:.0e}"
     direct = best_time(lambda: _herpolhode_direct(motion, times), repeats)
@@ -186,6 +221,7 @@ def bench_motion(points=2001, repeats=5, dtheta=None):
     return {
         "_ours": (lambda: herpolhode(body, theta, points=points), repeats),
         "task": f"herpolhode, {points} points, 1 period ({where})",
+        "timed": f"best of {repeats} runs of each after a warm-up run, in this process",
         "ours_s": ours,
         "baseline": "solve_ivp DOP853 rtol 1e-12, dense output",
         "baseline_s": theirs,
@@ -204,10 +240,11 @@ def bench_motion_rate(points=1_000_000, repeats=3):
     return {
         "_ours": (lambda: motion.state(times), repeats),
         "task": f"exact motion, full state, {points:.0e} times",
+        "timed": f"best of {repeats} runs after a warm-up run, in this process",
         "ours_s": ours,
         "baseline": "none (throughput row)",
-        "baseline_s": float("nan"),
-        "speedup": float("nan"),
+        "baseline_s": None,
+        "speedup": None,
         "note": f"{points / ours:.2e} points/s (omega, Euler angles, R, omega_space)",
     }
 
@@ -271,6 +308,8 @@ def bench_search(n_max=50, repeats=20):
     return {
         "_ours": (lambda: closed_orbits(body, n_max=n_max), repeats),
         "task": f"closed orbits n <= {n_max}, both branches (fig6)",
+        "timed": f"ours best of {repeats} runs, the baseline best of 3, each after a "
+        "warm-up run, in this process",
         "ours_s": ours,
         "baseline": "theta grid (2000 points) + scipy.optimize.brentq on the SciPy-route phase",
         "baseline_s": theirs,
@@ -296,6 +335,8 @@ def bench_search_evaluations(resolution=60, n_max=10):
     theirs, old_evaluations, _ = _search_counts(kernels.search_body_bracketing, bodies, levels)
     return {
         "task": f"search kernel, {len(bodies)} bodies, n <= {n_max} (one thread)",
+        "timed": "one run of each over all the bodies, after a warm-up on two bodies "
+        "(kernels loaded), in this process",
         "ours_s": ours,
         "baseline": "the scan-and-bracket search (Brent) it replaced",
         "baseline_s": theirs,
@@ -306,6 +347,16 @@ def bench_search_evaluations(resolution=60, n_max=10):
         f"vs {old_evaluations / roots:.2f} "
         f"({old_evaluations / new_evaluations:.1f}x fewer)",
     }
+
+
+# the survey row's baseline loop runs on about this many bodies of the grid
+SURVEY_SAMPLE = 500
+
+
+def _ordinal(k):
+    """``1st``, ``2nd``, ``3rd``, ``4th``, ..., ``11th``, ``21st``, ..."""
+    suffix = "th" if k % 100 in (11, 12, 13) else {1: "st", 2: "nd", 3: "rd"}.get(k % 10, "th")
+    return f"{k}{suffix}"
 
 
 def bench_survey(resolution=400, n_max=10, repeats=1):
@@ -333,7 +384,8 @@ def bench_survey(resolution=400, n_max=10, repeats=1):
 
     for fmt in ("csv", "parquet"):
         times[fmt] = best_time(lambda fmt=fmt: survey_once(fmt), repeats)
-    sample = region_grid(resolution)[:: max(1, count // 500)]
+    step = max(1, count // SURVEY_SAMPLE)
+    sample = region_grid(resolution)[::step]
 
     def loop():
         for moments in sample:
@@ -341,36 +393,95 @@ def bench_survey(resolution=400, n_max=10, repeats=1):
             minimum_phase(moments)
 
     per_body = best_time(loop, 1) / len(sample)
+    runs = "one run" if repeats == 1 else f"best of {repeats} runs"
+    which = "every body" if step == 1 else f"every {_ordinal(step)} body"
     return {
         "_ours": (lambda: survey_once("parquet"), 1),
         "task": f"survey {count} bodies, n <= {n_max} (grid {resolution}), Parquet",
+        "timed": f"ours {runs} of each format after a warm-up run; the baseline one "
+        f"run over {len(sample)} sampled bodies after a warm-up run, scaled to "
+        f"{count}; in this process",
         "ours_s": times["parquet"],
-        "baseline": "a Python loop of closed_orbits + minimum_phase per body",
+        "baseline": f"a Python loop of closed_orbits + minimum_phase per body, "
+        f"extrapolated from {len(sample)} of the {count} bodies",
         "baseline_s": per_body * count,
         "speedup": per_body * count / times["parquet"],
         "bodies_per_s": count / times["parquet"],
+        "baseline_sample": len(sample),
         "note": f"{count / times['parquet']:.0f} bodies/s to Parquet (the default), "
         f"{count / times['csv']:.0f} bodies/s to CSV (end to end: search, "
-        "tables, atomic files, report)",
+        f"tables, atomic files, report); the baseline loop ran on {which} of the "
+        f"grid ({len(sample)} bodies, {_seconds(per_body)} per body), scaled by "
+        f"{count}/{len(sample)}",
     }
 
 
-def _fresh_interpreter(args, env=None):
-    """Wall and CPU seconds of one ``python args`` run in a new process."""
-    import resource
+def _child_env(extra=None):
+    """The environment of a child process: ours, with this package's parent
+    directory first on ``PYTHONPATH`` (the user's entries kept after it), so
+    that the child imports this same ``orbits``; ``extra`` added."""
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    env = dict(os.environ)
+    before = env.get("PYTHONPATH")
+    env["PYTHONPATH"] = root + (os.pathsep + before if before else "")
+    env.update(extra or {})
+    return env
+
+
+def _shown(argv):
+    """A child's command line as one would type it (``python`` for the interpreter)."""
+    import shlex
+
+    return shlex.join(["python" if a == sys.executable else str(a) for a in argv])
+
+
+def _run_child(argv, env, stdout=None, **options):
+    """Run one child process to its end; return its ``CompletedProcess``.
+
+    Standard error is captured; a child that fails is :class:`BenchError`
+    (one line: the exit status or signal, the command and the child's last
+    line on stderr), and a child ended by Ctrl-C (which reaches the whole
+    process group) is ``KeyboardInterrupt``.
+    """
+    import signal
     import subprocess
-    import sys
+
+    done = subprocess.run(
+        argv,
+        env=env,
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL if stdout is None else stdout,
+        stderr=subprocess.PIPE,
+        text=True,
+        **options,
+    )
+    if done.returncode == 0:
+        return done
+    if done.returncode == -signal.SIGINT:
+        raise KeyboardInterrupt
+    if done.returncode > 0:
+        why = f"exit {done.returncode}"
+    else:
+        try:
+            why = f"killed by {signal.Signals(-done.returncode).name}"
+        except ValueError:
+            why = f"killed by signal {-done.returncode}"
+    lines = [line.strip() for line in (done.stderr or "").splitlines() if line.strip()]
+    last = f": {lines[-1][:300]}" if lines else ""
+    raise BenchError(f"a benchmark's child process failed ({why}): {_shown(argv)}{last}")
+
+
+def _fresh_interpreter(args, env=None):
+    """Wall and CPU seconds of one ``python args`` run in a new process.
+
+    ``env``: the child's environment (default :func:`_child_env`).  A child
+    that fails is :class:`BenchError`.
+    """
+    import resource
 
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
-    subprocess.run(
-        [sys.executable, *args],
-        check=True,
-        env=env,
-        stdin=subprocess.DEVNULL,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-    )
+    _run_child([sys.executable, *args], _child_env() if env is None else env)
     wall = time.perf_counter() - start
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
@@ -384,16 +495,20 @@ def _median_wall(args, repeats):
 def bench_startup(repeats=7):
     """Start-up: ``orbits --help`` and ``import orbits`` against ``import numpy``.
 
-    Each is a fresh interpreter (median of ``repeats``); the target is
-    within 4x of ``python -c "import numpy"``.
+    Each is a fresh interpreter: one untimed run of each command first (the
+    files in the operating system's cache), then the median of ``repeats``;
+    the target is within 4x of ``python -c "import numpy"``.
     """
-    numpy_s = _median_wall(["-c", "import numpy"], repeats)
-    import_s = _median_wall(["-c", "import orbits"], repeats)
-    help_s = _median_wall(["-m", "orbits", "--help"], repeats)
+    commands = (["-c", "import numpy"], ["-c", "import orbits"], ["-m", "orbits", "--help"])
+    for args in commands:
+        _fresh_interpreter(args)  # warm-up, untimed
+    numpy_s, import_s, help_s = (_median_wall(args, repeats) for args in commands)
     return {
         "task": "start-up: python -m orbits --help (fresh process)",
+        "timed": f"median of {repeats} fresh processes of each command, after one "
+        "untimed run of each",
         "ours_s": help_s,
-        "baseline": 'python -c "import numpy"',
+        "baseline": 'python -c "import numpy" (fresh process)',
         "baseline_s": numpy_s,
         "speedup": numpy_s / help_s,
         "note": f"--help takes {help_s / numpy_s:.1f}x and import orbits "
@@ -407,17 +522,21 @@ def bench_cold_compile():
 
     The cache goes to a fresh ``NUMBA_CACHE_DIR`` (the package's own cache is
     not touched), so every kernel the command needs is compiled; the same
-    command is then run again warm (kernels loaded from that cache).  CPU
-    seconds are those of the child process: on a shared machine they are
-    what the command costs, the wall time is what it waited.
+    command is then run again warm (kernels loaded from that cache).  One
+    fresh process each (the cold run is the point: no warm-up), with
+    ``--threads`` the count in effect here.  CPU seconds are those of the
+    child process: on a shared machine they are what the command costs, the
+    wall time is what it waited.
     """
     import shutil
     import tempfile
 
+    threads = get_num_threads()
     cache = tempfile.mkdtemp(prefix="orbits-bench-cache-")
     out = os.path.join(cache, "fig6.csv")
-    env = dict(os.environ, NUMBA_CACHE_DIR=cache)
-    args = ["-m", "orbits", "catalog", "--preset", "fig6", "--n-max", "30", "--out", out]
+    env = _child_env({"NUMBA_CACHE_DIR": cache})
+    args = ["-m", "orbits", "--threads", str(threads), "catalog", "--preset", "fig6"]
+    args += ["--n-max", "30", "--out", out]
     try:
         cold, cold_cpu = _fresh_interpreter(args, env)
         warm, warm_cpu = _fresh_interpreter(args, env)
@@ -425,41 +544,47 @@ def bench_cold_compile():
         shutil.rmtree(cache, ignore_errors=True)
     return {
         "task": "cold compile: orbits catalog --preset fig6 --n-max 30",
+        "timed": "one fresh process with an empty numba cache, then one more with "
+        "that cache filled",
         "ours_s": cold,
-        "baseline": "the same command warm (kernels from the numba cache)",
+        "baseline": "the same command warm (kernels from the numba cache, fresh process)",
         "baseline_s": warm,
         "speedup": warm / cold,
+        "threads": threads,
         "note": f"cold {cold:.1f} s wall / {cold_cpu:.1f} s CPU (target <= 8 s), "
-        f"warm {warm:.1f} s wall / {warm_cpu:.1f} s CPU",
+        f"warm {warm:.1f} s wall / {warm_cpu:.1f} s CPU; --threads {threads}",
     }
 
 
-def _survey_command_wall(resolution, n_max, cpus, extra=()):
+def _survey_argv(resolution, n_max, threads, out, extra=()):
+    """The child's ``orbits survey`` command line."""
+    argv = [sys.executable, "-m", "orbits", "--threads", str(threads), "survey"]
+    argv += ["--resolution", str(resolution), "--n-max", str(n_max), "--json", "--out", out]
+    return argv + list(extra)
+
+
+def _survey_command_wall(resolution, n_max, cpus, threads=1, extra=()):
     """Wall seconds of one whole ``orbits survey`` command pinned to ``cpus``.
 
-    The child runs on exactly those CPUs (as ``taskset -c``), in a fresh
-    interpreter (start-up, grid, search, tables, files, report), into a new
-    temporary directory; returns ``(wall, bodies, bytes on disk)``.
+    The child runs on exactly those CPUs (as ``taskset -c``) with
+    ``--threads threads``, in a fresh interpreter (start-up, grid, search,
+    tables, files, report), into a new temporary directory; returns
+    ``(wall, bodies, bytes on disk)``.  A child that fails is
+    :class:`BenchError`.
     """
     import shutil
     import subprocess
-    import sys
     import tempfile
 
     directory = tempfile.mkdtemp(prefix="orbits-bench-")
     out = os.path.join(directory, "s")
-    argv = [sys.executable, "-m", "orbits", "survey", "--resolution", str(resolution)]
-    argv += ["--n-max", str(n_max), "--json", "--out", out, *extra]
-    env = dict(os.environ, PYTHONPATH=os.path.dirname(os.path.dirname(__file__)))
+    argv = _survey_argv(resolution, n_max, threads, out, extra)
     try:
         start = time.perf_counter()
-        done = subprocess.run(
+        done = _run_child(
             argv,
-            check=True,
-            env=env,
-            stdin=subprocess.DEVNULL,
-            capture_output=True,
-            text=True,
+            _child_env(),
+            stdout=subprocess.PIPE,
             preexec_fn=lambda: os.sched_setaffinity(0, cpus),
         )
         wall = time.perf_counter() - start
@@ -468,9 +593,28 @@ def _survey_command_wall(resolution, n_max, cpus, extra=()):
             for root, _, names in os.walk(out)
             for name in names
         )
-        return wall, json.loads(done.stdout)["bodies"], size
+        try:
+            bodies = int(json.loads(done.stdout)["bodies"])
+        except (ValueError, KeyError, TypeError):
+            raise BenchError(
+                f"a benchmark's child process printed no survey report: {_shown(argv)}"
+            ) from None
+        return wall, bodies, size
     finally:
         shutil.rmtree(directory, ignore_errors=True)
+
+
+def unavailable(name):
+    """Why the CPU row ``name`` cannot run on this machine, or None when it can."""
+    if name == "survey_scaling":
+        if not (hasattr(os, "sched_getaffinity") and hasattr(os, "sched_setaffinity")):
+            return (
+                "needs os.sched_getaffinity and os.sched_setaffinity (Linux) "
+                "to pin the command to CPUs"
+            )
+        if len(os.sched_getaffinity(0)) < 2:
+            return "only one CPU is available to this process"
+    return None
 
 
 def amdahl_bound(one, fixed, cpus):
@@ -489,34 +633,51 @@ def bench_survey_scaling(resolution=500, n_max=30, repeats=3):
     """Whole-command ``orbits survey`` on one CPU and on every CPU it may use.
 
     Issue #18's target: two CPUs >= 1.7x one (``taskset -c 0`` against
-    ``taskset -c 0,1``).  The speedup column is one CPU's time over all
-    CPUs' time, each the best of ``repeats`` runs taken in turns (one CPU,
-    all CPUs, the fixed cost), so that a drift of the machine's speed
-    touches all three alike.
+    ``taskset -c 0,1``).  The one-CPU command runs with ``--threads 1``,
+    the all-CPU one with ``--threads`` the count in effect here
+    (:func:`orbits.get_num_threads`).  After one untimed grid-2 run (a
+    warm-up: kernels and files into the caches), the speedup column is one
+    CPU's time over all CPUs' time, each the best of ``repeats`` fresh
+    processes taken in turns (one CPU, all CPUs, the fixed cost), so that a
+    drift of the machine's speed touches all three alike.
+
+    Raises :class:`BenchError` where :func:`unavailable` gives a reason
+    (no CPU-affinity API, one CPU).
     """
+    reason = unavailable("survey_scaling")
+    if reason:
+        raise BenchError(f"survey_scaling cannot run here: {reason}")
     cpus = sorted(os.sched_getaffinity(0))
+    threads = get_num_threads()
+    # the fixed cost of a survey command (interpreter, NumPy, numba and its
+    # first kernel, pandas, pyarrow, the files): a grid of 2, one CPU
+    _survey_command_wall(2, 1, {cpus[0]})  # warm-up, untimed
     ones, runs, fixeds = [], [], []
     for _ in range(repeats):
         ones.append(_survey_command_wall(resolution, n_max, {cpus[0]})[0])
-        runs.append(_survey_command_wall(resolution, n_max, set(cpus)))
-        # the fixed cost of a survey command (interpreter, NumPy, numba and
-        # its first kernel, pandas, pyarrow, the files): a grid of 2, one CPU
+        runs.append(_survey_command_wall(resolution, n_max, set(cpus), threads))
         fixeds.append(_survey_command_wall(2, 1, {cpus[0]})[0])
     one, fixed = min(ones), min(fixeds)
     wall, bodies, size = min(runs)
     bound = amdahl_bound(one, fixed, len(cpus))
+    runs_text = "one fresh process" if repeats == 1 else f"best of {repeats} fresh processes"
     return {
-        "task": f"orbits survey, grid {resolution}, n <= {n_max}: {len(cpus)} CPUs vs 1",
+        "task": f"orbits survey, grid {resolution}, n <= {n_max}: {len(cpus)} CPUs "
+        f"({_plural_threads(threads)}) vs 1",
+        "timed": f"{runs_text} of each command, taken in turns, after one untimed grid-2 run",
         "ours_s": wall,
-        "baseline": "the same command pinned to one CPU",
+        "baseline": "the same command pinned to one CPU, --threads 1 (fresh process)",
         "baseline_s": one,
         "speedup": one / wall,
         "bodies_per_s": bodies / wall,
         "bytes_per_body": size / bodies,
         "fixed_s": fixed,
         "bound": bound,
-        "note": f"{bodies} bodies: {bodies / wall:.0f} bodies/s on CPUs {cpus}, "
-        f"{bodies / one:.0f} on CPU {cpus[0]}; {size / bodies:.0f} bytes per body "
+        "threads": threads,
+        "command": _shown(_survey_argv(resolution, n_max, threads, "DIR")),
+        "note": f"{bodies} bodies: {bodies / wall:.0f} bodies/s on CPUs {cpus} "
+        f"(--threads {threads}), {bodies / one:.0f} on CPU {cpus[0]}; "
+        f"{size / bodies:.0f} bytes per body "
         "(whole command: start-up, search, tables, files, report); "
         f"a grid-2 survey takes {fixed:.2f} s on one CPU ({fixed / one:.0%} of the "
         "one-CPU run), a fixed cost that more CPUs cannot shorten: with it, "
@@ -524,13 +685,19 @@ def bench_survey_scaling(resolution=500, n_max=30, repeats=3):
     }
 
 
+def _plural_threads(count):
+    return "1 thread" if count == 1 else f"{count} threads"
+
+
 def bench_search_scaling(resolution=500, n_max=30, repeats=3):
-    """The survey's search kernel alone on one numba thread and on all of them.
+    """The survey's search kernel alone on one numba thread and on all in effect.
 
     The same bodies as :func:`bench_survey_scaling` (the grid, in the
     survey's chunks, each through :func:`orbits.survey.compute.search_chunk`),
-    in this process: no start-up, no tables, no files.  Each figure is the
-    best of ``repeats``, taken in turns.
+    in this process: no start-up, no tables, no files.  "All" is the count
+    in effect (:func:`orbits.get_num_threads`, which ``orbits --threads``
+    sets).  After a warm-up on 64 bodies each figure is the best of
+    ``repeats``, taken in turns.
     """
     from .bodies import region_grid
     from .survey.compute import search_chunk
@@ -539,7 +706,7 @@ def bench_search_scaling(resolution=500, n_max=30, repeats=3):
 
     moments = region_grid(resolution)
     chunks = [moments[i : i + DEFAULT_CHUNK] for i in range(0, len(moments), DEFAULT_CHUNK)]
-    top = numba.config.NUMBA_NUM_THREADS
+    top = get_num_threads()
     search_chunk(chunks[0][:64], n_max)  # load the kernels first
 
     def once(threads):
@@ -555,22 +722,29 @@ def bench_search_scaling(resolution=500, n_max=30, repeats=3):
         everys.append(once(top))
     single, every = min(singles), min(everys)
     bodies = len(moments)
+    runs = "one run" if repeats == 1 else f"best of {repeats} runs"
     return {
         "_ours": (lambda: once(top), 1),
-        "task": f"search kernel, grid {resolution}, n <= {n_max}: {top} threads vs 1",
+        "task": f"search kernel, grid {resolution}, n <= {n_max}: {_plural_threads(top)} vs 1",
+        "timed": f"{runs} of each, taken in turns, after a warm-up on 64 bodies, in this process",
         "ours_s": every,
         "baseline": "the same search on one numba thread",
         "baseline_s": single,
         "speedup": single / every,
         "bodies_per_s": bodies / every,
-        "note": f"{bodies} bodies: {bodies / every:.0f} bodies/s on {top} threads, "
-        f"{bodies / single:.0f} on one; the parallel part of the survey_scaling "
-        "command (no start-up, tables or files)",
+        "threads": top,
+        "note": f"{bodies} bodies: {bodies / every:.0f} bodies/s on "
+        f"{_plural_threads(top)}, {bodies / single:.0f} on one; the parallel part "
+        "of the survey_scaling command (no start-up, tables or files)",
     }
 
 
 def bench_survey_threads(resolution=300, n_max=30):
-    """The same survey in-process on one numba thread and on all of them."""
+    """The same survey in-process on one numba thread and on all in effect.
+
+    "All" is :func:`orbits.get_num_threads` (which ``orbits --threads``
+    sets).  One warm-up run, then one timed run on each count.
+    """
     import shutil
     import tempfile
 
@@ -588,48 +762,63 @@ def bench_survey_threads(resolution=300, n_max=30):
         finally:
             shutil.rmtree(directory, ignore_errors=True)
 
-    top = numba.config.NUMBA_NUM_THREADS
+    top = get_num_threads()
     once(top)  # compile and warm the caches first
     single, bodies = once(1)
     every, _ = once(top)
     return {
         "_ours": (lambda: once(top), 1),
-        "task": f"survey {bodies} bodies, n <= {n_max}: {top} threads vs 1",
+        "task": f"survey {bodies} bodies, n <= {n_max}: {_plural_threads(top)} vs 1",
+        "timed": "one run on each count after a warm-up run, in this process",
         "ours_s": every,
         "baseline": "the same survey on one numba thread (one table thread)",
         "baseline_s": single,
         "speedup": single / every,
         "bodies_per_s": bodies / every,
-        "note": f"{bodies / every:.0f} bodies/s on {top} threads, "
+        "threads": top,
+        "note": f"{bodies / every:.0f} bodies/s on {_plural_threads(top)}, "
         f"{bodies / single:.0f} on one (search, tables, files, ledger, report)",
     }
 
 
 def bench_survey_bytes(resolution=300, n_max=30):
-    """Bytes per body on disk: the compact layout (default) against ``columns="all"``."""
+    """Bytes per body on disk: the compact layout (default) against ``columns="all"``.
+
+    Each layout: one untimed warm-up survey, then one timed survey whose
+    files are measured.
+    """
     import shutil
     import tempfile
 
     from .survey import Survey
 
     sizes, times = {}, {}
-    for columns in ("compact", "all"):
+
+    def once(columns, measure):
         directory = tempfile.mkdtemp(prefix="orbits-bench-")
         try:
             start = time.perf_counter()
             survey = Survey.grid(os.path.join(directory, "s"), resolution, n_max, columns=columns)
             survey.run()
-            times[columns] = time.perf_counter() - start
-            sizes[columns] = sum(
-                os.path.getsize(os.path.join(root, name))
-                for root, _, names in os.walk(directory)
-                for name in names
-            )
+            elapsed = time.perf_counter() - start
+            if measure:
+                times[columns] = elapsed
+                sizes[columns] = sum(
+                    os.path.getsize(os.path.join(root, name))
+                    for root, _, names in os.walk(directory)
+                    for name in names
+                )
+            return survey.moments.shape[0]
         finally:
             shutil.rmtree(directory, ignore_errors=True)
-    bodies = survey.moments.shape[0]
+
+    for columns in ("compact", "all"):
+        once(columns, measure=False)  # warm-up, untimed
+    for columns in ("compact", "all"):
+        bodies = once(columns, measure=True)
     return {
         "task": f"survey bytes per body, n <= {n_max} (grid {resolution}), Parquet",
+        "timed": "one run of each layout after an untimed warm-up run of each, in this process",
         "ours_s": times["compact"],
         "baseline": "the same survey with every catalog column (--columns all)",
         "baseline_s": times["all"],
@@ -681,18 +870,31 @@ def bench_cuda_total_phase(points=100_000_000, repeats=7, seed=0):
     sample = theta[:1_000_000]
     reference = total_phase(body, sample)
     difference = np.max(np.abs(total_phase(body, sample, device="cuda") / reference - 1.0))
+    threads = 1 if cpu_points < SERIAL_BELOW else get_num_threads()
+    cpu_runs = max(1, repeats // 2)
+    scaled = (
+        f"timed on the first {cpu_points:.0e} angles and scaled by {points / cpu_points:g}"
+        if cpu_points < points
+        else "timed on all the angles"
+    )
     return {
         "task": f"total phase on the GPU, {points:.0e} random theta (fig6 body)",
+        "timed": f"the kernel alone (angles already on the GPU) and end to end, best "
+        f"of {repeats} runs each after a warm-up run; the CPU best of {cpu_runs} after "
+        f"a warm-up run, {scaled}",
         "device": gpu.device_name(),
         "ours_s": kernel,
-        "baseline": f"orbits.total_phase on the CPU ({numba.get_num_threads()} threads)",
+        "baseline": f"orbits.total_phase on the CPU ({_plural_threads(threads)}), {scaled}",
         "baseline_s": cpu,
         "speedup": cpu / kernel,
         "angles_per_s": points / kernel,
         "end_to_end_s": end_to_end,
+        "threads": threads,
         "note": f"kernel {points / kernel:.3g} angles/s on {gpu.device_name()}; "
-        f"end to end (copies, fold and checks on the host) {points / end_to_end:.3g} "
-        f"angles/s; CPU {points / cpu:.3g} angles/s; max relative difference "
+        f"end to end {points / end_to_end:.3g} angles/s (total_phase(..., "
+        "device='cuda'): argument checks and the phi fold on the host, theta "
+        "folded and checked in the kernel, copies both ways); "
+        f"CPU {points / cpu:.3g} angles/s; max relative difference "
         f"GPU vs CPU {difference:.1e}",
     }
 
@@ -736,15 +938,20 @@ def bench_cuda_search(resolution=400, n_max=30, repeats=3):
         if k and rows.counts[b] == cpu_rows.counts[b]:
             ours, theirs = rows.offset[b, :k], cpu_rows.offset[b, :k]
             worst = max(worst, float(np.max(np.abs(ours / theirs - 1.0))))
+    threads = get_num_threads()
     return {
         "task": f"survey search on the GPU, {count} bodies, n <= {n_max} (grid {resolution})",
+        "timed": f"the kernel alone (best of {repeats} launches) and end to end (best "
+        f"of {repeats}), after a warm-up run; the CPU best of {max(1, repeats // 2)} "
+        "after a warm-up run",
         "device": gpu.device_name(),
         "ours_s": kernel,
-        "baseline": f"the same search on the CPU ({numba.get_num_threads()} threads)",
+        "baseline": f"the same search on the CPU ({_plural_threads(threads)})",
         "baseline_s": cpu,
         "speedup": cpu / kernel,
         "bodies_per_s": count / kernel,
         "end_to_end_s": end_to_end,
+        "threads": threads,
         "note": f"kernel {count / kernel:.3g} bodies/s on {gpu.device_name()}; with "
         f"the copies {count / end_to_end:.3g} bodies/s; CPU {count / cpu:.3g} "
         f"bodies/s; {int(cpu_rows.counts.clip(0).sum())} roots, root counts "
@@ -777,7 +984,6 @@ def _median_time(function, repeats):
 def _busy_process():
     """A CPU-bound child (a Python busy loop) standing for another user's job."""
     import subprocess
-    import sys
 
     return subprocess.Popen(
         [sys.executable, "-c", "while True:\n    pass"],
@@ -791,10 +997,13 @@ def load_check(rows):
     """Re-time each row's own task idle and beside a CPU-bound process.
 
     For each row (in place) adds ``load``: ``idle_s`` and ``loaded_s``
-    (medians, measured back to back so that the rest of the machine is the
-    same), ``slowdown`` = loaded/idle and ``holds`` (slowdown <=
-    :data:`LOAD_LIMIT`).  Rows without a task of their own (start-up, cold
-    compile) are skipped.  The busy process is ours and is always stopped.
+    (each after a warm-up call, the median of ``runs`` calls: at least 3,
+    one for the rows whose own figure is a single run; measured back to back
+    so that the rest of the machine is the same), ``slowdown`` = loaded/idle
+    and ``holds`` (slowdown <= :data:`LOAD_LIMIT`).  Rows without a task of
+    their own (``_ours``: startup, cold_compile, search_evaluations,
+    survey_scaling, survey_bytes) are not re-timed.  The busy process is
+    ours and is always stopped.
     """
     for row in rows:
         task = row.pop("_ours", None)
@@ -815,55 +1024,100 @@ def load_check(rows):
             "loaded_s": loaded,
             "slowdown": loaded / idle,
             "holds": bool(loaded / idle <= LOAD_LIMIT),
+            "runs": repeats,
         }
 
 
-def run(names=None, quick=False, load=True, device="cpu"):
-    """Run the named benchmarks (all by default); return a JSON-able dict.
+def load_failures(report):
+    """The rows of a :func:`run` report whose under-load check failed."""
+    return [row for row in report["results"] if not row.get("load", {}).get("holds", True)]
 
-    With ``load`` each row's task is then re-timed beside a CPU-bound
-    process (:func:`load_check`).  With ``device="cuda"`` the rows are those
-    of :data:`CUDA_BENCHMARKS` (the GPU named in ``machine["gpu"]``); without
+
+def _quick_kwargs(name, gpu):
+    """The smaller sizes of ``--quick`` for the row ``name``."""
+    if gpu:
+        return {"cuda_phase": {"points": 10_000_000}, "cuda_search": {"resolution": 100}}.get(
+            name, {}
+        )
+    if name in ("phase", "motion_rate"):
+        return {"points": 100_000}
+    if name in ("survey", "survey_scaling", "survey_threads", "search_scaling", "survey_bytes"):
+        return {"resolution": 60}
+    if name == "startup":
+        return {"repeats": 2}
+    if name == "search_evaluations":
+        return {"resolution": 30}
+    return {}
+
+
+def _skipped(name, reason):
+    """The row of a benchmark that cannot run here (see :func:`unavailable`)."""
+    return {
+        "name": name,
+        "task": f"{name}: skipped",
+        "timed": None,
+        "ours_s": None,
+        "baseline": None,
+        "baseline_s": None,
+        "speedup": None,
+        "skipped": reason,
+        "note": f"skipped: {reason}",
+    }
+
+
+def run(names=None, quick=False, load=True, device="cpu"):
+    """Run the named benchmarks (all by default, each once); return a JSON-able dict.
+
+    With ``load`` each CPU row's task is then re-timed beside a CPU-bound
+    process (:func:`load_check`; the report's ``load_check`` says how many
+    rows held).  With ``device="cuda"`` the rows are those of
+    :data:`CUDA_BENCHMARKS` (the GPU named in ``machine["gpu"]``), ``load``
+    does not apply (there is no under-load check of GPU rows), and without
     a usable GPU that raises :class:`orbits.DeviceError` before any timing.
+
+    A row that cannot run on this machine (:func:`unavailable`) is refused
+    with :class:`BenchError` when it is named, and is a row with
+    ``skipped`` (the reason) and no figures when all rows run.  An unknown
+    or repeated name is :class:`orbits.InputError`.
     """
     from .device import check_device, cuda_kernels
 
-    gpu = cuda_kernels() if check_device(device) == "cuda" else None
-    table = CUDA_BENCHMARKS if gpu else BENCHMARKS
-    names = list(table) if not names else names
+    table = CUDA_BENCHMARKS if check_device(device) == "cuda" else BENCHMARKS
+    named = bool(names)
+    names = list(table) if not names else list(names)
+    unknown = [name for name in names if name not in table]
+    if unknown:
+        raise InputError(
+            f"unknown benchmark(s) for --device {device}: {', '.join(sorted(set(unknown)))}; "
+            f"known: {', '.join(table)}"
+        )
+    repeated = sorted({name for name in names if names.count(name) > 1})
+    if repeated:
+        raise InputError(
+            f"benchmark(s) named more than once: {', '.join(repeated)}; give each name once"
+        )
+    gpu = cuda_kernels() if device == "cuda" else None
+    if named and not gpu:
+        for name in names:
+            reason = unavailable(name)
+            if reason:
+                raise BenchError(f"{name} cannot run here: {reason}")
     rows = []
     for name in names:
-        if gpu:
-            kwargs = {}
-            if quick and name == "cuda_phase":
-                kwargs = {"points": 10_000_000}
-            if quick and name == "cuda_search":
-                kwargs = {"resolution": 100}
-            rows.append(dict(name=name, **table[name](**kwargs)))
+        reason = None if gpu else unavailable(name)
+        if reason:
+            rows.append(_skipped(name, reason))
             continue
-        kwargs = {}
-        if quick and name in ("phase", "motion_rate"):
-            kwargs = {"points": 100_000}
-        if quick and name in (
-            "survey",
-            "survey_scaling",
-            "survey_threads",
-            "search_scaling",
-            "survey_bytes",
-        ):
-            kwargs = {"resolution": 60}
-        if quick and name == "startup":
-            kwargs = {"repeats": 2}
-        if quick and name == "search_evaluations":
-            kwargs = {"resolution": 30}
-        rows.append(dict(name=name, **BENCHMARKS[name](**kwargs)))
-    if load:
+        kwargs = _quick_kwargs(name, gpu) if quick else {}
+        rows.append(dict(name=name, **table[name](**kwargs)))
+    checked = bool(load and not gpu)
+    if checked:
         load_check(rows)
     for row in rows:
         row.pop("_ours", None)
     machine = {
         "cpu_count": os.cpu_count(),
-        "numba_threads": numba.get_num_threads(),
+        "numba_threads": get_num_threads(),
         "python": platform.python_version(),
         "numpy": np.__version__,
         "scipy": scipy.__version__,
@@ -871,12 +1125,27 @@ def run(names=None, quick=False, load=True, device="cpu"):
     }
     if gpu:
         machine["gpu"] = gpu.device_name()
-    return {"machine": machine, "results": rows}
+    report = {"machine": machine, "results": rows}
+    if checked:
+        loaded = [row for row in rows if "load" in row]
+        report["load_check"] = {
+            "limit": LOAD_LIMIT,
+            "rows": len(loaded),
+            "held": sum(row["load"]["holds"] for row in loaded),
+            "passed": not load_failures(report),
+        }
+    return report
+
+
+# the task column is at least this wide
+TASK_WIDTH = 52
 
 
 def format_table(report):
     """Plain-text table of a :func:`run` report."""
     machine = report["machine"]
+    rows = report["results"]
+    width = max([TASK_WIDTH] + [len(row["task"]) for row in rows])
     lines = [
         f"orbits bench: {machine['cpu_count']} cores, "
         f"{machine['numba_threads']} numba threads, Python "
@@ -884,36 +1153,46 @@ def format_table(report):
         f"{machine['scipy']}, numba {machine['numba']}"
         + (f", GPU {machine['gpu']}" if "gpu" in machine else ""),
         "",
-        f"{'task':<52} {'ours':>10} {'baseline':>10} {'ratio':>8}",
+        f"{'task':<{width}} {'ours':>10} {'baseline':>10} {'ratio':>8}",
     ]
-    for row in report["results"]:
-        baseline = _seconds(row["baseline_s"]) if math.isfinite(row["baseline_s"]) else "-"
-        ratio = f"{row['speedup']:>7.1f}x" if math.isfinite(row["speedup"]) else f"{'-':>8}"
-        lines.append(f"{row['task']:<52} {_seconds(row['ours_s']):>10} {baseline:>10} {ratio}")
+    for row in rows:
+        ours = _seconds(row["ours_s"]) if _finite(row["ours_s"]) else "-"
+        baseline = _seconds(row["baseline_s"]) if _finite(row["baseline_s"]) else "-"
+        ratio = f"{row['speedup']:.1f}x" if _finite(row["speedup"]) else "-"
+        lines.append(f"{row['task']:<{width}} {ours:>10} {baseline:>10} {ratio:>8}")
+        if row.get("skipped"):
+            lines.append(f"    skipped: {row['skipped']}")
+            continue
+        lines.append(f"    timed: {row['timed']}")
         lines.append(f"    baseline: {row['baseline']}; {row['note']}")
-    loaded = [row for row in report["results"] if "load" in row]
+    loaded = [row for row in rows if "load" in row]
     if loaded:
         lines += [
             "",
             (
-                "under load: each task again beside one CPU-bound process "
-                f"(a Python busy loop), medians; must hold within {LOAD_LIMIT:g}x"
+                "under load: each task again, idle and then beside one CPU-bound "
+                "process (a Python busy loop), each the median of `runs` runs after "
+                f"a warm-up; each row must slow down by at most {LOAD_LIMIT:g}x"
             ),
-            f"{'task':<52} {'idle':>10} {'loaded':>10} {'slowdown':>8}",
+            f"{'task':<{width}} {'idle':>10} {'loaded':>10} {'slowdown':>8} {'runs':>4}",
         ]
         for row in loaded:
             load = row["load"]
             lines.append(
-                f"{row['task']:<52} {_seconds(load['idle_s']):>10} "
-                f"{_seconds(load['loaded_s']):>10} {load['slowdown']:>7.2f}x"
-                + ("" if load["holds"] else "  FAILS")
+                f"{row['task']:<{width}} {_seconds(load['idle_s']):>10} "
+                f"{_seconds(load['loaded_s']):>10} {load['slowdown']:>7.2f}x "
+                f"{load.get('runs', '-'):>4}" + ("" if load["holds"] else "  FAILS")
             )
         held = sum(row["load"]["holds"] for row in loaded)
         lines.append(
             f"under-load check: {held} of {len(loaded)} rows hold within "
-            f"{LOAD_LIMIT:g}x" + ("" if held == len(loaded) else " (NOT ALL)")
+            f"{LOAD_LIMIT:g}x" + ("" if held == len(loaded) else " (NOT ALL: FAILED)")
         )
     return "\n".join(lines)
+
+
+def _finite(value):
+    return value is not None and math.isfinite(value)
 
 
 def _seconds(value):
@@ -924,5 +1203,23 @@ def _seconds(value):
     return f"{value * 1e6:.1f} us"
 
 
+def _json_ready(value):
+    """``value`` with every NaN or infinity as None (JSON's null); NumPy scalars
+    as Python numbers."""
+    if isinstance(value, dict):
+        return {key: _json_ready(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_ready(item) for item in value]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        value = float(value)
+        return value if math.isfinite(value) else None
+    return value
+
+
 def to_json(report):
-    return json.dumps(report, indent=2)
+    """The report as strict JSON: a figure that does not exist is null, never NaN."""
+    return json.dumps(_json_ready(report), indent=2, allow_nan=False)

@@ -26,6 +26,7 @@ def test_load_check_times_each_row_and_stops_the_busy_process(monkeypatch):
     rows = [
         {
             "task": "a",
+            "timed": "t",
             "ours_s": 1e-3,
             "baseline": "b",
             "baseline_s": 2e-3,
@@ -35,6 +36,7 @@ def test_load_check_times_each_row_and_stops_the_busy_process(monkeypatch):
         },
         {
             "task": "no task of its own",
+            "timed": "t",
             "ours_s": 1.0,
             "baseline": "b",
             "baseline_s": math.nan,
@@ -45,7 +47,8 @@ def test_load_check_times_each_row_and_stops_the_busy_process(monkeypatch):
     bench.load_check(rows)
     assert len(started) == 1 and started[0].poll() is not None  # stopped
     load = rows[0]["load"]
-    assert set(load) == {"idle_s", "loaded_s", "slowdown", "holds"}
+    assert set(load) == {"idle_s", "loaded_s", "slowdown", "holds", "runs"}
+    assert load["runs"] == 5
     assert load["slowdown"] == load["loaded_s"] / load["idle_s"]
     assert load["holds"] == (load["slowdown"] <= bench.LOAD_LIMIT)
     assert len(calls) == 2 * (1 + 5)  # warm-up + 5, idle and loaded
@@ -124,3 +127,422 @@ def test_search_scaling_row_counts_the_grid():
     assert row["ours_s"] > 0 and row["baseline_s"] > 0
     assert row["speedup"] == pytest.approx(row["baseline_s"] / row["ours_s"], rel=1e-12)
     assert f"{bodies} bodies" in row["note"]
+
+
+# ------------------------------------------------------------------ probe10 fixes
+def _strict_json(text):
+    """json.loads that refuses NaN and Infinity (as JavaScript's JSON.parse does)."""
+    import json
+
+    def refuse(constant):
+        raise ValueError(f"not JSON: {constant}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+def _machine():
+    return {
+        "cpu_count": 2,
+        "numba_threads": 2,
+        "python": "3",
+        "numpy": "2",
+        "scipy": "1",
+        "numba": "0",
+    }
+
+
+def _one_line_error(capsys, *fragments):
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("orbits: error: "), err
+    for fragment in fragments:
+        assert fragment in err[0], err
+    return err[0]
+
+
+@pytest.fixture
+def restore_threads(monkeypatch):
+    """``orbits --threads N`` sets the count for the process: put it back after."""
+    import numba
+
+    from orbits import threads
+
+    before = numba.get_num_threads()
+    monkeypatch.setattr(threads, "_requested", threads._requested)
+    yield
+    numba.set_num_threads(before)
+
+
+def test_json_is_strict_json_with_null_for_missing_figures(capsys):
+    """F1: the throughput row has no baseline: null, not NaN (invalid JSON)."""
+    from orbits.cli import main
+
+    assert main(["bench", "--only", "motion_rate", "--quick", "--json", "--no-load-check"]) == 0
+    report = _strict_json(capsys.readouterr().out)
+    row = report["results"][0]
+    assert row["name"] == "motion_rate"
+    assert row["baseline_s"] is None and row["speedup"] is None
+    assert row["ours_s"] > 0
+    # any other non-finite number becomes null too, never NaN or Infinity
+    text = bench.to_json({"a": [math.nan, math.inf, -math.inf, 1.5], "b": {"c": math.nan}})
+    assert _strict_json(text) == {"a": [None, None, None, 1.5], "b": {"c": None}}
+
+
+def _fake_subprocess_run(monkeypatch, calls, stdout='{"bodies": 7}'):
+    """Replace subprocess.run: record each child's argv and environment."""
+    import subprocess
+
+    def fake(argv, **options):
+        calls.append({"argv": list(argv), "env": options.get("env")})
+        return subprocess.CompletedProcess(argv, 0, stdout=stdout, stderr="")
+
+    monkeypatch.setattr(subprocess, "run", fake)
+
+
+def test_threads_option_reaches_the_thread_rows_and_the_children(
+    capsys, monkeypatch, restore_threads
+):
+    """F3: ``orbits --threads 1 bench`` compares 1 thread with 1 in the in-process
+    rows, and the children (survey_scaling, cold_compile) get ``--threads 1`` and
+    the user's PYTHONPATH after the package's own directory."""
+    import os
+    from pathlib import Path
+
+    from orbits.cli import main
+
+    monkeypatch.setitem(
+        bench.BENCHMARKS,
+        "survey_threads",
+        lambda **kw: bench.bench_survey_threads(resolution=8, n_max=3),
+    )
+    monkeypatch.setitem(
+        bench.BENCHMARKS,
+        "search_scaling",
+        lambda **kw: bench.bench_search_scaling(resolution=8, n_max=3, repeats=1),
+    )
+    monkeypatch.setitem(
+        bench.BENCHMARKS,
+        "survey_scaling",
+        lambda **kw: bench.bench_survey_scaling(resolution=4, n_max=2, repeats=1),
+    )
+    # the children are not started (no timing); two CPUs whatever this machine has
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
+    monkeypatch.setattr(os, "sched_setaffinity", lambda pid, cpus: None, raising=False)
+    calls = []
+    _fake_subprocess_run(monkeypatch, calls)
+    monkeypatch.setenv("PYTHONPATH", "/the/users/own/path")
+    names = ["survey_threads", "search_scaling", "survey_scaling", "cold_compile"]
+    assert main(["--threads", "1", "bench", "--only", *names, "--json", "--no-load-check"]) == 0
+    report = _strict_json(capsys.readouterr().out)
+    assert report["machine"]["numba_threads"] == 1
+    rows = {row["name"]: row for row in report["results"]}
+    assert set(rows) == set(names)
+    assert rows["survey_threads"]["task"].endswith(": 1 thread vs 1")
+    assert rows["search_scaling"]["task"].endswith(": 1 thread vs 1")
+    for name in names:
+        assert rows[name]["threads"] == 1, name
+    assert "(1 thread) vs 1" in rows["survey_scaling"]["task"]
+    assert "--threads 1 survey" in rows["survey_scaling"]["command"]
+    # every orbits child was told the count; the one-CPU runs use one thread
+    children = [call["argv"] for call in calls if "orbits" in call["argv"]]
+    assert len(children) == 4 + 2  # survey: warm-up + 3 in turns; catalog: cold + warm
+    for argv in children:
+        assert argv[argv.index("--threads") + 1] == "1", argv
+    root = str(Path(bench.__file__).resolve().parents[1])
+    for call in calls:
+        assert call["env"]["PYTHONPATH"] == root + os.pathsep + "/the/users/own/path"
+
+
+def test_survey_scaling_without_cpu_affinity(capsys, monkeypatch):
+    """F5: no os.sched_getaffinity (macOS, Windows): named, one line and exit 2;
+    among all rows, a skipped row with the reason (and strict JSON)."""
+    import os
+
+    from orbits.cli import main
+
+    monkeypatch.delattr(os, "sched_getaffinity", raising=False)
+    monkeypatch.delattr(os, "sched_setaffinity", raising=False)
+    assert main(["bench", "--only", "survey_scaling", "--quick", "--no-load-check"]) == 2
+    _one_line_error(capsys, "survey_scaling cannot run here", "sched_getaffinity")
+    with pytest.raises(bench.BenchError, match="cannot run here"):
+        bench.bench_survey_scaling(resolution=4, n_max=2, repeats=1)
+
+    def other(**kw):
+        return {
+            "task": "another row",
+            "timed": "t",
+            "ours_s": 1.0,
+            "baseline": "b",
+            "baseline_s": 2.0,
+            "speedup": 2.0,
+            "note": "n",
+        }
+
+    monkeypatch.setattr(
+        bench, "BENCHMARKS", {"survey_scaling": bench.bench_survey_scaling, "other": other}
+    )
+    report = bench.run(quick=True, load=False)  # all rows
+    skipped, ran = report["results"]
+    assert skipped["name"] == "survey_scaling" and "sched_getaffinity" in skipped["skipped"]
+    assert skipped["ours_s"] is None and skipped["speedup"] is None
+    assert ran["name"] == "other" and "skipped" not in ran
+    assert _strict_json(bench.to_json(report))["results"][0]["skipped"] == skipped["skipped"]
+    text = bench.format_table(report)
+    assert "survey_scaling: skipped" in text and "    skipped: needs os.sched_getaffinity" in text
+
+
+@pytest.fixture
+def failing_interpreter(tmp_path, monkeypatch):
+    """sys.executable replaced by a program that fails with a message on stderr."""
+    import sys
+
+    script = tmp_path / "python"
+    script.write_text(
+        "#!/bin/sh\necho 'first line' >&2\necho 'boom: the child broke' >&2\nexit 3\n"
+    )
+    script.chmod(0o755)
+    monkeypatch.setattr(sys, "executable", str(script))
+    return script
+
+
+def test_a_failing_child_process_is_one_line_and_exit_2(capsys, failing_interpreter):
+    """F5: a child that fails (CalledProcessError before) is one line, exit 2."""
+    import os
+
+    from orbits.cli import main
+
+    assert main(["bench", "--only", "startup", "--quick", "--no-load-check"]) == 2
+    line = _one_line_error(capsys, "child process failed (exit 3)", "boom: the child broke")
+    assert "-c 'import numpy'" in line
+    if hasattr(os, "sched_getaffinity") and len(os.sched_getaffinity(0)) >= 2:
+        assert main(["bench", "--only", "survey_scaling", "--quick", "--no-load-check"]) == 2
+        _one_line_error(capsys, "child process failed (exit 3)", "survey --resolution 2")
+
+
+def test_startup_warms_up_before_it_times(monkeypatch):
+    """F2: one untimed run of each fresh-process command before the medians."""
+    calls = []
+    _fake_subprocess_run(monkeypatch, calls)
+    row = bench.bench_startup(repeats=2)
+    commands = [call["argv"][1:] for call in calls]
+    assert len(commands) == 3 + 3 * 2
+    assert commands[:3] == [
+        ["-c", "import numpy"],
+        ["-c", "import orbits"],
+        ["-m", "orbits", "--help"],
+    ]
+    assert "median of 2 fresh processes" in row["timed"] and "untimed run" in row["timed"]
+
+
+def test_survey_bytes_warms_up_before_it_times(monkeypatch):
+    """F2: the compact survey was timed cold against a warm ``all``; now each
+    layout has an untimed run first, and the timed runs are the last two."""
+    from orbits.survey import Survey
+
+    runs = []
+    real = Survey.run
+
+    def spy(self, *args, **kwargs):
+        runs.append(self.columns)
+        return real(self, *args, **kwargs)
+
+    monkeypatch.setattr(Survey, "run", spy)
+    row = bench.bench_survey_bytes(resolution=8, n_max=3)
+    assert runs == ["compact", "all", "compact", "all"]
+    assert "after an untimed warm-up run of each" in row["timed"]
+
+
+def test_survey_baseline_says_it_is_extrapolated(monkeypatch):
+    """F2: the survey row's baseline loop runs on a sample and is scaled; the
+    row says how many bodies and to how many."""
+    from orbits.bodies import region_grid
+
+    monkeypatch.setattr(bench, "SURVEY_SAMPLE", 5)
+    row = bench.bench_survey(resolution=12, n_max=2)
+    count = len(region_grid(12))
+    sample = len(region_grid(12)[:: count // 5])
+    assert 5 <= sample < count
+    assert row["baseline_sample"] == sample
+    assert f"extrapolated from {sample} of the {count} bodies" in row["baseline"]
+    assert f"scaled by {count}/{sample}" in row["note"]
+    assert f"over {sample} sampled bodies" in row["timed"]
+
+
+def test_motion_accuracy_column_hides_only_a_missing_mpmath(monkeypatch):
+    """F7: an error in the mpmath reference is raised, not shown as 'install mpmath'."""
+    import sys
+
+    pytest.importorskip("mpmath")
+    from orbits import checks
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("the reference broke")
+
+    monkeypatch.setattr(checks, "exact_motion_mpmath", broken)
+    with pytest.raises(RuntimeError, match="the reference broke"):
+        bench.bench_motion(points=41, repeats=1)
+    monkeypatch.setitem(sys.modules, "mpmath", None)  # import mpmath fails
+    row = bench.bench_motion(points=41, repeats=1)
+    assert "accuracy vs mpmath: n/a (install mpmath)" in row["note"]
+
+
+def test_phase_note_makes_no_claim_about_the_baseline_losing_digits():
+    """F7: both routes are at theta's conditioning limit next to theta_c; the
+    note gives the largest difference and where it is, nothing more."""
+    row = bench.bench_total_phase(points=2000, repeats=1)
+    assert "loses digits" not in row["note"]
+    assert "max relative difference ours vs baseline" in row["note"]
+    assert "theta - theta_c = " in row["note"]
+
+
+def test_failed_under_load_check_exits_1_after_the_table(capsys, monkeypatch):
+    """F7: a row that slows down more than LOAD_LIMIT fails the command (exit 1,
+    one line naming it, after the table or the JSON)."""
+    from orbits.cli import main
+
+    def report(*args, **kwargs):
+        rows = [
+            {
+                "name": "search",
+                "task": "closed orbits",
+                "timed": "t",
+                "ours_s": 1e-3,
+                "baseline": "b",
+                "baseline_s": 2e-3,
+                "speedup": 2.0,
+                "note": "n",
+                "load": {
+                    "idle_s": 1e-3,
+                    "loaded_s": 4.46e-3,
+                    "slowdown": 4.46,
+                    "holds": False,
+                    "runs": 20,
+                },
+            }
+        ]
+        return {"machine": _machine(), "results": rows}
+
+    monkeypatch.setattr(bench, "run", report)
+    assert main(["bench", "--only", "search"]) == 1
+    captured = capsys.readouterr()
+    assert "under-load check: 0 of 1 rows hold within 2x" in captured.out
+    err = captured.err.strip().splitlines()
+    assert err == ["orbits: error: under-load check failed (limit 2x): closed orbits slowed 4.46x"]
+    assert main(["bench", "--only", "search", "--json"]) == 1
+    captured = capsys.readouterr()
+    assert _strict_json(captured.out)["results"][0]["load"]["holds"] is False
+    assert len(captured.err.strip().splitlines()) == 1
+
+
+def test_run_reports_the_load_check(monkeypatch):
+    """The report says how many rows held (JSON users need not recount)."""
+    monkeypatch.setattr(
+        bench,
+        "BENCHMARKS",
+        {
+            "a": lambda **kw: {
+                "task": "a",
+                "timed": "t",
+                "ours_s": 1.0,
+                "baseline": "b",
+                "baseline_s": 1.0,
+                "speedup": 1.0,
+                "note": "n",
+                "_ours": (lambda: None, 1),
+            }
+        },
+    )
+    monkeypatch.setattr(bench, "_busy_process", lambda: _Stopped())
+    report = bench.run(["a"])
+    check = report["load_check"]
+    assert check["limit"] == bench.LOAD_LIMIT and check["rows"] == 1
+    assert check["held"] + (not check["passed"]) == 1
+    assert "_ours" not in report["results"][0]
+
+
+class _Stopped:
+    def kill(self):
+        pass
+
+    def wait(self):
+        pass
+
+
+def test_device_cuda_refuses_no_load_check(capsys):
+    """F7: the GPU rows have no under-load check, so --no-load-check is refused there."""
+    from orbits.cli import main
+
+    assert main(["bench", "--device", "cuda", "--no-load-check"]) == 2
+    _one_line_error(capsys, "--no-load-check applies only with --device cpu")
+
+
+def test_only_refuses_a_repeated_name(capsys):
+    """F8: ``--only motion_rate motion_rate`` ran the row twice."""
+    from orbits.cli import main
+
+    code = main(["bench", "--only", "motion_rate", "motion_rate", "--quick", "--no-load-check"])
+    assert code == 2
+    _one_line_error(capsys, "named more than once: motion_rate")
+    with pytest.raises(bench.InputError, match="named more than once"):
+        bench.run(["phase", "phase"])
+
+
+def test_long_task_names_keep_the_columns_aligned():
+    """F8: a task longer than the column pushed its figures out of line."""
+    long = "survey search on the GPU, 3855 bodies, n <= 30 (grid 100), a long name"
+    rows = [
+        {
+            "task": task,
+            "timed": "t",
+            "ours_s": 1e-3,
+            "baseline": "b",
+            "baseline_s": 2e-3,
+            "speedup": 2.0,
+            "note": "n",
+            "load": {"idle_s": 1e-3, "loaded_s": 1e-3, "slowdown": 1.0, "holds": True, "runs": 3},
+        }
+        for task in ("short", long)
+    ]
+    lines = bench.format_table({"machine": _machine(), "results": rows}).splitlines()
+    main_table = [line for line in lines if line.startswith(("task", "short", long))]
+    assert len(main_table) == 6  # header and two rows, twice (times, under load)
+    first, second = main_table[:3], main_table[3:]
+    assert len({len(line) for line in first}) == 1, first
+    assert len({len(line.rstrip()) for line in second}) == 1, second
+
+
+def test_cuda_phase_labels_under_the_simulator():
+    """F7/F8: the cuda_phase row says what is timed (the CPU on fewer points,
+    scaled), where theta is folded, and the CPU's thread count (one thread
+    under 20,000 points)."""
+    import importlib.util
+    import json
+    import os
+    import subprocess
+    import sys
+    import textwrap
+    from pathlib import Path
+
+    if importlib.util.find_spec("numba_cuda") is None:
+        pytest.skip("numba-cuda not installed")
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1")
+    env["PYTHONPATH"] = str(root) + os.pathsep + env.get("PYTHONPATH", "")
+    code = """
+        import json
+        from orbits import bench
+        print(json.dumps(bench.bench_cuda_total_phase(points=48, repeats=1)))
+    """
+    done = subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code)],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=root,
+        timeout=600,
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    row = json.loads(done.stdout.strip().splitlines()[-1])
+    assert row["threads"] == 1 and "(1 thread)" in row["baseline"]
+    assert "timed on all the angles" in row["timed"]
+    assert "theta folded and checked in the kernel" in row["note"]
+    assert "fold and checks on the host" not in row["note"]

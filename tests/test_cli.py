@@ -88,7 +88,9 @@ class TestPhase:
 
 
 def test_bench_json_quick(capsys):
-    code, out, _ = run(capsys, "bench", "--quick", "--json", "--only", "phase")
+    # --no-load-check: the under-load check is a timing (exit 1 when this
+    # shared machine slows the row down more than 2x), never a test's verdict
+    code, out, _ = run(capsys, "bench", "--quick", "--json", "--only", "phase", "--no-load-check")
     assert code == 0
     report = json.loads(out)
     row = report["results"][0]
