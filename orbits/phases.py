@@ -357,7 +357,9 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0, device="cp
         {\\sqrt{(I_3-I_2)(M^2-2EI_1)/(I_1I_2I_3)}} - 2\\pi ,
 
     with :math:`T` and :math:`k` of Eqs. (16a, b) (eqn:TK), and on LAM its
-    image under :math:`1 \\leftrightarrow 3` without the :math:`-2\\pi`.
+    image under :math:`1 \\leftrightarrow 3` with :math:`+2\\pi` in place of
+    :math:`-2\\pi` (the plain image is :math:`\\Delta\\alpha - 4\\pi`: at the
+    Fig. 6 body and :math:`\\theta = 1.2`, 1.25936 for 13.82573).
     :math:`I_1K + (I_3-I_1)\\Pi` is evaluated as one Bulirsch
     :math:`\\operatorname{cel}(k_c, p, a, b)` with :math:`k_c = \\sqrt{1-k^2}`
     formed from the factored separatrix distance, never as :math:`1 - m`

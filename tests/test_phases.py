@@ -135,6 +135,31 @@ class TestErrata:
         assert float(reduced) == pytest.approx(orbits.total_phase(FIG6, theta), rel=1e-13)
 
     @pytest.mark.parametrize("theta", [1.03, 1.2, 1.5])
+    def test_lam_is_the_sam_formula_under_1_3_with_plus_two_pi(self, theta):
+        """The docstring of total_phase: Eq. (20)'s SAM expression (with its
+        -2 pi) under 1 <-> 3 is Delta alpha - 4 pi on LAM; written out here
+        from Eqs. (16, 20) in mpmath, not from the package's kernels."""
+
+        def sam_expression(i1, i2, i3, w1, w2, w3):
+            m_sq = (i1 * w1) ** 2 + (i2 * w2) ** 2 + (i3 * w3) ** 2
+            two_e = i1 * w1**2 + i2 * w2**2 + i3 * w3**2
+            k2 = (i2 - i1) * (two_e * i3 - m_sq) / ((i3 - i2) * (m_sq - two_e * i1))
+            rate = mp.sqrt((i3 - i2) * (m_sq - two_e * i1) / (i1 * i2 * i3))
+            n = -i3 * (i2 - i1) / (i1 * (i3 - i2))
+            return (
+                mp.sqrt(m_sq) * 4 * mp.ellipk(k2) / rate / i3
+                + 4 * mp.sqrt(m_sq) * (i3 - i1) / (i1 * i3) * mp.ellippi(n, k2) / rate
+                - 2 * mp.pi
+            )
+
+        i1, i2, i3 = (mp.mpf(v) for v in FIG6.moments)
+        with mp.workdps(30):
+            th = mp.mpf(theta)
+            image = sam_expression(i3, i2, i1, mp.cos(th), 0, mp.sin(th))
+        total = orbits.total_phase(FIG6, theta)
+        assert float(image + 4 * mp.pi) == pytest.approx(total, rel=1e-14)
+
+    @pytest.mark.parametrize("theta", [1.03, 1.2, 1.5])
     def test_printed_lam_characteristic_is_wrong(self, theta):
         i1, i2, i3 = FIG6.moments
         with mp.workdps(30):
