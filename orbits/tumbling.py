@@ -113,9 +113,9 @@ def _too_near(moments, what):
     sam, lam = total_phase(moments, dtheta=[-_SMALLEST_OFFSET, _SMALLEST_OFFSET])
     return InputError(
         f"every spin of this body with {what} lies closer than |dtheta| = "
-        f"{_SMALLEST_OFFSET:.2g} rad to the separatrix, nearer than a double can "
-        f"hold: the largest total phase a double reaches is {sam:.6f} rad on SAM "
-        f"and {lam:.6f} rad on LAM"
+        f"{_SMALLEST_OFFSET:.2g} rad to the separatrix, nearer than a double holds "
+        f"to full precision (the smallest normal double): the largest total phase "
+        f"at that offset is {sam:.6f} rad on SAM and {lam:.6f} rad on LAM"
     )
 
 
@@ -142,9 +142,9 @@ def spins_with_total_phase(body_or_moments, total_phase):
         ``total_phase`` not finite and positive, below the smallest
         total phase of the body (no spin has it: the message gives the
         minimum), or so large that every spin with it lies closer to the
-        separatrix than ``|dtheta| = 2.2e-308`` (the message gives the
-        largest total phase a double reaches on each branch: about 2,400 rad
-        for the Fig. 6 body).
+        separatrix than ``|dtheta| = 2.2e-308``, the smallest normal double
+        (the message gives the total phase at that offset on each branch:
+        about 2,400 rad for the Fig. 6 body).
 
     Warns
     -----

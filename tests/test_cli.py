@@ -80,11 +80,67 @@ class TestPhase:
             ),
             (["bench", "--only", "nope"], ["unknown benchmark"]),
             (["nonsense"], ["invalid choice"]),
+            # a subnormal offset keeps a few digits of what was typed (-1e-320
+            # was computed as -9.99989e-321 with exit 0)
+            (
+                ["phase", "--preset", "fig6", "--dtheta", "-1e-320"],
+                [
+                    "--dtheta -1e-320 is a subnormal double with about 3 significant",
+                    "-9.99989e-321",
+                ],
+            ),
+            (
+                ["phase", "--preset", "fig6", "--dtheta", "1e-310", "--degrees"],
+                ["is a subnormal double", "offsets from 4.9e-312 up keep at least 12"],
+            ),
         ],
     )
     def test_bad_input(self, capsys, argv, fragments):
         code, _, err = run(capsys, *argv)
         assert_usage_error(code, err, *fragments)
+
+    def test_name_is_printed_not_ignored(self, capsys):
+        """--name was accepted and shown nowhere (exit 0)."""
+        base = ["phase", "--preset", "fig6", "--theta", "0.5", "0.7", "--name", "my top"]
+        code, out, _ = run(capsys, *base)
+        assert code == 0
+        first = out.splitlines()[0].split()
+        assert first[:2] == ["name", "[-]"] and " ".join(first[2:]) == "my top my top"
+        code, out, _ = run(capsys, *base, "--csv")
+        table = pd.read_csv(io.StringIO(out), **csv_float_options())
+        assert table.columns[0] == "name" and table.name.tolist() == ["my top", "my top"]
+        # without --name the table is as before
+        code, out, _ = run(capsys, *base[:-2])
+        assert not out.startswith("name")
+        code, out, _ = run(
+            capsys,
+            "phase",
+            "--moments",
+            "1",
+            "2",
+            "2.5",
+            "--omega",
+            "1",
+            "0",
+            "0.1",
+            "--name",
+            "Y",
+        )
+        assert code == 0 and out.splitlines()[0].split() == ["name", "[-]", "Y"]
+
+    @pytest.mark.parametrize("omega, axis", [(("0", "0", "1"), "I3"), (("2", "0", "0"), "I1")])
+    def test_steady_spin_about_an_axis(self, capsys, omega, axis):
+        """omega along I3 was told that its I2 component reverses every T/2 (it is
+        zero throughout), and Omega printed as -0.0."""
+        code, out, _ = run(capsys, "phase", "--moments", "1", "2", "2.5", "--omega", *omega)
+        assert code == 0
+        lines = out.splitlines()
+        assert (
+            lines[-1]
+            == f"steady spin about {axis}: omega stays along {axis} (no polhode, no flip)"
+        )
+        geometric = next(line for line in lines if line.startswith("geometric_phase"))
+        assert geometric.split()[-1] == "0.0"
 
 
 def test_bench_json_quick(capsys):

@@ -27,10 +27,16 @@ def _phase_table(args):
     if args.time_unit is not None and args.periods is None:
         raise InputError("orbits phase: --time-unit applies to --periods")
     body = body_from_args(args)
+    if getattr(args, "name", None) is not None:
+        args.label = body.name  # --name: the first row (a first column in CSV)
     if args.omega is not None:
         table = _omega_table(body, args)
         return _print_table(
-            table, args.csv, _omega_units(args, _moment_unit(args)), _flip_note(table)
+            table,
+            args.csv,
+            _omega_units(args, _moment_unit(args)),
+            _flip_note(table),
+            getattr(args, "label", None),
         )
     if args.periods is not None:
         return _periods_table(body, args)
@@ -41,13 +47,13 @@ def _phase_table(args):
             table = tumbling.spins_with_total_phase(body, _angle(args.total_phase, args))
         else:
             table = tumbling.spins_with_period_ratio(body, args.period_ratio)
-        return _print_table(table, args.csv, NORMALISED_UNITS)
+        return _print_table(table, args.csv, NORMALISED_UNITS, label=getattr(args, "label", None))
     from ..phases import phases
 
     theta = None if args.theta is None else [_angle(v, args) for v in args.theta]
-    dtheta = None if args.dtheta is None else [_angle(v, args) for v in args.dtheta]
+    dtheta = None if args.dtheta is None else [_offset(v, args) for v in args.dtheta]
     table = phases(body, theta, _angle(args.phi, args), dtheta=dtheta)
-    return _print_table(table, args.csv, NORMALISED_UNITS)
+    return _print_table(table, args.csv, NORMALISED_UNITS, label=getattr(args, "label", None))
 
 
 # units of the printed rows (text tables; CSV keeps the bare column names)
@@ -101,6 +107,9 @@ def _flip_note(table):
     row = table.iloc[0]
     components = [abs(float(row[name])) for name in ("w1", "w2", "w3")]
     half = 0.5 * float(row["period"])
+    if components.count(0.0) == 2:  # along I1 or I3 (along I2 is refused: the separatrix)
+        axis = "I1" if components[0] else "I3"
+        return [f"steady spin about {axis}: omega stays along {axis} (no polhode, no flip)"]
     if components[1] < max(components):
         return [
             f"omega's I2 component reverses every T/2 = {half:.6g} s "
@@ -139,12 +148,34 @@ def _periods_table(body, args):
         "P_phi the precession period of the short (SAM) or long (LAM) axis about L; "
         "E_over_E0 = 2 E I3 / M^2; theta at phi = 0)"
     ]
-    return _print_table(table, args.csv, units, notes)
+    return _print_table(table, args.csv, units, notes, getattr(args, "label", None))
 
 
 def _angle(value, args):
     """An angle of the command line in radians (``--degrees`` converts)."""
     return math.radians(value) if getattr(args, "degrees", False) else value
+
+
+# Below the smallest normal double (2.2e-308) the spacing of doubles is a
+# fixed 2**-1074 = 4.9e-324: an offset keeps 12 significant digits down to
+# 2**-1074 * 1e12 = 4.9e-312; below that the phase of the offset as stored
+# differs visibly from that of the offset typed (1.5e-8 relative at 1e-320).
+_SUBNORMAL_STEP = 2.0**-1074
+_SMALLEST_OFFSET = _SUBNORMAL_STEP * 1e12
+
+
+def _offset(value, args):
+    """A ``--dtheta`` in radians, refused where a double keeps fewer than 12
+    significant digits of it (subnormal offsets below 4.9e-312)."""
+    offset = _angle(value, args)
+    if offset != 0.0 and abs(offset) < _SMALLEST_OFFSET:
+        digits = max(0, int(math.log10(abs(offset) / _SUBNORMAL_STEP)))
+        raise InputError(
+            f"--dtheta {value!r} is a subnormal double with about {digits} significant "
+            f"digits (computed as {offset:.6g} rad); offsets from {_SMALLEST_OFFSET:.2g} "
+            "up keep at least 12"
+        )
+    return offset
 
 
 def _omega_table(body, args):
@@ -208,7 +239,7 @@ def format_value(value):
     return str(value)
 
 
-def _print_table(table, csv, units=None, notes=()):
+def _print_table(table, csv, units=None, notes=(), label=None):
     import numpy as np
 
     numbers = table.select_dtypes("number")
@@ -223,6 +254,11 @@ def _print_table(table, csv, units=None, notes=()):
             "are beyond the range of double precision (e.g. moments below "
             "1e-150 or above 1e150, or a huge --omega); rescale them"
         )
+    table = table.copy()
+    floats = table.select_dtypes("float").columns
+    table[floats] = table[floats] + 0.0  # -0.0 (e.g. Omega of a steady spin) prints as 0.0
+    if label is not None:
+        table.insert(0, "name", label)
     if csv:
         table.to_csv(sys.stdout, index=False, float_format="%.17g")
         return 0
