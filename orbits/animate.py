@@ -302,8 +302,11 @@ def flip_motion(body=None, *, offset=0.05, speed=1.0):
     """A spin close to the intermediate axis: the Dzhanibekov / tennis-racket flip.
 
     ``omega0 = speed (sin t cos p, sin t sin p, cos t)`` with
-    ``t = pi/2 - offset`` and ``p = pi/2 - offset``: almost along I2, tipped
-    by ``offset`` towards I1 and I3.  The motion lies close to the
+    ``t = pi/2 - offset`` and ``p = pi/2 - offset``, i.e.
+    ``speed (sin(offset) cos(offset), cos(offset)^2, sin(offset))``: almost
+    along I2, tipped by ``offset`` towards I1 and by ``offset`` towards I3,
+    so at ``arccos(cos(offset)^2)``, about ``sqrt(2) offset``, from I2
+    (0.0707 rad for the default 0.05).  The motion lies close to the
     separatrix; once per half period the body turns over (the I2 axis
     reverses), the longer the wait the smaller ``offset``
     (``T ~ log(1/offset)``).
@@ -313,7 +316,10 @@ def flip_motion(body=None, *, offset=0.05, speed=1.0):
     body : Body, optional
         Default: the paper's T-handle (8, 4, 1), whose I2 axis is its shaft.
     offset : float
-        Radians, ``0 < offset < pi/4``.
+        Radians, ``0 < offset < pi/4``: the tilt towards each of I1 and I3.
+    speed : float
+        ``|omega0|``, positive, in radians per unit of the motion's time
+        (rad/s gives times in s); default 1.
 
     Returns
     -------

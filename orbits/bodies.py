@@ -327,6 +327,8 @@ class Body:
             cross piece.
         w : float
             Side of the square cross-section of both bars.
+        name : str, optional
+            Label carried into catalogs and figure titles (as :class:`Body`).
 
         Notes
         -----
@@ -401,6 +403,13 @@ class Body:
         (``c = 0``: a flat body, a lamina); the semi-axes are dimensionless
         (the body has unit norm, not unit mass).
 
+        Parameters
+        ----------
+        b, c : float
+            The middle and the shortest semi-axis, dimensionless.
+        name : str, optional
+            Label carried into catalogs and figure titles (as :class:`Body`).
+
         Raises
         ------
         NonPhysicalBodyError
@@ -464,6 +473,7 @@ class Body:
         ----------
         tensor : array_like, shape (3, 3)
         name : str, optional
+            Label carried into catalogs and figure titles (as :class:`Body`).
         defect : {"error", "flatten"}
             What to do with a measured or computed body a hair beyond the
             flat limit, ``I3 > I1 + I2`` (see :func:`remove_flat_excess`).
@@ -494,6 +504,13 @@ class Body:
         and ``(a^2+b^2)/5`` (caller's axes along a, b, c); a zero semi-axis
         gives a flat body.  Each moment is computed with its semi-axes scaled
         by an exact power of two (scale-free, as :meth:`box`).
+
+        Parameters
+        ----------
+        a, b, c : float
+            Semi-axes along x, y and z (m for kg m^2; the mass is 1).
+        name : str, optional
+            Label carried into catalogs and figure titles (as :class:`Body`).
 
         Raises
         ------
@@ -646,6 +663,15 @@ class Body:
         ``2**k (a, b, c)`` give moments ``4**k`` times those of ``(a, b, c)``,
         bit for bit, and the same unit moments and phases.
 
+        Parameters
+        ----------
+        a, b, c : float
+            Edges along x, y and z (m for kg m^2).
+        mass : float
+            Total mass (kg for kg m^2); default 1.
+        name : str, optional
+            Label carried into catalogs and figure titles (as :class:`Body`).
+
         Raises
         ------
         NonPhysicalBodyError
@@ -687,6 +713,19 @@ class Body:
         ``I_z = m (a^2 + b^2)/4``; for ``a = b = R`` these are the textbook
         ``m (3R^2 + L^2)/12`` (twice) and ``m R^2/2``.
 
+        Parameters
+        ----------
+        radius : float
+            Semi-axis ``a`` of the cross-section, along x (m for kg m^2).
+        length : float
+            Length ``L`` along z.
+        mass : float
+            Total mass (kg for kg m^2); default 1.
+        radius_y : float, optional
+            Semi-axis ``b`` along y; needed for an asymmetric body.
+        name : str, optional
+            Label carried into catalogs and figure titles (as :class:`Body`).
+
         Raises
         ------
         SymmetricTopError
@@ -722,6 +761,8 @@ class Body:
         ----------
         masses : array_like, shape (n,)
         positions : array_like, shape (n, 3)
+        name : str, optional
+            Label carried into catalogs and figure titles (as :class:`Body`).
         defect : {"error", "flatten"}
             As :meth:`from_inertia_tensor` (a planar set computed in
             floating point can land a hair past ``I3 = I1 + I2``).
@@ -817,8 +858,17 @@ class Body:
         ``density`` in kg/m^3 give kg m^2.  Needs the optional extra
         ``orbits[mesh]`` (trimesh).
 
-        ``defect`` as :meth:`from_inertia_tensor` (a thin plate's mesh can
-        land a hair past the flat limit).
+        Parameters
+        ----------
+        path : path
+            The mesh file, in any format trimesh reads.
+        density : float
+            Mass per unit volume (kg/m^3 for kg m^2); default 1.
+        name : str, optional
+            Label carried into catalogs and figure titles (as :class:`Body`).
+        defect : {"error", "flatten"}
+            As :meth:`from_inertia_tensor` (a thin plate's mesh can land a
+            hair past the flat limit).
 
         Raises
         ------
@@ -914,6 +964,8 @@ class Body:
             water: 0.05 u A^2, 3 %).  ``"error"`` (default) raises;
             ``"flatten"`` sets ``I_C = I_A + I_B`` (the flat edge of the
             physical region) and warns with the defect.
+        name : str, optional
+            Label carried into catalogs and figure titles (as :class:`Body`).
 
         Raises
         ------

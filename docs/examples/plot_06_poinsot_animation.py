@@ -17,8 +17,17 @@ space frame, L up; right: body frame.  The command line writes the same
 animation as a GIF (or an MP4 with imageio-ffmpeg)::
 
     orbits animate --preset fig6 --n 4 --branch SAM --out fig6_n4.gif
+
+Run as a plain script (``python plot_06_poinsot_animation.py``), it plays
+the animation in a window, or without a display writes it to a GIF.
 """
 
+import sys
+import tempfile
+from pathlib import Path
+
+import matplotlib
+import matplotlib.pyplot as plt
 import numpy as np
 
 import orbits
@@ -45,3 +54,12 @@ print(
     "orientation after one period - start:", f"{np.abs(last.rotation - first.rotation).max():.1e}"
 )
 print("contact height - plane height:", f"{last.contact[2] - last.plane_height:.1e}")
+
+# %%
+# Outside this gallery (which embeds the animation itself), show it: in a
+# window with an interactive matplotlib backend, else as a GIF file.
+if "sphinx_gallery" not in sys.modules:
+    if matplotlib.get_backend().lower() == "agg":
+        print("written:", poinsot.save(Path(tempfile.mkdtemp()) / "fig6_n4.gif"))
+    else:
+        plt.show()

@@ -227,10 +227,15 @@ def add_parser(subparsers):
     add_body_options(parser)
     spin = parser.add_argument_group("spin (exactly one)")
     spin.add_argument(
-        "--theta", type=finite, help="polar angle of omega0 from I3 (rad, within [-2 pi, 2 pi])"
+        "--theta",
+        type=finite,
+        help="polar angle of omega0 from I3 (rad, within [-2 pi, 2 pi])",
     )
     spin.add_argument(
-        "--dtheta", type=finite, help="offset theta - theta_crit (rad, within [-2 pi, 2 pi])"
+        "--dtheta",
+        type=finite,
+        help="offset theta - theta_crit (rad, not folded: theta_crit + dtheta must lie "
+        "in [0, pi/2], i.e. dtheta in [-theta_crit, pi/2 - theta_crit], and not be 0)",
     )
     spin.add_argument("--n", type=positive_int, help="the closed orbit Delta alpha = 2 pi n")
     spin.add_argument("--p", type=positive_int, help="the closed orbit 2 pi p/q (with --q)")
@@ -250,8 +255,9 @@ def add_parser(subparsers):
         nargs="?",
         const=0.05,
         metavar="OFFSET",
-        help="spin near the intermediate axis, tipped by OFFSET rad "
-        "(default 0.05): the tennis-racket flip",
+        help="spin near the intermediate axis I2, tipped OFFSET rad towards I1 and "
+        "OFFSET rad towards I3 (theta = phi = pi/2 - OFFSET; about sqrt(2) OFFSET "
+        "from I2), 0 < OFFSET < pi/4 (default 0.05): the tennis-racket flip",
     )
     parser.add_argument(
         "--phi",

@@ -117,10 +117,13 @@ def add_parser(subparsers):
         "(0, pi/2), both branches) whose total phase is 2 pi p/q "
         "with p/q <= N and q <= Q: the body returns to its starting "
         "orientation after q periods and the herpolhode closes.  "
-        "Writes one row per orbit (schema in the README); the file "
+        "Writes one row per orbit (schema: docs/catalog.md); the file "
         "starts with '#' lines recording the version and this "
-        "command, so read it with pandas.read_csv(path, "
-        "comment='#').  The output is written atomically.",
+        "command, so read it with orbits.read_catalog(path), or with "
+        "pandas.read_csv(path, comment='#') (pandas 2.x: add "
+        "float_precision='round_trip' to read the floats back bit for bit).  "
+        "With --nearest the rows are ranked by nearness, not sorted by theta, "
+        "and four columns are added.  The output is written atomically.",
     )
     add_body_options(parser, many=True)
     parser.add_argument(
@@ -139,8 +142,9 @@ def add_parser(subparsers):
         "--verify",
         action="store_true",
         help="add closure_error: an independent integration of "
-        "each orbit over q periods (exit 1 if any exceeds "
-        "1e-8 rad)",
+        "each orbit (over q periods; closer than 1e-3 rad to theta_crit, "
+        "a quarter period from its closest approach to I2) "
+        "(exit 1 if any exceeds 1e-8 rad)",
     )
     nearest = parser.add_argument_group("nearest closed orbits of a real spin")
     nearest.add_argument(

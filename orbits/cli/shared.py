@@ -675,6 +675,8 @@ _SELECTOR_NOTES = {
 
 # Angles typed in radians beyond one turn are refused: the top's symmetries
 # would fold them silently, and --theta 60 almost surely means degrees.
+# (--dtheta is never folded: within the turn, the library refuses any
+# theta_crit + dtheta outside [0, pi/2].)
 ANGLE_OPTIONS = ("theta", "dtheta", "phi")
 ONE_TURN = 2.0 * math.pi
 
@@ -721,7 +723,9 @@ def check_arguments(args):
     InputError
         ``--mass applies to --box and --cylinder, not to --t-handle``, or an
         angle in radians outside [-2 pi, 2 pi] (or degrees outside
-        [-360, 360] with ``--degrees``).
+        [-360, 360] with ``--degrees``).  This is the only range checked
+        here; a ``--dtheta`` inside it is refused later, by the library,
+        unless ``theta_crit + dtheta`` lies in [0, pi/2].
     """
     command = getattr(args, "command", None)
     if command not in SELECTORS:
