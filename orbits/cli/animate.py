@@ -119,7 +119,7 @@ def _cmd_animate(args):
     if args.flip is not None:
         title = (
             f"{literal_text(body.name or 'body')}: the Dzhanibekov (tennis-racket) flip, spin "
-            f"{args.flip:g} rad from the intermediate axis $I_2$\n"
+            f"on $I_2$ tipped {args.flip:g} rad towards $I_1$ and $I_3$\n"
             f"at {rate}: T = {source.period:.4g} s, "
             f"flips every T/2 = {0.5 * source.period:.4g} s"
         )

@@ -305,8 +305,9 @@ def add_parser(subparsers):
         "--dtheta",
         nargs="+",
         type=finite,
-        help="offset(s) theta - theta_crit from the separatrix, radians within "
-        "[-2 pi, 2 pi] (well conditioned down to 1e-300)",
+        help="offset(s) theta - theta_crit from the separatrix, radians, not folded: "
+        "in [-theta_crit, pi/2 - theta_crit], nonzero (well conditioned down to "
+        "|dtheta| = 4.9e-312; smaller subnormal offsets are refused)",
     )
     angle.add_argument(
         "--omega",

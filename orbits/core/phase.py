@@ -284,9 +284,11 @@ def orbit_constants(i1, i2, i3, w1, w2, w3, scale, offset, closing):
         ``kc = sqrt(1 - k^2)`` for the ``k`` of eqn:TK;
         ``q`` with ``D^2 = q / (I1 I2 I3)`` for the ``D`` of eqn:ABCD(d);
         and ``p, b`` such that ``cel(kc, p, 1, b) = (I1 K + (I3-I1) Pi(n|k^2))
-        / I3`` with ``p = 1 - n`` of eqn:GeometricPhase.  On LAM every
-        quantity is the image under ``1 <-> 3`` that eqn:GeometricPhase
-        prescribes.
+        / I3`` with ``p = 1 - n`` of eqn:GeometricPhase.  On LAM ``k``,
+        ``kc`` and ``q`` are the images under ``1 <-> 3`` (eqn:TK), while
+        ``p`` and ``b`` are those of the paper's own LAM case of
+        eqn:GeometricPhase (not the relabelled SAM ones: that relabelling
+        gives Delta alpha - 4 pi).
 
     Notes
     -----
