@@ -46,6 +46,7 @@ _LAZY = {
     "motion_phase": "checks",
     "rotation_by_integration": "checks",
     "verify": "checks",
+    "verify_body": "checks",
     "AxesWarning": "motion",
     "Motion": "motion",
     "MotionState": "motion",
@@ -161,5 +162,6 @@ __all__ = [
     "spins_with_total_phase",
     "total_phase",
     "verify",
+    "verify_body",
     "write_catalog",
 ]

@@ -18,22 +18,26 @@ way sharing no formula with the closed form it checks:
     the closed form.
 
 :func:`verify` runs all three over the paper's 292 bodies x 22 angles
-(or more) and reports the largest discrepancy of each.
+(or more) and reports the largest discrepancy of each; it also checks that
+the closed form as the public functions compute it (``total_phase``'s SIMD
+kernels, ``phases``, the table of ``orbits phase``, and ``spin_phases``)
+agrees with the closed form the three checks were compared with.
 """
 
+import math
 from collections import namedtuple
 
 import numpy as np
 import pandas as pd
 from scipy.integrate import solve_ivp
 
-from ._args import broadcast, real_array, real_scalar
+from ._args import broadcast, integer, positive_finite, real_array, real_scalar
 from .bodies import region_sample, unit_moments
 from .core import checks as _checks
-from .core import quadrature as _quadrature
-from .core.exact import separatrix_gap_exact
+from .core import phase as _phase
 from .core.ode import STATE_SIZE, euler_rhs
-from .errors import AngleError, InputError
+from .errors import AngleError, ArgumentTypeError, InputError, OrbitsError
+from .limits import format_bytes, memory_budget
 from .motion import Motion, as_body
 from .threads import threads_for
 
@@ -41,6 +45,15 @@ TOLERANCE = 1e-9
 # longest closure check: q periods integrated at rtol 1e-13
 MAX_CLOSURE_PERIODS = 100_000
 TWO_PI = 2.0 * np.pi
+# the integration tolerances rotation_by_integration accepts: SciPy raises an
+# rtol below 100 eps to 100 eps itself (with a warning), and the compiled
+# DOP853 at rtol = atol = 1e-300 takes minutes of steps that cannot be
+# interrupted; SciPy's error norm squares err/atol, which overflows (NaN,
+# no result) for atol below ~1e-160 (measured: 1e-160 worked, 1e-200 not)
+ODE_RTOL_RANGE = (100.0 * np.finfo(float).eps, 1e-3)
+ODE_ATOL_RANGE = (1e-100, 1e-3)
+MONTGOMERY_RTOL_RANGE = (_checks.MONTGOMERY_RTOL_MIN, _checks.MONTGOMERY_RTOL_MAX)
+ENGINES = ("scipy", "compiled")
 
 RotationCheck = namedtuple("RotationCheck", ["period", "angle", "off_axis", "expected", "error"])
 RotationCheck.__doc__ = """Result of :func:`rotation_by_integration`.
@@ -60,6 +73,41 @@ MontgomeryCheck = namedtuple(
 def _unit_motion(body_or_moments, theta, dtheta, phi):
     body = as_body(body_or_moments)
     return Motion.from_spin(body, theta, dtheta=dtheta, phi=phi)
+
+
+def _spin_and_gap(body_or_moments, theta, dtheta, phi):
+    """The unit moments, the unit spin and its separatrix gap, factored.
+
+    The spin is that of :meth:`Motion.from_spin` (which validates the
+    arguments); ``M^2 - 2 E I2 = -scale * offset * closing`` is the gap of
+    the orbit as :func:`orbits.total_phase` takes it: from the exact offset
+    of ``theta`` or ``dtheta`` from theta_c (a double omega0 cannot hold a
+    separatrix distance below ~1e-16), or, for a spin that is not built
+    from them that way (a ``theta`` outside [0, pi/2], taken as given), the
+    exact gap of the double omega0.
+    """
+    motion = _unit_motion(body_or_moments, theta, dtheta, phi)
+    unit = tuple(float(v) for v in motion.body.unit_moments)
+    omega = tuple(float(v) for v in motion.omega0)
+    from_offset = dtheta is not None
+    angle = real_scalar("dtheta" if from_offset else "theta", dtheta if from_offset else theta)
+    code, _, _, _, w1, w2, w3, scale, offset, closing = _phase.spin_from_angle(
+        _phase.body_constants(*unit, real_scalar("phi", phi)), angle, from_offset
+    )
+    if code == _phase.STATUS_OK and (w1, w2, w3) == omega:
+        return unit, omega, (scale, offset, closing)
+    return unit, omega, _phase.vector_gap(*unit, *omega)
+
+
+def _bounded(name, value, bounds, what):
+    """A real number within ``bounds`` (inclusive), or an error naming ``name``."""
+    number = real_scalar(name, value)
+    low, high = bounds
+    if not (math.isfinite(number) and low <= number <= high):
+        raise InputError(
+            f"{name} must be a number from {low:.3g} to {high:g} ({what}), got {number!r}"
+        )
+    return number
 
 
 def circular_distance(a, b):
@@ -87,9 +135,11 @@ def rotation_by_integration(
         The orbit, as in :func:`orbits.total_phase`.
     periods : int
         Number of periods to integrate (the rotation is then ``periods``
-        times ``Delta alpha``).
+        times ``Delta alpha``), 1 to :data:`MAX_CLOSURE_PERIODS`.
     rtol, atol : float
-        Integration tolerances (``rtol <= 1e-12`` by default).
+        Integration tolerances (default 1e-12 and 1e-14): ``rtol`` from
+        100 eps (2.2e-16 x 100, SciPy's own floor) to 1e-3, ``atol`` from
+        1e-100 to 1e-3 (:data:`ODE_RTOL_RANGE`, :data:`ODE_ATOL_RANGE`).
     engine : {"scipy", "compiled"}
         ``solve_ivp(method="DOP853")`` with a terminal event, or the
         compiled DOP853 (same method, used by :func:`verify`).
@@ -105,7 +155,9 @@ def rotation_by_integration(
     Raises
     ------
     InputError
-        The integration cannot reach the end of the last period: beyond
+        ``engine``, ``periods``, ``rtol`` or ``atol`` out of range (checked
+        before any integration), or
+        the integration cannot reach the end of the last period: beyond
         10,000 turns of omega with ``engine="scipy"`` (refused before it
         starts), or beyond the compiled engine's 10^7 steps (a nearly
         symmetric body, or a spin very near the separatrix).
@@ -128,10 +180,11 @@ def rotation_by_integration(
     >>> round(check.angle, 5), bool(check.error < 1e-9)
     (2.68074, True)
     """
-    if engine not in ("scipy", "compiled"):
+    if not isinstance(engine, str) or engine not in ENGINES:
         raise InputError(f"engine must be 'scipy' or 'compiled', got {engine!r}")
-    if int(periods) != periods or periods < 1:
-        raise InputError(f"periods must be a positive integer, got {periods}")
+    periods = integer("periods", periods, minimum=1, maximum=MAX_CLOSURE_PERIODS)
+    rtol = _bounded("rtol", rtol, ODE_RTOL_RANGE, "relative tolerance of DOP853")
+    atol = _bounded("atol", atol, ODE_ATOL_RANGE, "absolute tolerance of DOP853")
     motion = _unit_motion(body_or_moments, theta, dtheta, phi)
     # scale-free with |omega0| = 1 (period, angles, phases), and the
     # kernels' products neither underflow nor overflow at any scale
@@ -155,7 +208,7 @@ def rotation_by_integration(
         )
     if engine == "compiled":
         period, angle, off_axis = _checks.rotation_after_periods(
-            i1, i2, i3, w[0], w[1], w[2], int(periods), rtol, atol, _checks.ODE_MAX_STEPS
+            i1, i2, i3, w[0], w[1], w[2], periods, rtol, atol, _checks.ODE_MAX_STEPS
         )
     else:
         span = 2.0 * int(periods) * closed_period + TWO_PI
@@ -229,8 +282,13 @@ def montgomery(body_or_moments, theta=None, *, dtheta=None, phi=0.0, rtol=1e-14)
     theta, dtheta, phi : float
         The spin direction as in :func:`orbits.total_phase` (radians; one of
         ``theta`` and ``dtheta``), with :math:`|\boldsymbol\omega_0| = 1`.
+        The orbit is the one :func:`orbits.total_phase` evaluates: its
+        separatrix distance comes from the exact offset of ``theta`` (or
+        ``dtheta``) from the critical angle, not from the rounded omega0,
+        so ``dtheta`` down to 1e-300 (and below) is resolved.
     rtol : float
-        Relative tolerance of the adaptive Gauss-Legendre quadratures.
+        Relative tolerance of the adaptive Gauss-Legendre quadratures, from
+        1e-15 to 1e-3 (:data:`MONTGOMERY_RTOL_RANGE`).
 
     Returns
     -------
@@ -239,6 +297,14 @@ def montgomery(body_or_moments, theta=None, *, dtheta=None, phi=0.0, rtol=1e-14)
         signed by the right-hand rule (positive on SAM, negative on LAM).
         For the T-handle spin of the paper it is 2.12519.  All in radians,
         ``period`` in units of :math:`1/|\boldsymbol\omega_0|`.
+
+    Raises
+    ------
+    AngleError, SeparatrixError, NonPhysicalBodyError, SymmetricTopError
+        As :func:`orbits.total_phase`.
+    InputError
+        ``rtol`` out of range (checked before the quadrature starts), or the
+        quadrature did not converge within its budget of panels.
 
     Notes
     -----
@@ -250,8 +316,14 @@ def montgomery(body_or_moments, theta=None, *, dtheta=None, phi=0.0, rtol=1e-14)
 
     with the period :math:`T` and the solid angle :math:`\Omega` enclosed by
     the polhode both found by quadrature along the polhode, parameterised by
-    its azimuth about the axis it circles: no elliptic function is used, so
-    the check shares no formula with the closed form of Eq. (20).
+    the azimuth's distance from the polhode's I2 side (where the integrands
+    change on the scale of the separatrix distance, and near the thin-rod
+    corner on the scale of the small moment difference; the panels are
+    graded geometrically down to both): no elliptic function is used, so the
+    check shares no formula with the closed form of Eq. (20).  Against
+    mpmath it agrees to a few 1e-16 relative for ``|dtheta|`` from 1e-10 to
+    1e-320 and for rods ``(eps, 1, 1 + eps)`` down to ``eps = 1e-15``
+    (tests/test_checks.py, docs/checks.md).
 
     Examples
     --------
@@ -261,15 +333,16 @@ def montgomery(body_or_moments, theta=None, *, dtheta=None, phi=0.0, rtol=1e-14)
     >>> round(check.total_phase, 4), round(check.solid_angle, 5)
     (21.5303, 2.12519)
     """
-    motion = _unit_motion(body_or_moments, theta, dtheta, phi)
+    rtol = _bounded("rtol", rtol, MONTGOMERY_RTOL_RANGE, "relative tolerance of the quadrature")
     # scale-free with |omega0| = 1 (period, angles, phases), and the
     # kernels' products neither underflow nor overflow at any scale
-    i1, i2, i3 = (float(v) for v in motion.body.unit_moments)
-    w1, w2, w3 = motion.omega0
-    gap = separatrix_gap_exact(i1, i2, i3, w1, w3)
-    total, dynamic, solid, period, _ = _quadrature.montgomery_phase(
-        i1, i2, i3, w1, w2, w3, gap, rtol
-    )
+    unit, omega, gap = _spin_and_gap(body_or_moments, theta, dtheta, phi)
+    total, dynamic, solid, period, _ = _checks.montgomery_phase(*unit, *omega, *gap, rtol)
+    if not (math.isfinite(total) and math.isfinite(period)):
+        raise InputError(
+            f"montgomery: the quadrature did not converge to rtol {rtol:g} within "
+            f"{_checks.MONTGOMERY_MAX_PANELS:,} panels; give a larger rtol"
+        )
     return MontgomeryCheck(total, dynamic, solid, period)
 
 
@@ -303,7 +376,9 @@ def closure_errors(moments, dtheta, periods, rtol=1e-13):
         After how many periods each orbit should close (the catalog's q),
         1 to :data:`MAX_CLOSURE_PERIODS`.
     rtol : float
-        Integration tolerance, in (0, 1e-3].
+        Integration tolerance, from 100 eps (2.2e-14) to 1e-3
+        (:data:`ODE_RTOL_RANGE`; at 1e-300 the integration near the
+        separatrix did not finish).
 
     Returns
     -------
@@ -353,9 +428,7 @@ def closure_errors(moments, dtheta, periods, rtol=1e-13):
             f"periods (the catalog's q) must be integers from 1 to "
             f"{MAX_CLOSURE_PERIODS}, got {periods.ravel()[:5].tolist()}"
         )
-    rtol = real_scalar("rtol", rtol)
-    if not (0.0 < rtol <= 1e-3):
-        raise InputError(f"rtol must be in (0, 1e-3], got {rtol!r}")
+    rtol = _bounded("rtol", rtol, ODE_RTOL_RANGE, "relative tolerance of DOP853")
     shape = broadcast(
         [("moments", moments.shape[:-1]), ("dtheta", dtheta.shape), ("periods", periods.shape)]
     )
@@ -367,7 +440,7 @@ def closure_errors(moments, dtheta, periods, rtol=1e-13):
     dtheta = np.broadcast_to(dtheta, shape)
     moments = np.broadcast_to(moments, shape + (3,))
     periods = np.broadcast_to(periods.astype(np.int64), shape)
-    out = np.empty(dtheta.shape)
+    out = np.full(dtheta.shape, np.nan)  # an unwritten entry reads as NaN (refused)
     with threads_for(out.size, serial_below=2):
         _checks.closure_batch(
             np.ascontiguousarray(moments),
@@ -386,13 +459,57 @@ def closure_errors(moments, dtheta, periods, rtol=1e-13):
     return out
 
 
+# A discrepancy of up to PHASE_ULPS spacings of doubles at |Delta alpha|
+# passes whatever the tolerance: a value correct to a few ulps is all that
+# double precision can hold (near the sphere Delta alpha reaches 1e8..1e9
+# rad, where doubles are 1e-8..1e-7 apart), and the closed form and the
+# checks differ by up to 14 ulps (measured over 100,000 initial conditions
+# of verify(10000, 10), and <= 4 ulps on the nearly spherical bodies of
+# docs/checks.md); a real inaccuracy, like the 160 ulps of the earlier
+# quadrature near the sphere, still fails.
+PHASE_ULPS = 16
+# The closed form as the public functions compute it must agree with the
+# closed form the checks were compared with to this many spacings of
+# doubles, whatever the tolerance: the same formula for the same orbit,
+# differing only in the order of operations (the SIMD kernels' polynomial
+# sine and cosine, cel's pair loop); measured at most 14 over the 100,000
+# initial conditions of verify(10000, 10) and 200 random, thin-rod, nearly
+# spherical and nearly prolate bodies (docs/checks.md).
+ROUTE_ULPS = 64
+# the integration and quadrature tolerances of verify's checks
+VERIFY_ODE_RTOL = 1e-12
+VERIFY_ODE_ATOL = 1e-14
+VERIFY_QUAD_RTOL = 1e-14
+# memory per initial condition (the table's ~35 float columns, the
+# route evaluations and the integrations' state); orbits/cli/verify.py
+# estimates with the same figure before importing this module
+VERIFY_BYTES_PER_CONDITION = 2000
+# the public routes of the closed form verify evaluates (summary["routes"])
+ROUTES = (
+    ("total_phase", "orbits.total_phase, bodies in one call (SIMD kernel total_phase_many)"),
+    (
+        "total_phase_one_body",
+        "orbits.total_phase, one body per call (SIMD kernel total_phase_one_body)",
+    ),
+    ("phases", "orbits.phases, the table of 'orbits phase --theta' (parts_from_spin)"),
+    ("spin_phases", "orbits.spin_phases, a spin vector (parts_from_vector_array)"),
+)
+_CHECKS = (
+    ("montgomery", "montgomery_error"),
+    ("ode_rotation", "ode_error"),
+    ("exact_motion", "motion_error"),
+    ("closed_form_routes", "routes_error"),
+)
+
+
 class VerifyReport(namedtuple("VerifyReport", ["table", "summary", "passed"])):
     """Result of :func:`verify`.
 
     table : DataFrame, one row per initial condition (I1, I2, I3, theta, branch,
-        the closed form and each check with its discrepancy)
+        the closed form, each check and each public route with its
+        discrepancy; see :func:`verify`)
     summary : dict in the ``orbits verify --json`` format
-    passed : every discrepancy within the tolerance
+    passed : every check passed (see :func:`verify`)
     """
 
     __slots__ = ()
@@ -436,6 +553,29 @@ class VerifyReport(namedtuple("VerifyReport", ["table", "summary", "passed"])):
         return html_table("orbits.verify: closed form against independent checks", rows)
 
 
+def _verify_arguments(n_angles, tolerance, progress, chunk):
+    """Validate the arguments shared by :func:`verify` and :func:`verify_body`."""
+    n_angles = integer("n_angles", n_angles, minimum=1)
+    tolerance = positive_finite("tolerance", tolerance)
+    chunk = integer("chunk", chunk, minimum=1)
+    if progress is not None and not callable(progress):
+        raise ArgumentTypeError(
+            f"progress must be a callable (progress(done)) or None, got {type(progress).__name__}"
+        )
+    return n_angles, tolerance, progress, chunk
+
+
+def _check_memory(n_bodies, n_angles):
+    total = n_bodies * n_angles
+    memory = total * VERIFY_BYTES_PER_CONDITION
+    if memory > memory_budget():
+        raise InputError(
+            f"verify with {n_bodies} bodies x {n_angles} angles = {total} initial "
+            f"conditions would need about {format_bytes(memory)} of memory, more than "
+            f"the {format_bytes(memory_budget())} allowed (half of this machine's)"
+        )
+
+
 def verify(n_bodies=293, n_angles=22, *, tolerance=TOLERANCE, progress=None, chunk=2048):
     """The paper's exhaustive check, at any scale.
 
@@ -445,16 +585,44 @@ def verify(n_bodies=293, n_angles=22, *, tolerance=TOLERANCE, progress=None, chu
     293 x 22 = 6446, reproduce the paper's count of initial conditions (the
     paper says 292 bodies x 22 angles = 6446, but 292 x 22 = 6424).
 
+    Each body is checked in the canonical form every public function gives
+    the kernels (:func:`orbits.bodies.unit_moments`: an exact power-of-two
+    scaling), so the body checked is the body named, bit for bit.
+
     Parameters
     ----------
+    n_bodies, n_angles : int
+        Positive integers; their product is bounded by the memory allowed
+        (half of this machine's, about 2 kB per initial condition).
+    tolerance : float
+        Largest discrepancy allowed (radians), positive and finite.  A
+        discrepancy within :data:`PHASE_ULPS` (16) spacings of doubles at
+        ``|Delta alpha|`` passes too: no double can agree more closely with
+        a phase of 1e8 rad than ~1e-8 rad.
     progress : callable, optional
         ``progress(done)`` after each chunk of initial conditions.
+    chunk : int
+        Initial conditions per batch (a positive integer).
 
     Returns
     -------
     VerifyReport
         ``table`` (one row per initial condition), ``summary`` (the largest
-        error of each check) and ``passed``.
+        error of each check) and ``passed``.  Four checks: (b)
+        ``montgomery``, (a) ``ode_rotation`` and (c) ``exact_motion`` against
+        the closed form (the ``closed_form`` column, eqn:GeometricPhase for
+        the orbit through the double omega0), and ``closed_form_routes``:
+        the closed form as :func:`orbits.total_phase` (both SIMD kernels),
+        :func:`orbits.phases` (``orbits phase --theta``) and
+        :func:`orbits.spin_phases` compute it, each against the same formula
+        evaluated by the scalar kernel for the same orbit, which must agree
+        to :data:`ROUTE_ULPS` (64) spacings of doubles whatever the
+        tolerance.
+
+    Raises
+    ------
+    InputError, ArgumentTypeError
+        An argument of the wrong type or out of range (before any work).
 
     Examples
     --------
@@ -463,58 +631,78 @@ def verify(n_bodies=293, n_angles=22, *, tolerance=TOLERANCE, progress=None, chu
     >>> report.passed, report.summary["initial_conditions"]
     (True, 12)
     """
-    if int(n_bodies) != n_bodies or n_bodies < 1:
-        raise InputError(f"bodies must be a positive integer, got {n_bodies}")
-    if int(n_angles) != n_angles or n_angles < 1:
-        raise InputError(f"angles must be a positive integer, got {n_angles}")
-    bodies = region_sample(int(n_bodies))
-    return _verify_grid(bodies, n_angles, tolerance, progress, chunk)
+    n_bodies = integer("n_bodies", n_bodies, minimum=1)
+    n_angles, tolerance, progress, chunk = _verify_arguments(n_angles, tolerance, progress, chunk)
+    _check_memory(n_bodies, n_angles)
+    bodies = region_sample(n_bodies)
+    unit, exponent = unit_moments(bodies)
+    return _verify_grid(unit, exponent, n_angles, tolerance, progress, chunk, one_body=False)
 
 
 def verify_body(body, n_angles=22, *, tolerance=TOLERANCE, progress=None, chunk=2048):
     """:func:`verify` for one body of the caller's (``orbits verify BODY``).
 
-    The three checks at ``theta_j = (j + 1/2) (pi/2) / n_angles`` (phi = 0)
-    for the body's moments normalised to ``|I| = 1`` (the phases do not
-    depend on the scale; the tolerances of the integrators are absolute).
+    The checks at ``theta_j = (j + 1/2) (pi/2) / n_angles`` (phi = 0) for
+    the body's canonical moments (:attr:`Body.unit_moments`, the exact
+    power-of-two scaling every public function uses: the body checked is
+    the body given, bit for bit; the table's I1, I2, I3 are its moments as
+    given).  The phases do not depend on the scale; the tolerances of the
+    integrators are absolute for ``|omega0| = 1`` and moments near 1.
 
     Returns
     -------
     VerifyReport
+
+    Raises
+    ------
+    InputError, ArgumentTypeError, NonPhysicalBodyError, SymmetricTopError
+        A bad body or argument (before any work).
     """
-    if int(n_angles) != n_angles or n_angles < 1:
-        raise InputError(f"angles must be a positive integer, got {n_angles}")
-    unit = as_body(body).normalized_moments
-    return _verify_grid(unit[None, :], n_angles, tolerance, progress, chunk)
+    body = as_body(body)
+    n_angles, tolerance, progress, chunk = _verify_arguments(n_angles, tolerance, progress, chunk)
+    _check_memory(1, n_angles)
+    unit = np.asarray(body.unit_moments, dtype=float)[None, :]
+    exponent = np.array([body.exponent])
+    return _verify_grid(unit, exponent, n_angles, tolerance, progress, chunk, one_body=True)
 
 
-def _verify_grid(bodies, n_angles, tolerance, progress, chunk):
-    """The three checks for every body (rows of ``bodies``) times ``n_angles`` angles."""
-    n_bodies = bodies.shape[0]
+def _verify_grid(unit, exponent, n_angles, tolerance, progress, chunk, one_body):
+    """The checks for every body (rows of canonical ``unit``) times ``n_angles`` angles."""
+    n_bodies = unit.shape[0]
     angles = (np.arange(n_angles) + 0.5) * (0.5 * np.pi / n_angles)
-    moments = np.repeat(bodies, n_angles, axis=0)
-    theta = np.tile(angles, int(n_bodies))
+    moments = np.ascontiguousarray(np.repeat(unit, n_angles, axis=0))
+    theta = np.tile(angles, n_bodies)
     phi = np.zeros_like(theta)
-    out = np.empty((theta.size, len(_checks.CHECK_COLUMNS)))
-    for start in range(0, theta.size, chunk):
-        stop = min(start + chunk, theta.size)
+    n = theta.size
+    # NaN until written: a row the kernel did not reach can never read as 0
+    out = np.full((n, len(_checks.CHECK_COLUMNS)), np.nan)
+    done = 0
+    for start in range(0, n, chunk):
+        stop = min(start + chunk, n)
         with threads_for(stop - start, serial_below=2):
             _checks.check_batch(
                 moments[start:stop],
                 theta[start:stop],
                 phi[start:stop],
-                1e-12,
-                1e-14,
-                1e-14,
+                VERIFY_ODE_RTOL,
+                VERIFY_ODE_ATOL,
+                VERIFY_QUAD_RTOL,
                 out[start:stop],
             )
+        done += stop - start
         if progress is not None:
             progress(stop - start)
+    # every row written (the kernel writes every entry; branch is never NaN)
+    if done != n or np.isnan(out[:, _checks.CHECK_COLUMNS.index("branch")]).any():
+        raise AssertionError(f"verify: {n - done} of {n} initial conditions were not evaluated")
     table = pd.DataFrame(out, columns=_checks.CHECK_COLUMNS)
     table.insert(0, "theta", theta)
+    # the moments as given (the canonical ones times 2**exponent, exact)
+    given = np.ldexp(moments, np.repeat(np.asarray(exponent), n_angles)[:, None])
     for k, name in enumerate(("I1", "I2", "I3")):
-        table.insert(k, name, moments[:, k])
-    table["branch"] = np.where(table["branch"] > 0, "SAM", "LAM")
+        table.insert(k, name, given[:, k])
+    code = table["branch"].to_numpy()
+    table["branch"] = np.where(code > 0, "SAM", np.where(code < 0, "LAM", "separatrix"))
     closed = table["closed_form"].to_numpy()
     table["montgomery_error"] = np.abs(table["montgomery"] - closed)
     table["motion_error"] = np.abs(table["motion"] - closed)
@@ -525,43 +713,111 @@ def _verify_grid(bodies, n_angles, tolerance, progress, chunk):
     exhausted = (table["ode_period"] == _checks.STEP_BUDGET_EXHAUSTED).to_numpy()
     table.loc[exhausted, "ode_period"] = np.nan
     table["ode_period_error"] = np.abs(table["ode_period"] - table["period"])
+    route_failures = _add_routes(table, unit, moments, theta, n_angles, one_body)
     summary = {
-        "initial_conditions": int(theta.size),
+        "initial_conditions": int(n),
         "bodies": int(n_bodies),
         "angles": int(n_angles),
         "tolerance": tolerance,
     }
-    summary.update(_summarize(table, tolerance, exhausted))
+    summary.update(_summarize(table, tolerance, exhausted, route_failures))
     return VerifyReport(table, summary, summary["passed"])
 
 
-def _summarize(table, tolerance, exhausted):
+def _add_routes(table, unit, moments, theta, n_angles, one_body):
+    """The closed form through each public route (columns ``route_*``).
+
+    Each route runs on the rows that have a closed form; its value is
+    compared with the scalar kernel's closed form for the same orbit
+    (``closed_form_theta`` for the routes that take ``theta``, the orbit of
+    the exact angle; ``closed_form`` for :func:`orbits.spin_phases`, the
+    orbit of the double omega0), both at least 2 pi as the public functions
+    give them (:func:`orbits.phases.at_least_two_pi`).  Adds the columns
+    ``route_<name>`` and ``routes_error`` (the largest difference, NaN where
+    a route gave no value).  Returns ``{route: message}`` for routes that
+    raised.
+    """
+    from .phases import phases, spin_phases, total_phase
+
+    n = theta.size
+    rows = np.flatnonzero(np.isfinite(table["closed_form_theta"].to_numpy()))
+    omega = table[["w1", "w2", "w3"]].to_numpy()
+    failures = {}
+    values = {name: np.full(n, np.nan) for name, _ in ROUTES}
+
+    def run(name, where, function, *args, column=None):
+        if where.size == 0:
+            return
+        try:
+            result = function(*args)
+        except OrbitsError as error:
+            failures.setdefault(name, f"{type(error).__name__}: {error}")
+            return
+        if column is not None:
+            result = result[column]
+        values[name][where] = np.asarray(result, dtype=float).reshape(-1)
+
+    run("total_phase", rows, total_phase, moments[rows], theta[rows])
+    for b in range(unit.shape[0]):
+        mine = rows[(rows >= b * n_angles) & (rows < (b + 1) * n_angles)]
+        run("total_phase_one_body", mine, total_phase, unit[b], theta[mine])
+    # 'orbits phase BODY --theta ...' passes one body: its own kernel path
+    body = unit[0] if one_body else moments[rows]
+    run("phases", rows, phases, body, theta[rows], column="total_phase")
+    run("spin_phases", rows, spin_phases, moments[rows], omega[rows], column="total_phase")
+    error = np.zeros(n)
+    for name, _ in ROUTES:
+        table[f"route_{name}"] = values[name]
+        error = np.maximum(error, np.abs(values[name] - _route_reference(table, name)))
+    table["routes_error"] = np.where(np.isfinite(table["closed_form_theta"]), error, np.nan)
+    return failures
+
+
+def _route_reference(table, name):
+    """What route ``name`` is compared with: the scalar kernel's closed form
+    of the same orbit, at least 2 pi as the public functions give it."""
+    column = "closed_form" if name == "spin_phases" else "closed_form_theta"
+    return np.maximum(table[column].to_numpy(), TWO_PI)
+
+
+def _summarize(table, tolerance, exhausted, route_failures=None):
     """Largest discrepancy of each check, never NaN (strict JSON).
 
-    A row on the separatrix (no closed form) or a check that gave no value
-    is counted and explained; its discrepancy is ``None``, never NaN.  The
-    ODE check (a) is *not applicable* at the rows of ``exhausted``, where
-    the integration could not complete one period within its step budget
-    (a nearly symmetric body: the period is then ~1e8 rotations); that is
-    not a failure.  Every other missing value fails the verification.
+    A discrepancy passes when it is within ``max(tolerance, PHASE_ULPS *
+    spacing(|Delta alpha|))`` (the public routes: within ``ROUTE_ULPS *
+    spacing``, whatever the tolerance).  A row on the separatrix (no closed
+    form) or a check that gave no value is counted and explained; its
+    discrepancy is ``None``, never NaN.  The ODE check (a) is *not
+    applicable* at the rows of ``exhausted``, where the integration could
+    not complete one period within its step budget (a nearly symmetric
+    body: the period is then ~1e8 rotations); that is not a failure.  Every
+    other missing value fails the verification.
     """
+    route_failures = route_failures or {}
     closed = table["closed_form"].to_numpy()
     has_closed = np.isfinite(closed)
+    if "closed_form_theta" in table:
+        has_closed &= np.isfinite(table["closed_form_theta"].to_numpy())
     on_separatrix = int(np.count_nonzero(~has_closed))
+    spacing = np.where(has_closed, np.spacing(np.abs(np.where(has_closed, closed, 1.0))), np.nan)
+    allowance = np.maximum(tolerance, PHASE_ULPS * spacing)
     checks = {}
     passed = on_separatrix == 0
-    for name, column in (
-        ("montgomery", "montgomery_error"),
-        ("ode_rotation", "ode_error"),
-        ("exact_motion", "motion_error"),
-    ):
+    for name, column in _CHECKS:
+        if column not in table:
+            continue
         errors = table[column].to_numpy()
-        ran = np.isfinite(errors)
+        ran = np.isfinite(errors) & has_closed
         missing = int(np.count_nonzero(has_closed & ~ran))
+        limit = ROUTE_ULPS * spacing if name == "closed_form_routes" else allowance
+        beyond = ran & ~(errors <= limit)
         entry = {
             "max_abs_error": float(errors[ran].max()) if ran.any() else None,
+            "max_ulps": float(np.max(errors[ran] / spacing[ran])) if ran.any() else None,
+            "beyond_tolerance": int(np.count_nonzero(beyond)),
             "not_applicable": 0,
             "failed_to_evaluate": 0,
+            "passed": True,
             "reason": None,
         }
         reasons = []
@@ -578,17 +834,36 @@ def _summarize(table, tolerance, exhausted):
                     f"{float(np.max(periods)):.4g} / |w0|, a nearly symmetric body or a "
                     "spin near the separatrix)"
                 )
+        if name == "closed_form_routes":
+            for route, message in route_failures.items():
+                reasons.append(f"{route} raised {message}")
+            entry["routes"] = {}
+            for route, _ in ROUTES:
+                if f"route_{route}" not in table:
+                    continue
+                value = table[f"route_{route}"].to_numpy()
+                reference = _route_reference(table, route)
+                ok = has_closed & np.isfinite(value)
+                entry["routes"][route] = (
+                    float(np.max(np.abs(value[ok] - reference[ok]) / np.spacing(reference[ok])))
+                    if ok.any()
+                    else None
+                )
+            if entry["beyond_tolerance"]:
+                reasons.append(
+                    f"the public routes differ from the closed form by more than "
+                    f"{ROUTE_ULPS} ulps at {entry['beyond_tolerance']} initial condition(s)"
+                )
         if missing:
             entry["failed_to_evaluate"] = missing
             reasons.append(f"no value (not finite) at {missing} initial condition(s)")
-            passed = False
         if on_separatrix:
             reasons.append(
                 f"{on_separatrix} initial condition(s) on the separatrix have no closed form"
             )
         entry["reason"] = "; ".join(reasons) or None
-        if entry["max_abs_error"] is not None and not entry["max_abs_error"] <= tolerance:
-            passed = False
+        entry["passed"] = bool(missing == 0 and entry["beyond_tolerance"] == 0)
+        passed = passed and entry["passed"]
         checks[name] = entry
     period_error = table["ode_period_error"].to_numpy()
     period_error = period_error[np.isfinite(period_error)]
@@ -601,6 +876,10 @@ def _summarize(table, tolerance, exhausted):
         "ode_period_max_abs_error": float(period_error.max()) if period_error.size else None,
         "max_abs_phase": largest,
         "phase_resolution": resolution,
+        "phase_ulps": PHASE_ULPS,
+        "route_ulps": ROUTE_ULPS,
+        "largest_allowance": float(np.max(allowance[has_closed])) if has_closed.any() else None,
+        "on_separatrix": on_separatrix,
         "passed": bool(passed),
     }
 

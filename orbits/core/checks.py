@@ -7,7 +7,8 @@ For each initial condition (body, omega0):
   until omega returns to omega0 ``periods`` times; the final rotation must
   be a rotation about M.  Returns the period found, the rotation angle about
   M mod 2 pi and the size of the rotation's part *not* about M.
-* ``montgomery``: 2ET/M - Omega by quadrature (:mod:`orbits.core.quadrature`).
+* ``montgomery``: 2ET/M - Omega by quadrature along the polhode
+  (:func:`montgomery_phase`, here; no elliptic functions).
 * ``motion``: phi(T) of the exact motion (:mod:`orbits.core.motion`,
   Carlson's Pi), independent of Bulirsch's ``cel``.
 """
@@ -19,11 +20,223 @@ from numba import njit, prange
 
 from . import motion as _motion
 from . import phase as _phase
-from .exact import separatrix_gap_exact
 from .ode import STATE_SIZE, euler_rhs, integrate_to_event
-from .quadrature import montgomery_phase
 
 TWO_PI = 2.0 * math.pi
+HALF_PI = 0.5 * math.pi
+
+# ---------------------------------------------------------------- Montgomery
+#
+# Montgomery's Delta alpha = 2ET/M - Omega with the period T and the solid
+# angle Omega by quadrature along the polhode, from the two invariants
+# alone (no elliptic functions).  The angular momentum in the body is
+# M (sin v cos u, sin v sin u, cos v) about the axis the polhode circles
+# (I3 on SAM, u from I1; I1 on LAM, u from I2); the energy fixes v(u).
+# The variable of integration is x, the azimuth's distance from the I2
+# side of the polhode, where every difficulty lies: x = pi/2 - u on SAM,
+# x = u on LAM.  With s = sin x, c = cos x:
+#
+#     G(x) = p s^2 + q c^2,   N(x) = a s^2 + b c^2,
+#     dt/dx = 1 / sqrt(G N),  cos v = sqrt(N / (M^2 G)),
+#     sin^2 v = c0 / (M^2 G),
+#
+# SAM: p = 1/I1 - 1/I3, q = 1/I2 - 1/I3, a = (M^2 - 2EI1)/I1,
+#      b = (M^2 - 2EI2)/I2, c0 = (2EI3 - M^2)/I3;
+# LAM: p = 1/I1 - 1/I3, q = 1/I1 - 1/I2, a = (2EI3 - M^2)/I3,
+#      b = (2EI2 - M^2)/I2, c0 = (M^2 - 2EI1)/I1;
+#
+# every coefficient is a product of non-negative factors (the differences
+# of reciprocals formed as (Ij - Ii)/(Ii Ij), the separatrix gap
+# M^2 - 2EI2 from its factored form), so none cancels.  T = 4 int_0^{pi/2}
+# dt/dx dx and the cap's solid angle 4 int_0^{pi/2} (1 - cos v) dx, with
+# 1 - cos v = sin^2 v / (1 + cos v); Omega = +cap on SAM, -cap on LAM
+# (right-hand rule).
+#
+# The integrands change on the scales sqrt(b/a) (the separatrix distance:
+# down to ~1e-150 rad for |dtheta| = 1e-300) and sqrt(q/p) (the thin-rod
+# corner, where I3 - I2 or I2 - I1 is small beside I1) near x = 0: the
+# first panels are graded geometrically down to below both, and sqrt(G),
+# sqrt(N) are formed with hypot, so nothing is squared into underflow and x
+# itself (not pi/2 - x) carries the small distances.  Parameterised by u
+# instead, cos u near u = pi/2 has an absolute error of 1e-16, which is all
+# of the orbit's information there once the scale is below ~1e-8 (the
+# earlier quadrature lost 5e-8 relative at the rod (1e-9, 1, 1 + 1e-9) and
+# every digit at |dtheta| < 1e-14).
+
+_NODES, _WEIGHTS = np.polynomial.legendre.leggauss(20)
+GAUSS_NODES = np.ascontiguousarray(_NODES)
+GAUSS_WEIGHTS = np.ascontiguousarray(_WEIGHTS)
+# graded panels: x_j = (pi/2) 2^-j down to below both scales, at most this many
+_MAX_GRADED = 1100
+_STACK = _MAX_GRADED + 256
+# panel evaluations (20 points each) before the quadrature gives up (NaN):
+# a bound on the time of any call whatever its tolerance (~0.5 s)
+MONTGOMERY_MAX_PANELS = 600_000
+# the tolerance range that montgomery_phase accepts (orbits.checks.montgomery
+# refuses others before calling it): below 1e-15 the panels' rounding is
+# larger than the tolerance and the budget runs out
+MONTGOMERY_RTOL_MIN = 1e-15
+MONTGOMERY_RTOL_MAX = 1e-3
+
+
+@njit(cache=True, nogil=True)
+def _montgomery_integrands(x, root_p, root_q, root_a, root_b, root_c0, momentum):
+    """``(dt/dx, 1 - cos v)`` at ``x`` (see the comment above)."""
+    s = math.sin(x)
+    c = math.cos(x)
+    root_g = math.hypot(root_p * s, root_q * c)
+    root_n = math.hypot(root_a * s, root_b * c)
+    cos_v = root_n / (momentum * root_g)
+    sin_v = root_c0 / (momentum * root_g)
+    return 1.0 / (root_g * root_n), sin_v * sin_v / (1.0 + cos_v)
+
+
+@njit(cache=True, nogil=True)
+def _montgomery_panel(lo, hi, root_p, root_q, root_a, root_b, root_c0, momentum):
+    half = 0.5 * (hi - lo)
+    mid = 0.5 * (lo + hi)
+    time = 0.0
+    area = 0.0
+    for k in range(GAUSS_NODES.shape[0]):
+        dt, dcap = _montgomery_integrands(
+            mid + half * GAUSS_NODES[k], root_p, root_q, root_a, root_b, root_c0, momentum
+        )
+        time += GAUSS_WEIGHTS[k] * dt
+        area += GAUSS_WEIGHTS[k] * dcap
+    return half * time, half * area
+
+
+@njit(cache=True, nogil=True)
+def _add(total, compensation, value):
+    """Neumaier's compensated sum: ``(total, compensation) += value``."""
+    t = total + value
+    if abs(total) >= abs(value):
+        compensation += (total - t) + value
+    else:
+        compensation += (value - t) + total
+    return t, compensation
+
+
+@njit(cache=True, nogil=True)
+def period_and_cap(i1, i2, i3, w1, w2, w3, scale, offset, closing, rtol):
+    """Period T and the cap's solid angle by quadrature along the polhode.
+
+    Parameters
+    ----------
+    i1, i2, i3 : float
+        Principal moments, ascending (any scale).
+    w1, w2, w3 : float
+        The spin (any magnitude).
+    scale, offset, closing : float
+        ``M^2 - 2 E I2 = -scale * offset * closing`` (factored as in
+        :func:`orbits.core.phase.spin_gap`: ``offset`` carries the sign and
+        the separatrix distance, the others are positive).
+    rtol : float
+        Relative tolerance of the adaptive Gauss-Legendre quadrature
+        (20 points a panel; a panel is split until its halves agree with
+        it to ``rtol`` of the totals).
+
+    Returns
+    -------
+    period, cap, branch : float
+        ``branch`` +1 (SAM) or -1 (LAM); ``period`` and ``cap`` NaN on the
+        separatrix (``offset == 0``) or when the quadrature needed more
+        than :data:`MONTGOMERY_MAX_PANELS` panels.
+    """
+    if offset == 0.0 or not (scale > 0.0 and closing > 0.0):
+        return np.nan, np.nan, 0.0
+    sam = offset < 0.0
+    s1 = w1 * w1
+    s2 = w2 * w2
+    s3 = w3 * w3
+    m_sq = i1 * i1 * s1 + i2 * i2 * s2 + i3 * i3 * s3
+    momentum = math.sqrt(m_sq)
+    gap_m1 = i2 * (i2 - i1) * s2 + i3 * (i3 - i1) * s3  # M^2 - 2 E I1
+    gap_3m = i1 * (i3 - i1) * s1 + i2 * (i3 - i2) * s2  # 2 E I3 - M^2
+    # |M^2 - 2 E I2| / I2 as a product of square roots: no underflow
+    root_b = math.sqrt(scale) * math.sqrt(abs(offset)) * math.sqrt(closing) / math.sqrt(i2)
+    root_p = math.sqrt((i3 - i1) / (i1 * i3))
+    if sam:
+        root_q = math.sqrt((i3 - i2) / (i2 * i3))
+        root_a = math.sqrt(gap_m1 / i1)
+        root_c0 = math.sqrt(gap_3m / i3)
+    else:
+        root_q = math.sqrt((i2 - i1) / (i1 * i2))
+        root_a = math.sqrt(gap_3m / i3)
+        root_c0 = math.sqrt(gap_m1 / i1)
+    # the smaller of the two scales near x = 0, and the graded panels
+    finest = min(root_b / root_a, root_q / root_p)
+    lo_stack = np.empty(_STACK)
+    hi_stack = np.empty(_STACK)
+    depth = 0
+    edge = HALF_PI
+    estimate_t = 0.0
+    estimate_c = 0.0
+    while depth < _MAX_GRADED - 1 and edge > 0.25 * finest:
+        lower = 0.5 * edge
+        lo_stack[depth] = lower
+        hi_stack[depth] = edge
+        depth += 1
+        edge = lower
+    lo_stack[depth] = 0.0
+    hi_stack[depth] = edge
+    depth += 1
+    for k in range(depth):
+        t_k, c_k = _montgomery_panel(
+            lo_stack[k], hi_stack[k], root_p, root_q, root_a, root_b, root_c0, momentum
+        )
+        estimate_t += t_k
+        estimate_c += c_k
+    scale_t = abs(estimate_t)
+    scale_c = max(abs(estimate_c), 1e-300)
+    total_t = 0.0
+    comp_t = 0.0
+    total_c = 0.0
+    comp_c = 0.0
+    panels = depth
+    while depth > 0:
+        depth -= 1
+        a = lo_stack[depth]
+        b = hi_stack[depth]
+        t_ab, c_ab = _montgomery_panel(a, b, root_p, root_q, root_a, root_b, root_c0, momentum)
+        mid = 0.5 * (a + b)
+        t_l, c_l = _montgomery_panel(a, mid, root_p, root_q, root_a, root_b, root_c0, momentum)
+        t_r, c_r = _montgomery_panel(mid, b, root_p, root_q, root_a, root_b, root_c0, momentum)
+        panels += 3
+        if panels > MONTGOMERY_MAX_PANELS:
+            return np.nan, np.nan, (1.0 if sam else -1.0)
+        converged = (
+            abs(t_l + t_r - t_ab) <= rtol * scale_t and abs(c_l + c_r - c_ab) <= rtol * scale_c
+        )
+        # a panel narrower than ~1e-13 of its position cannot be split usefully
+        if converged or depth + 2 > _STACK or b - a <= 1e-13 * b:
+            total_t, comp_t = _add(total_t, comp_t, t_l)
+            total_t, comp_t = _add(total_t, comp_t, t_r)
+            total_c, comp_c = _add(total_c, comp_c, c_l)
+            total_c, comp_c = _add(total_c, comp_c, c_r)
+        else:
+            lo_stack[depth] = a
+            hi_stack[depth] = mid
+            lo_stack[depth + 1] = mid
+            hi_stack[depth + 1] = b
+            depth += 2
+    return 4.0 * (total_t + comp_t), 4.0 * (total_c + comp_c), (1.0 if sam else -1.0)
+
+
+@njit(cache=True, nogil=True)
+def montgomery_phase(i1, i2, i3, w1, w2, w3, scale, offset, closing, rtol):
+    """``Delta alpha = 2ET/M - Omega`` with T and Omega by quadrature.
+
+    Arguments as :func:`period_and_cap`.  Returns ``(total, dynamic,
+    omega_signed, period, branch)``; NaN where :func:`period_and_cap` gives
+    NaN.
+    """
+    two_e = i1 * w1 * w1 + i2 * w2 * w2 + i3 * w3 * w3
+    momentum = math.sqrt(i1 * i1 * w1 * w1 + i2 * i2 * w2 * w2 + i3 * i3 * w3 * w3)
+    period, cap, branch = period_and_cap(i1, i2, i3, w1, w2, w3, scale, offset, closing, rtol)
+    signed = branch * cap  # right-hand rule: + on SAM, - on LAM
+    dynamic = two_e * period / momentum
+    return dynamic - signed, dynamic, signed, period, branch
 
 
 @njit(cache=True, nogil=True)
@@ -224,6 +437,7 @@ def rotation_angle_after_periods(i1, i2, i3, w1, w2, w3, periods, rtol, atol, ma
 
 CHECK_COLUMNS = (
     "closed_form",
+    "closed_form_theta",
     "motion",
     "montgomery",
     "solid_angle",
@@ -233,6 +447,9 @@ CHECK_COLUMNS = (
     "ode_off_axis",
     "period",
     "branch",
+    "w1",
+    "w2",
+    "w3",
 )
 
 
@@ -240,53 +457,66 @@ CHECK_COLUMNS = (
 def check_batch(moments, theta, phi, ode_rtol, ode_atol, quad_rtol, out):
     """The closed form and all three checks for each row.
 
-    All four evaluate the orbit through the double-precision vector
-    omega0 built from ``theta, phi``, whose distance from the separatrix is
-    computed exactly (so near the separatrix they compare the same orbit;
-    how the double omega0 differs from the exact ``theta`` is a matter of
-    the input's conditioning, not of the formulas).
+    The closed form (``closed_form``) and the three checks evaluate the
+    orbit through the double-precision vector omega0 built from ``theta,
+    phi``, whose distance from the separatrix is computed exactly
+    (:func:`orbits.core.phase.vector_gap`), so near the separatrix they
+    compare the same orbit; how the double omega0 differs from the exact
+    ``theta`` is a matter of the input's conditioning, not of the formulas.
+    ``closed_form_theta`` is the closed form of the orbit of ``theta``
+    itself (the factored gap of :func:`orbits.core.phase.spin_from_angle`),
+    the orbit that ``orbits.total_phase`` and ``orbits.phases`` evaluate:
+    the reference their values are compared with.
 
     ``moments`` (n, 3) sorted ascending; ``theta``, ``phi`` (n,) the unit
-    initial spin.  ``out`` (n, 10) follows :data:`CHECK_COLUMNS`: the
-    closed-form total phase (Bulirsch ``cel``), the exact-motion
-    ``phi(T)`` phase, Montgomery's total phase, solid angle and period, the
-    ODE period, rotation angle mod 2 pi and off-axis size, the closed-form
-    period and the branch.  Rows on the separatrix get NaN; a row whose
-    integration ran out of steps has ``ode_period`` equal to
-    :data:`STEP_BUDGET_EXHAUSTED` (see :func:`rotation_after_periods`).
+    initial spin.  ``out`` (n, 14) follows :data:`CHECK_COLUMNS`: the
+    closed-form total phase (Bulirsch ``cel``) of omega0 and of ``theta``,
+    the exact-motion ``phi(T)`` phase, Montgomery's total phase, solid angle
+    and period, the ODE period, rotation angle mod 2 pi and off-axis size,
+    the closed-form period, the branch (+1 SAM, -1 LAM, 0 where ``theta``
+    has no closed form: on the separatrix, or within the rounding error of
+    ``theta_c``) and omega0.  Every column but ``branch`` is NaN on the rows
+    of branch 0; a row whose integration ran out of steps has
+    ``ode_period`` equal to :data:`STEP_BUDGET_EXHAUSTED` (see
+    :func:`rotation_after_periods`).  Every entry of ``out`` is written.
     """
     for k in prange(moments.shape[0]):
         i1 = moments[k, 0]
         i2 = moments[k, 1]
         i3 = moments[k, 2]
-        code, _, _, _, w1, w2, w3, _, _, _ = _phase.spin_from_angle(
+        code, _, _, _, w1, w2, w3, scale, offset, closing = _phase.spin_from_angle(
             _phase.body_constants(i1, i2, i3, phi[k]), theta[k], False
         )
         if code != _phase.STATUS_OK:
             for j in range(out.shape[1]):
                 out[k, j] = np.nan
+            out[k, 10] = 0.0
             continue
+        out[k, 1] = _phase.total_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing)
         # every evaluation below follows the orbit through the double
         # vector (w1, w2, w3); its separatrix gap is computed exactly
-        gap = separatrix_gap_exact(i1, i2, i3, w1, w3)
-        out[k, 0] = _phase.total_from_spin(i1, i2, i3, w1, w2, w3, 1.0, -gap, 1.0)
+        v_scale, v_offset, v_closing = _phase.vector_gap(i1, i2, i3, w1, w2, w3)
+        out[k, 0] = _phase.total_from_spin(i1, i2, i3, w1, w2, w3, v_scale, v_offset, v_closing)
         orbit = np.empty(_motion.ORBIT_SIZE)
-        branch = _motion.orbit_setup(i1, i2, i3, w1, w2, w3, 1.0, -gap, 1.0, orbit)
-        out[k, 1] = _motion.phase_after_period(orbit)
-        total, dynamic, solid, period, quad_branch = montgomery_phase(
-            i1, i2, i3, w1, w2, w3, gap, quad_rtol
+        branch = _motion.orbit_setup(i1, i2, i3, w1, w2, w3, v_scale, v_offset, v_closing, orbit)
+        out[k, 2] = _motion.phase_after_period(orbit)
+        total, _, solid, period, _ = montgomery_phase(
+            i1, i2, i3, w1, w2, w3, v_scale, v_offset, v_closing, quad_rtol
         )
-        out[k, 2] = total
-        out[k, 3] = solid
-        out[k, 4] = period
+        out[k, 3] = total
+        out[k, 4] = solid
+        out[k, 5] = period
         ode_period, angle, off_axis = rotation_after_periods(
             i1, i2, i3, w1, w2, w3, 1, ode_rtol, ode_atol, ODE_MAX_STEPS
         )
-        out[k, 5] = ode_period
-        out[k, 6] = angle
-        out[k, 7] = off_axis
-        out[k, 8] = orbit[_motion.SLOT_PERIOD]
-        out[k, 9] = branch
+        out[k, 6] = ode_period
+        out[k, 7] = angle
+        out[k, 8] = off_axis
+        out[k, 9] = orbit[_motion.SLOT_PERIOD]
+        out[k, 10] = branch
+        out[k, 11] = w1
+        out[k, 12] = w2
+        out[k, 13] = w3
 
 
 # Full integration from a double omega0 keeps ~1e-10 only while the orbit

@@ -24,7 +24,18 @@ Formulas (Mecholsky 2019, appendix; Landau & Lifshitz, Mechanics, Sec. 37):
 
   with ``Pi(n; phi + j pi) = 2 j Pi(n) + Pi(n; phi)``.  The incomplete and
   complete Pi come from Carlson's R_J (DLMF 19.25.14), independent of the
-  Bulirsch ``cel`` used for the closed-form phase.
+  Bulirsch ``cel`` used for the closed-form phase.  For ``n < -1`` (always
+  the case for a thin rod, ``I1 -> 0``, where ``-n ~ 1/I1``) the form
+  ``F + (n/3) s^3 R_J`` cancels (its terms are ~ ``F`` while ``Pi ~
+  1/sqrt(-n)``); there :func:`pi_far` uses the cancellation-free form
+  derived from DLMF 19.7.9 (see there), whose leading term is
+  ``atan2(W s, c dn) / W`` with ``W = M (I3-I1) / (I1 I3 D)``, the
+  coefficient of ``Pi`` in ``phi`` itself.
+* Times are first reduced by whole periods, ``t = k T + t'``:
+  ``Pi(u + 4 K) = Pi(u) + 4 Pi(n)``, so ``omega(k T) = omega0`` and
+  ``phi(k T) = k phi(T)`` do not depend on the rounding of ``D T`` against
+  ``4 K`` (which ``dphi/du``, up to ``M / (I1 D)``, amplifies for a thin
+  rod).
 * Orientation ``R = Rz(phi) Rx(theta) Rz(psi)`` (z-x'-z'', Goldstein/Landau)
   maps body components to space components; the space z axis is along M
   and ``phi(0) = 0``.
@@ -51,6 +62,56 @@ HALF_PI = 0.5 * math.pi
 TWO_PI = 2.0 * math.pi
 # below this |cn| and dn the R_J of phi(t) is taken from them, not their squares
 _TINY_ROOT = 1.0e-140
+# below this characteristic Pi(n; .) is taken from pi_far (no cancellation)
+_FAR_N = -1.0
+
+
+@njit(cache=True, nogil=True)
+def pi_far(s, c, dn, ratio, width):
+    """``Pi(n; am | m)`` for ``n < 0``, ``|am| <= pi/2``, without cancellation.
+
+    ``s, c, dn``: sine and cosine of ``am`` (``c >= 0``) and ``sqrt(1 - m
+    s^2)``; ``ratio = m / N`` and ``width = W = sqrt((1 + N)(1 + m / N))``
+    with ``N = -n > 0``.  Then
+
+        Pi(-N; am | m) = atan2(W s, c dn) / W
+                         + (m / (3 N)) s^3 R_J(c^2, dn^2, 1, 1 + (m / N) s^2),
+
+    two terms of the sign of ``s``: no cancellation for any ``N > 0``.
+    Derivation: DLMF 19.7.9 with ``alpha^2 = -N`` and ``omega^2 = m /
+    alpha^2 = -m / N``, ``Pi(-N) + Pi(-m / N) = F + sqrt(C) R_C((C - 1)(C -
+    m), (C + N)(C + m / N))`` (``C = 1 / s^2``); ``Pi(-m / N) = F - (m /
+    3N) s^3 R_J(...)`` (DLMF 19.25.14) cancels ``F``, and the ``R_C``,
+    scaled by ``s^4``, is ``R_C(x, y)`` with ``x = c^2 dn^2`` and ``y - x =
+    s^2 (1 + N)(1 + m / N) = W^2 s^2`` exactly, i.e. ``atan(sqrt((y - x) /
+    x)) / sqrt(y - x)`` (DLMF 19.2.18) ``= atan2(W s, c dn) / (W s)``.
+    (Checked in mpmath at 60 digits to 1e-60 over ``N`` in 1e-3..1e40.)
+    The form ``F + (n/3) s^3 R_J`` that it replaces for ``n < -1`` has
+    terms ~ ``F`` while ``Pi ~ 1 / sqrt(N)``: a relative error ~ ``eps
+    sqrt(N)``, which on a thin rod ``(e, 1, 1 + e)`` (``N ~ 1 / e^2``)
+    reached 0.2 in ``phi(T)`` at ``e = 1e-15``.
+    """
+    q = 1.0 + ratio * s * s
+    if abs(c) < _TINY_ROOT and dn < _TINY_ROOT:
+        rj = carlson_rj_roots(abs(c), dn, q)
+    else:
+        rj = carlson_rj(c * c, dn * dn, 1.0, q)
+    return math.atan2(width * s, c * dn) / width + ratio / 3.0 * s * s * s * rj
+
+
+@njit(cache=True, nogil=True)
+def pi_far_complete(kc, ratio, width):
+    """Complete ``Pi(n | m)`` for ``n < 0`` as :func:`pi_far` at ``am = pi/2``.
+
+    ``pi / (2 W) + (m / (3 N)) R_J(0, kc^2, 1, 1 + m / N)``.
+    """
+    q = 1.0 + ratio
+    if kc < _TINY_ROOT:
+        rj = carlson_rj_roots(0.0, kc, q)
+    else:
+        rj = carlson_rj(0.0, kc * kc, 1.0, q)
+    return HALF_PI / width + ratio / 3.0 * rj
+
 
 (
     SLOT_BRANCH,
@@ -77,8 +138,10 @@ _TINY_ROOT = 1.0e-140
     SLOT_LEVELS,
     SLOT_GAP_3M,
     SLOT_START_QUARTERS,
-) = range(24)
-SLOT_MEANS = 24
+    SLOT_RATIO,
+    SLOT_WIDTH,
+) = range(26)
+SLOT_MEANS = 26
 SLOT_GEOMETRIC = SLOT_MEANS + AGM_LEVELS
 ORBIT_SIZE = SLOT_GEOMETRIC + AGM_LEVELS
 
@@ -103,14 +166,19 @@ def pi_of_u(orbit, w):
     s = parity * sn  # sin and cos of am(r), |am(r)| <= pi/2
     c = parity * cn
     n = orbit[SLOT_N]
-    # DLMF 19.25.14 with F(am(r)) = r; near the saddle c and dn may both be
-    # below 1e-154, whose squares leave the normal doubles
-    p = 1.0 - n * s * s
-    if abs(c) < _TINY_ROOT and dn < _TINY_ROOT:
-        rj = carlson_rj_roots(abs(c), dn, p)
+    if n < _FAR_N:
+        part = pi_far(s, c, dn, orbit[SLOT_RATIO], orbit[SLOT_WIDTH])
     else:
-        rj = carlson_rj(c * c, dn * dn, 1.0, p)
-    value = 2.0 * j * orbit[SLOT_PI_COMPLETE] + r + n / 3.0 * s * s * s * rj
+        # DLMF 19.25.14 with F(am(r)) = r (|n| <= 1: Pi >= F / 2, no
+        # cancellation); near the saddle c and dn may both be below 1e-154,
+        # whose squares leave the normal doubles
+        p = 1.0 - n * s * s
+        if abs(c) < _TINY_ROOT and dn < _TINY_ROOT:
+            rj = carlson_rj_roots(abs(c), dn, p)
+        else:
+            rj = carlson_rj(c * c, dn * dn, 1.0, p)
+        part = r + n / 3.0 * s * s * s * rj
+    value = 2.0 * j * orbit[SLOT_PI_COMPLETE] + part
     return value, sn, cn, dn, j
 
 
@@ -225,13 +293,29 @@ def orbit_setup(i1, i2, i3, w1, w2, w3, scale, offset, closing, orbit):
     orbit[SLOT_RATE] = rate
     orbit[SLOT_QUARTER] = quarter
     orbit[SLOT_N] = n
-    orbit[SLOT_PI_COMPLETE] = ellippi_complete_carlson(n, kc)
+    m = elliptic_parameter(i1, i2, i3, branch, gap_m1, gap_3m)
+    if n < _FAR_N:
+        # m / N and W = sqrt((1 + N)(1 + m / N)) of pi_far, as products:
+        # m / N = I1 (2EI3 - M^2) / (I3 (M^2 - 2EI1)) on SAM, I1 (I3-I2) /
+        # (I3 (I2-I1)) on LAM, and 1 + N = 1 - n = p of orbit_constants
+        if branch == BRANCH_SAM:
+            ratio = i1 * gap_3m / (i3 * gap_m1)
+        else:
+            ratio = i1 * d32 / (i3 * d21)
+        width = math.sqrt(p) * math.sqrt(1.0 + ratio)
+        orbit[SLOT_RATIO] = ratio
+        orbit[SLOT_WIDTH] = width
+        orbit[SLOT_PI_COMPLETE] = pi_far_complete(kc, ratio, width)
+    else:
+        orbit[SLOT_RATIO] = 0.0
+        orbit[SLOT_WIDTH] = 0.0
+        orbit[SLOT_PI_COMPLETE] = ellippi_complete_carlson(n, kc)
     orbit[SLOT_COEF] = momentum * d31 / (i1 * i3 * rate)
     orbit[SLOT_MOMENTUM] = momentum
     orbit[SLOT_PRECESSION] = momentum / i3
     orbit[SLOT_TWO_E] = two_e
     orbit[SLOT_PERIOD] = 4.0 * quarter / rate
-    orbit[SLOT_M] = elliptic_parameter(i1, i2, i3, branch, gap_m1, gap_3m)
+    orbit[SLOT_M] = m
     orbit[SLOT_GAP_3M] = gap_3m
     # a steady spin about I3: the Euler angles phi and psi share one axis
     orbit[SLOT_STILL] = 1.0 if (branch == BRANCH_SAM and gap_3m == 0.0) else 0.0
@@ -244,24 +328,47 @@ def orbit_setup(i1, i2, i3, w1, w2, w3, scale, offset, closing, orbit):
 
 
 @njit(cache=True, nogil=True)
+def whole_periods(orbit, t):
+    """``(k, w)``: ``t = k T + t'`` with ``k`` whole, ``|t'| <= T/2``, ``w = tau0 + D t'``.
+
+    ``u(t) = u(t') + 4 k K`` exactly (``T = 4 K / D``), so ``sn, cn, dn``
+    are those at ``w`` and ``Pi`` gains ``4 k Pi(n)``: the motion at whole
+    periods does not depend on how ``D T`` rounds against ``4 K``.
+    """
+    period = orbit[SLOT_PERIOD]
+    k = math.floor(t / period + 0.5)
+    rest = t - k * period if k != 0.0 else t
+    return k, orbit[SLOT_TAU0] + orbit[SLOT_RATE] * rest
+
+
+@njit(cache=True, nogil=True)
 def state_at(orbit, t):
     """``w1, w2, w3, phi, theta, psi`` at time ``t`` (body-frame omega, Euler angles).
 
     ``phi`` is continuous (unwrapped) with ``phi(0) = 0``; ``psi`` is
     continuous too: on SAM it winds by -2 pi sign(w3) per period, on LAM it
-    stays in one half-plane.
+    stays in one half-plane.  ``t`` is first reduced by whole periods
+    (:func:`whole_periods`).
     """
-    pi_u, sn, cn, dn, j = pi_of_u(orbit, orbit[SLOT_TAU0] + orbit[SLOT_RATE] * t)
-    return state_from_pieces(orbit, t, pi_u, sn, cn, dn, j)
+    k, w = whole_periods(orbit, t)
+    pi_u, sn, cn, dn, j = pi_of_u(orbit, w)
+    gained = (pi_u - orbit[SLOT_PI_START]) + 4.0 * k * orbit[SLOT_PI_COMPLETE]
+    return _state(orbit, t, gained, sn, cn, dn, j + 2.0 * k)
 
 
 @njit(cache=True, nogil=True)
 def state_from_pieces(orbit, t, pi_u, sn, cn, dn, j):
     """:func:`state_at` from ``P(u)``, ``sn, cn, dn`` of ``u`` and its half-period index."""
+    return _state(orbit, t, pi_u - orbit[SLOT_PI_START], sn, cn, dn, j)
+
+
+@njit(cache=True, nogil=True)
+def _state(orbit, t, gained, sn, cn, dn, j):
+    """:func:`state_at` from ``P(u) - P(u0)``, ``sn, cn, dn`` and the half-period index."""
     i1 = orbit[SLOT_I1]
     i2 = orbit[SLOT_I2]
     i3 = orbit[SLOT_I3]
-    elapsed = orbit[SLOT_COEF] * (pi_u - orbit[SLOT_PI_START])
+    elapsed = orbit[SLOT_COEF] * gained
     phi = orbit[SLOT_PRECESSION] * t + elapsed
     amp2 = orbit[SLOT_A2]
     w2 = amp2 * sn
@@ -314,16 +421,24 @@ def omega_space_at(orbit, t):
     ``2E/M``; its part in that plane is ``Rz(phi)`` of
     ``((I2 - I1) w1 w2, w3 (2EI3 - M^2) / M) / (M sin(theta))``.
     """
-    pi_u, sn, cn, dn, _ = pi_of_u(orbit, orbit[SLOT_TAU0] + orbit[SLOT_RATE] * t)
-    return omega_space_from_pieces(orbit, t, pi_u, sn, cn, dn)
+    k, w = whole_periods(orbit, t)
+    pi_u, sn, cn, dn, _ = pi_of_u(orbit, w)
+    gained = (pi_u - orbit[SLOT_PI_START]) + 4.0 * k * orbit[SLOT_PI_COMPLETE]
+    return _omega_space(orbit, t, gained, sn, cn, dn)
 
 
 @njit(cache=True, nogil=True)
 def omega_space_from_pieces(orbit, t, pi_u, sn, cn, dn):
     """:func:`omega_space_at` from ``P(u)`` and ``sn, cn, dn`` of ``u``."""
+    return _omega_space(orbit, t, pi_u - orbit[SLOT_PI_START], sn, cn, dn)
+
+
+@njit(cache=True, nogil=True)
+def _omega_space(orbit, t, gained, sn, cn, dn):
+    """:func:`omega_space_at` from ``P(u) - P(u0)`` and ``sn, cn, dn`` of ``u``."""
     i1 = orbit[SLOT_I1]
     i2 = orbit[SLOT_I2]
-    phi = orbit[SLOT_PRECESSION] * t + orbit[SLOT_COEF] * (pi_u - orbit[SLOT_PI_START])
+    phi = orbit[SLOT_PRECESSION] * t + orbit[SLOT_COEF] * gained
     w2 = orbit[SLOT_A2] * sn
     if orbit[SLOT_BRANCH] == BRANCH_SAM:
         w1 = orbit[SLOT_A1] * cn
@@ -356,7 +471,9 @@ def omega_space_from_pieces(orbit, t, pi_u, sn, cn, dn):
 def phase_after_period(orbit):
     """``Delta alpha`` from the motion: ``phi(T) - 2 pi`` (SAM) or ``phi(T)``.
 
-    ``T = 4 K / D`` with K from the AGM table; phi from Carlson's Pi.
+    ``T = 4 K / D`` with K from the AGM table; phi from Carlson's Pi.  By
+    :func:`whole_periods` this is ``M T / I3 + 4 (M (I3-I1) / (I1 I3 D))
+    Pi(n)`` (eqn:fullphi over one period), free of the rounding of ``D T``.
     """
     phi = state_at(orbit, orbit[SLOT_PERIOD])[3]
     return phi - TWO_PI if orbit[SLOT_BRANCH] == BRANCH_SAM else phi
