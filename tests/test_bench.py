@@ -55,14 +55,7 @@ def test_load_check_times_each_row_and_stops_the_busy_process(monkeypatch):
     assert "_ours" not in rows[0] and "load" not in rows[1]
     text = bench.format_table(
         {
-            "machine": {
-                "cpu_count": 2,
-                "numba_threads": 2,
-                "python": "3",
-                "numpy": "2",
-                "scipy": "1",
-                "numba": "0",
-            },
+            "machine": _machine(),
             "results": rows,
         }
     )
