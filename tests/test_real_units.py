@@ -184,8 +184,11 @@ def test_phase_omega_prints_units_frame_and_flip(capsys):
     period = float(lines["period"].split()[-1])
     assert f"every T/2 = {0.5 * period:.6g} s" in text and "flip" in text
     # a spin far from I2: no flip claimed
-    assert main([*argv, "--omega", "0", "0", "100", "--units", "rpm"]) == 0
+    assert main([*argv, "--omega", "0", "2", "100", "--units", "rpm"]) == 0
     assert "no flip is seen" in capsys.readouterr().out
+    # exactly along z (the phone's I3): a steady spin, said so
+    assert main([*argv, "--omega", "0", "0", "100", "--units", "rpm"]) == 0
+    assert "steady spin about I3" in capsys.readouterr().out
 
 
 def test_singular_and_plural(capsys, tmp_path):
