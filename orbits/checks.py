@@ -37,7 +37,7 @@ from .core import checks as _checks
 from .core import phase as _phase
 from .core.ode import STATE_SIZE, euler_rhs
 from .errors import AngleError, ArgumentTypeError, InputError, OrbitsError
-from .limits import format_bytes, memory_budget
+from .limits import PHASE_ULPS, ROUTE_ULPS, check_verify_size
 from .motion import Motion, as_body
 from .threads import threads_for
 
@@ -459,31 +459,10 @@ def closure_errors(moments, dtheta, periods, rtol=1e-13):
     return out
 
 
-# A discrepancy of up to PHASE_ULPS spacings of doubles at |Delta alpha|
-# passes whatever the tolerance: a value correct to a few ulps is all that
-# double precision can hold (near the sphere Delta alpha reaches 1e8..1e9
-# rad, where doubles are 1e-8..1e-7 apart), and the closed form and the
-# checks differ by up to 14 ulps (measured over 100,000 initial conditions
-# of verify(10000, 10), and <= 4 ulps on the nearly spherical bodies of
-# docs/checks.md); a real inaccuracy, like the 160 ulps of the earlier
-# quadrature near the sphere, still fails.
-PHASE_ULPS = 16
-# The closed form as the public functions compute it must agree with the
-# closed form the checks were compared with to this many spacings of
-# doubles, whatever the tolerance: the same formula for the same orbit,
-# differing only in the order of operations (the SIMD kernels' polynomial
-# sine and cosine, cel's pair loop); measured at most 14 over the 100,000
-# initial conditions of verify(10000, 10) and 200 random, thin-rod, nearly
-# spherical and nearly prolate bodies (docs/checks.md).
-ROUTE_ULPS = 64
 # the integration and quadrature tolerances of verify's checks
 VERIFY_ODE_RTOL = 1e-12
 VERIFY_ODE_ATOL = 1e-14
 VERIFY_QUAD_RTOL = 1e-14
-# memory per initial condition (the table's ~35 float columns, the
-# route evaluations and the integrations' state); orbits/cli/verify.py
-# estimates with the same figure before importing this module
-VERIFY_BYTES_PER_CONDITION = 2000
 # the public routes of the closed form verify evaluates (summary["routes"])
 ROUTES = (
     ("total_phase", "orbits.total_phase, bodies in one call (SIMD kernel total_phase_many)"),
@@ -565,17 +544,6 @@ def _verify_arguments(n_angles, tolerance, progress, chunk):
     return n_angles, tolerance, progress, chunk
 
 
-def _check_memory(n_bodies, n_angles):
-    total = n_bodies * n_angles
-    memory = total * VERIFY_BYTES_PER_CONDITION
-    if memory > memory_budget():
-        raise InputError(
-            f"verify with {n_bodies} bodies x {n_angles} angles = {total} initial "
-            f"conditions would need about {format_bytes(memory)} of memory, more than "
-            f"the {format_bytes(memory_budget())} allowed (half of this machine's)"
-        )
-
-
 def verify(n_bodies=293, n_angles=22, *, tolerance=TOLERANCE, progress=None, chunk=2048):
     """The paper's exhaustive check, at any scale.
 
@@ -633,7 +601,7 @@ def verify(n_bodies=293, n_angles=22, *, tolerance=TOLERANCE, progress=None, chu
     """
     n_bodies = integer("n_bodies", n_bodies, minimum=1)
     n_angles, tolerance, progress, chunk = _verify_arguments(n_angles, tolerance, progress, chunk)
-    _check_memory(n_bodies, n_angles)
+    check_verify_size(n_bodies, n_angles)
     bodies = region_sample(n_bodies)
     unit, exponent = unit_moments(bodies)
     return _verify_grid(unit, exponent, n_angles, tolerance, progress, chunk, one_body=False)
@@ -660,7 +628,7 @@ def verify_body(body, n_angles=22, *, tolerance=TOLERANCE, progress=None, chunk=
     """
     body = as_body(body)
     n_angles, tolerance, progress, chunk = _verify_arguments(n_angles, tolerance, progress, chunk)
-    _check_memory(1, n_angles)
+    check_verify_size(1, n_angles)
     unit = np.asarray(body.unit_moments, dtype=float)[None, :]
     exponent = np.array([body.exponent])
     return _verify_grid(unit, exponent, n_angles, tolerance, progress, chunk, one_body=True)
@@ -676,7 +644,6 @@ def _verify_grid(unit, exponent, n_angles, tolerance, progress, chunk, one_body)
     n = theta.size
     # NaN until written: a row the kernel did not reach can never read as 0
     out = np.full((n, len(_checks.CHECK_COLUMNS)), np.nan)
-    done = 0
     for start in range(0, n, chunk):
         stop = min(start + chunk, n)
         with threads_for(stop - start, serial_below=2):
@@ -689,12 +656,14 @@ def _verify_grid(unit, exponent, n_angles, tolerance, progress, chunk, one_body)
                 VERIFY_QUAD_RTOL,
                 out[start:stop],
             )
-        done += stop - start
         if progress is not None:
             progress(stop - start)
     # every row written (the kernel writes every entry; branch is never NaN)
-    if done != n or np.isnan(out[:, _checks.CHECK_COLUMNS.index("branch")]).any():
-        raise AssertionError(f"verify: {n - done} of {n} initial conditions were not evaluated")
+    unwritten = np.isnan(out[:, _checks.CHECK_COLUMNS.index("branch")])
+    if unwritten.any():
+        raise AssertionError(
+            f"verify: {int(unwritten.sum())} of {n} initial conditions were not evaluated"
+        )
     table = pd.DataFrame(out, columns=_checks.CHECK_COLUMNS)
     table.insert(0, "theta", theta)
     # the moments as given (the canonical ones times 2**exponent, exact)
@@ -795,17 +764,13 @@ def _summarize(table, tolerance, exhausted, route_failures=None):
     """
     route_failures = route_failures or {}
     closed = table["closed_form"].to_numpy()
-    has_closed = np.isfinite(closed)
-    if "closed_form_theta" in table:
-        has_closed &= np.isfinite(table["closed_form_theta"].to_numpy())
+    has_closed = np.isfinite(closed) & np.isfinite(table["closed_form_theta"].to_numpy())
     on_separatrix = int(np.count_nonzero(~has_closed))
     spacing = np.where(has_closed, np.spacing(np.abs(np.where(has_closed, closed, 1.0))), np.nan)
     allowance = np.maximum(tolerance, PHASE_ULPS * spacing)
     checks = {}
     passed = on_separatrix == 0
     for name, column in _CHECKS:
-        if column not in table:
-            continue
         errors = table[column].to_numpy()
         ran = np.isfinite(errors) & has_closed
         missing = int(np.count_nonzero(has_closed & ~ran))
@@ -839,8 +804,6 @@ def _summarize(table, tolerance, exhausted, route_failures=None):
                 reasons.append(f"{route} raised {message}")
             entry["routes"] = {}
             for route, _ in ROUTES:
-                if f"route_{route}" not in table:
-                    continue
                 value = table[f"route_{route}"].to_numpy()
                 reference = _route_reference(table, route)
                 ok = has_closed & np.isfinite(value)

@@ -129,6 +129,48 @@ def check_resolution(resolution):
     return int(resolution)
 
 
+# ------------------------------------------------------------------- verify
+# orbits verify / orbits.checks.verify: memory per initial condition (the
+# table's ~35 float columns, the route evaluations and the integrations'
+# state) and time (measured here: 64,460 initial conditions in 1.5 s)
+VERIFY_BYTES_PER_CONDITION = 2000
+VERIFY_SECONDS_PER_CONDITION = 3e-5
+# A discrepancy of up to PHASE_ULPS spacings of doubles at |Delta alpha|
+# passes whatever the tolerance: a value correct to a few ulps is all that
+# double precision can hold (near the sphere Delta alpha reaches 1e8..1e9
+# rad, where doubles are 1e-8..1e-7 apart), and the closed form and the
+# checks differ by up to 14 ulps (measured over 100,000 initial conditions
+# of verify(10000, 10), and <= 4 ulps on the nearly spherical bodies of
+# docs/checks.md); a real inaccuracy, like the 160 ulps of the earlier
+# quadrature near the sphere, still fails.
+PHASE_ULPS = 16
+# The closed form as the public functions compute it must agree with the
+# closed form the checks were compared with to this many spacings of
+# doubles, whatever the tolerance: the same formula for the same orbit,
+# differing only in the order of operations (the SIMD kernels' polynomial
+# sine and cosine, cel's pair loop); measured at most 14 over the 100,000
+# initial conditions of verify(10000, 10) and 200 random, thin-rod, nearly
+# spherical and nearly prolate bodies (docs/checks.md).
+ROUTE_ULPS = 64
+
+
+def check_verify_size(n_bodies, n_angles):
+    """Refuse a verification whose table would exceed the memory allowed.
+
+    Returns ``(initial conditions, bytes)``; called by the command line
+    before it imports SciPy, and by :func:`orbits.checks.verify`.
+    """
+    total = n_bodies * n_angles
+    memory = total * VERIFY_BYTES_PER_CONDITION
+    if memory > memory_budget():
+        raise InputError(
+            f"verify with {n_bodies} bodies x {n_angles} angles = {total} initial "
+            f"conditions would need about {format_bytes(memory)} of memory, more than "
+            f"the {format_bytes(memory_budget())} allowed (half of this machine's)"
+        )
+    return total, memory
+
+
 # --------------------------------------------------------------- animations
 # measured here (2-core VM, 2026-11-24): drawing one frame of a Poinsot
 # animation takes ~0.2 s at dpi 40 to 160 alike (the 3-D artists dominate);

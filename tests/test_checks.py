@@ -216,11 +216,14 @@ def test_verify_summary_has_no_nan_and_explains_missing_values():
     table = pd.DataFrame(
         {
             "closed_form": [1.0, 2.0, nan],
+            "closed_form_theta": [1.0, 2.0, nan],
             "period": [6.0, 7.0, nan],
             "montgomery_error": [1e-12, nan, nan],
             "motion_error": [2e-12, 3e-12, nan],
             "ode_error": [nan, 5e-11, nan],
             "ode_period_error": [nan, 1e-10, nan],
+            "routes_error": [0.0, 0.0, nan],
+            **{f"route_{name}": [1.0, 2.0, nan] for name, _ in checks.ROUTES},
         }
     )
     exhausted = np.array([True, False, False])
@@ -502,12 +505,17 @@ def test_cli_verify_refuses_an_empty_table_name(capsys):
     assert len(err.strip().splitlines()) == 1 and "--table" in err
 
 
-def test_cli_ulps_match_the_module():
-    """The help quotes the allowances before importing orbits.checks."""
-    from orbits.cli import verify as command
+def test_cli_help_quotes_the_allowances_checks_applies(capsys):
+    """The help quotes the allowances before importing orbits.checks: one
+    definition (orbits.limits) serves both."""
+    from orbits import limits
 
-    assert command._PHASE_ULPS == checks.PHASE_ULPS
-    assert command._ROUTE_ULPS == checks.ROUTE_ULPS
+    assert (checks.PHASE_ULPS, checks.ROUTE_ULPS) == (limits.PHASE_ULPS, limits.ROUTE_ULPS)
+    with pytest.raises(SystemExit):
+        main(["verify", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert f"within {limits.PHASE_ULPS} spacings of doubles" in text
+    assert f"agrees with it to {limits.ROUTE_ULPS} ulps" in text
 
 
 # ---------------------------------------- verify checks the public routes
@@ -704,6 +712,7 @@ def test_summary_allows_ulps_but_not_more():
             "ode_error": [np.nan, np.nan],
             "ode_period_error": [np.nan, np.nan],
             "routes_error": [0.0, 65 * ulp],
+            **{f"route_{name}": [phase, phase + 65 * ulp] for name, _ in checks.ROUTES},
         }
     )
     exhausted = np.array([True, True])

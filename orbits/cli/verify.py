@@ -1,7 +1,12 @@
 """``orbits verify``: the paper's exhaustive check of the closed form, three ways."""
 
 from ..errors import InputError
-from ..limits import format_bytes, memory_budget
+from ..limits import (
+    PHASE_ULPS,
+    ROUTE_ULPS,
+    VERIFY_SECONDS_PER_CONDITION,
+    check_verify_size,
+)
 from .shared import (
     BODY_SELECTORS,
     EXIT_CHECK_FAILED,
@@ -13,17 +18,6 @@ from .shared import (
     positive_int,
     progress_bar,
 )
-
-# measured here: 64,460 initial conditions in 1.5 s; the table holds ~35
-# float columns and the integrations keep a few more per condition (the
-# same figure as orbits.checks.VERIFY_BYTES_PER_CONDITION, repeated here so
-# that the estimate comes before the import of SciPy)
-_VERIFY_SECONDS_PER_CONDITION = 3e-5
-_VERIFY_BYTES_PER_CONDITION = 2000
-# orbits.checks.PHASE_ULPS and ROUTE_ULPS, for the help (checks imports SciPy;
-# tests/test_checks.py keeps the two equal)
-_PHASE_ULPS = 16
-_ROUTE_ULPS = 64
 
 # the words that end the summary's reason for rows on the separatrix
 SEPARATRIX = "on the separatrix have no closed form"
@@ -50,16 +44,8 @@ def _cmd_verify(args):
     one = any(getattr(args, name, None) is not None for name in BODY_SELECTORS)
     body = body_from_args(args) if one else None
     n_bodies = 1 if one else args.bodies
-    total = n_bodies * args.angles
-    memory = total * _VERIFY_BYTES_PER_CONDITION
-    if memory > memory_budget():
-        raise InputError(
-            f"verify with {n_bodies} bodies x {args.angles} angles = "
-            f"{total} initial conditions would need about {format_bytes(memory)} "
-            f"of memory, more than the {format_bytes(memory_budget())} allowed "
-            "(half of this machine's)"
-        )
-    announce("verify", total * _VERIFY_SECONDS_PER_CONDITION, memory)
+    total, memory = check_verify_size(n_bodies, args.angles)
+    announce("verify", total * VERIFY_SECONDS_PER_CONDITION, memory)
     # imports SciPy (seconds on a cold start): after the estimate
     from ..checks import verify, verify_body
 
@@ -152,9 +138,9 @@ def add_parser(subparsers):
         "rtol 1e-12), (b) Montgomery's 2ET/M - Omega by quadrature "
         "along the polhode, and (c) phi(T) of the exact motion; and "
         "that the closed form as orbits.total_phase, orbits.phases ('orbits "
-        f"phase') and orbits.spin_phases compute it agrees with it to {_ROUTE_ULPS} "
+        f"phase') and orbits.spin_phases compute it agrees with it to {ROUTE_ULPS} "
         "ulps.  Exits with 1 if any discrepancy exceeds the tolerance (or "
-        f"{_PHASE_ULPS} spacings of doubles at the phase, where that is larger: "
+        f"{PHASE_ULPS} spacings of doubles at the phase, where that is larger: "
         "near the sphere the phases reach 1e9 rad, where doubles are 1e-7 apart), "
         "if a check gives no value, or if an angle lies on the separatrix.  "
         "The defaults give the paper's 6446 initial conditions.",
@@ -191,7 +177,7 @@ def add_parser(subparsers):
         type=finite,
         default=1e-9,
         help="largest allowed discrepancy, radians (default 1e-9); a discrepancy "
-        f"within {_PHASE_ULPS} spacings of doubles at the phase passes too",
+        f"within {PHASE_ULPS} spacings of doubles at the phase passes too",
     )
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument(
