@@ -38,6 +38,7 @@ from scipy import special
 
 from .bodies import Body
 from .errors import InputError, OrbitsError
+from .limits import plural
 from .phases import critical_angle, total_phase
 from .threads import SERIAL_BELOW, get_num_threads
 
@@ -649,13 +650,13 @@ def bench_survey_scaling(resolution=500, n_max=30, repeats=3):
         raise BenchError(f"survey_scaling cannot run here: {reason}")
     cpus = sorted(os.sched_getaffinity(0))
     threads = get_num_threads()
-    # the fixed cost of a survey command (interpreter, NumPy, numba and its
-    # first kernel, pandas, pyarrow, the files): a grid of 2, one CPU
     _survey_command_wall(2, 1, {cpus[0]})  # warm-up, untimed
     ones, runs, fixeds = [], [], []
     for _ in range(repeats):
         ones.append(_survey_command_wall(resolution, n_max, {cpus[0]})[0])
         runs.append(_survey_command_wall(resolution, n_max, set(cpus), threads))
+        # the fixed cost of a survey command (interpreter, NumPy, numba and
+        # its first kernel, pandas, pyarrow, the files): a grid of 2, one CPU
         fixeds.append(_survey_command_wall(2, 1, {cpus[0]})[0])
     one, fixed = min(ones), min(fixeds)
     wall, bodies, size = min(runs)
@@ -663,7 +664,7 @@ def bench_survey_scaling(resolution=500, n_max=30, repeats=3):
     runs_text = "one fresh process" if repeats == 1 else f"best of {repeats} fresh processes"
     return {
         "task": f"orbits survey, grid {resolution}, n <= {n_max}: {len(cpus)} CPUs "
-        f"({_plural_threads(threads)}) vs 1",
+        f"({plural(threads, 'thread')}) vs 1",
         "timed": f"{runs_text} of each command, taken in turns, after one untimed grid-2 run",
         "ours_s": wall,
         "baseline": "the same command pinned to one CPU, --threads 1 (fresh process)",
@@ -683,10 +684,6 @@ def bench_survey_scaling(resolution=500, n_max=30, repeats=3):
         "one-CPU run), a fixed cost that more CPUs cannot shorten: with it, "
         f"{len(cpus)} CPUs can be at most {bound:.2f}x one (Amdahl)",
     }
-
-
-def _plural_threads(count):
-    return "1 thread" if count == 1 else f"{count} threads"
 
 
 def bench_search_scaling(resolution=500, n_max=30, repeats=3):
@@ -725,7 +722,7 @@ def bench_search_scaling(resolution=500, n_max=30, repeats=3):
     runs = "one run" if repeats == 1 else f"best of {repeats} runs"
     return {
         "_ours": (lambda: once(top), 1),
-        "task": f"search kernel, grid {resolution}, n <= {n_max}: {_plural_threads(top)} vs 1",
+        "task": f"search kernel, grid {resolution}, n <= {n_max}: {plural(top, 'thread')} vs 1",
         "timed": f"{runs} of each, taken in turns, after a warm-up on 64 bodies, in this process",
         "ours_s": every,
         "baseline": "the same search on one numba thread",
@@ -734,7 +731,7 @@ def bench_search_scaling(resolution=500, n_max=30, repeats=3):
         "bodies_per_s": bodies / every,
         "threads": top,
         "note": f"{bodies} bodies: {bodies / every:.0f} bodies/s on "
-        f"{_plural_threads(top)}, {bodies / single:.0f} on one; the parallel part "
+        f"{plural(top, 'thread')}, {bodies / single:.0f} on one; the parallel part "
         "of the survey_scaling command (no start-up, tables or files)",
     }
 
@@ -768,7 +765,7 @@ def bench_survey_threads(resolution=300, n_max=30):
     every, _ = once(top)
     return {
         "_ours": (lambda: once(top), 1),
-        "task": f"survey {bodies} bodies, n <= {n_max}: {_plural_threads(top)} vs 1",
+        "task": f"survey {bodies} bodies, n <= {n_max}: {plural(top, 'thread')} vs 1",
         "timed": "one run on each count after a warm-up run, in this process",
         "ours_s": every,
         "baseline": "the same survey on one numba thread (one table thread)",
@@ -776,7 +773,7 @@ def bench_survey_threads(resolution=300, n_max=30):
         "speedup": single / every,
         "bodies_per_s": bodies / every,
         "threads": top,
-        "note": f"{bodies / every:.0f} bodies/s on {_plural_threads(top)}, "
+        "note": f"{bodies / every:.0f} bodies/s on {plural(top, 'thread')}, "
         f"{bodies / single:.0f} on one (search, tables, files, ledger, report)",
     }
 
@@ -884,7 +881,7 @@ def bench_cuda_total_phase(points=100_000_000, repeats=7, seed=0):
         f"a warm-up run, {scaled}",
         "device": gpu.device_name(),
         "ours_s": kernel,
-        "baseline": f"orbits.total_phase on the CPU ({_plural_threads(threads)}), {scaled}",
+        "baseline": f"orbits.total_phase on the CPU ({plural(threads, 'thread')}), {scaled}",
         "baseline_s": cpu,
         "speedup": cpu / kernel,
         "angles_per_s": points / kernel,
@@ -946,7 +943,7 @@ def bench_cuda_search(resolution=400, n_max=30, repeats=3):
         "after a warm-up run",
         "device": gpu.device_name(),
         "ours_s": kernel,
-        "baseline": f"the same search on the CPU ({_plural_threads(threads)})",
+        "baseline": f"the same search on the CPU ({plural(threads, 'thread')})",
         "baseline_s": cpu,
         "speedup": cpu / kernel,
         "bodies_per_s": count / kernel,
