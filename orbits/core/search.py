@@ -56,6 +56,7 @@ from .phase import (
     spin_from_angle,
     total_from_spin,
 )
+from .tasks import MAX_WORKERS, take_task
 
 SMALLEST_OFFSET = 2.2250738585072014e-308
 LOG_POINTS = 64
@@ -101,7 +102,7 @@ _AT_MERGED = _AT_HEAD + GRID_SIZE
 SCRATCH_FLOATS = _AT_MERGED + GRID_SIZE
 # the int scratch: the starts of the monotone pieces of search_branch
 SCRATCH_INTS = GRID_SIZE + 2
-# bodies per parallel task of search_many (the scratch is allocated per task)
+# bodies per task of search_many (a worker takes one task at a time)
 BODIES_PER_TASK = 16
 
 
@@ -898,23 +899,31 @@ def search_many(moments, levels, root_branch, root_level, root_offset, counts, i
     """:func:`search_body` for every row of ``moments`` (n, 3), in parallel.
 
     Row ``b``'s roots go to ``root_*[b, :counts[b]]``; ``counts[b] = -1``
-    when its row of the output arrays was too short.  The scratch of
-    :func:`search_body_with` is allocated once per task of
-    ``BODIES_PER_TASK`` bodies.
+    when its row of the output arrays was too short.  The workers take
+    tasks of ``BODIES_PER_TASK`` bodies until none is left
+    (:mod:`orbits.core.tasks`: a thread slowed by other work takes fewer);
+    the scratch of :func:`search_body_with` is allocated once per worker
+    that gets a task.
     """
     n = moments.shape[0]
-    for t in prange((n + BODIES_PER_TASK - 1) // BODIES_PER_TASK):
-        floats, ints = new_scratch()
-        for b in range(t * BODIES_PER_TASK, min(n, (t + 1) * BODIES_PER_TASK)):
-            counts[b] = search_body_with(
-                moments[b, 0],
-                moments[b, 1],
-                moments[b, 2],
-                levels,
-                root_branch[b],
-                root_level[b],
-                root_offset[b],
-                info[b],
-                floats,
-                ints,
-            )
+    tasks = (n + BODIES_PER_TASK - 1) // BODIES_PER_TASK
+    counter = np.zeros(1, dtype=np.int64)
+    for _ in prange(min(tasks, MAX_WORKERS)):
+        t = take_task(counter)
+        if t < tasks:  # a worker that gets no task allocates nothing
+            floats, ints = new_scratch()
+            while t < tasks:
+                for b in range(t * BODIES_PER_TASK, min(n, (t + 1) * BODIES_PER_TASK)):
+                    counts[b] = search_body_with(
+                        moments[b, 0],
+                        moments[b, 1],
+                        moments[b, 2],
+                        levels,
+                        root_branch[b],
+                        root_level[b],
+                        root_offset[b],
+                        info[b],
+                        floats,
+                        ints,
+                    )
+                t = take_task(counter)
