@@ -1,11 +1,13 @@
-"""The installed package version (from the package metadata)."""
+"""The package version: the one place it is written.
 
-from importlib.metadata import PackageNotFoundError, version
+``pyproject.toml`` reads it from here (``[tool.setuptools.dynamic]``), so
+the installed metadata and ``orbits.__version__`` cannot differ, and a
+source tree run through ``PYTHONPATH`` knows its version too.  A literal
+rather than :func:`importlib.metadata.version`, which scans every
+``sys.path`` entry for distributions: 11-21 ms of every command's start-up.
+"""
 
-try:
-    __version__ = version("orbits")
-except PackageNotFoundError:  # running from a source tree that is not installed
-    __version__ = "0+unknown"
+__version__ = "0.1.0"
 
 
 def source_fingerprint():

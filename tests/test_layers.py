@@ -37,7 +37,7 @@ LAYERS = [
     ["bodies"],
     ["limits", "cells", "units"],
     ["_args", "atomic", "threads", "device"],
-    ["core", "errors", "_version"],
+    ["core", "errors", "_version", "startup"],
 ]
 RANK = {name: len(LAYERS) - k for k, row in enumerate(LAYERS) for name in row}
 

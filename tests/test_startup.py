@@ -91,3 +91,144 @@ def test_an_unusable_numba_thread_count_is_one_line(value):
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in result.stderr
     assert lines[0].startswith(f"orbits: error: NUMBA_NUM_THREADS={value!r} is not a positive")
+
+
+def test_the_version_is_the_installed_metadata():
+    """orbits._version is the one place (pyproject reads it): no drift."""
+    from importlib.metadata import version
+
+    import orbits
+
+    assert orbits.__version__ == version("orbits")
+
+
+def test_the_collector_is_held_and_released_once(monkeypatch):
+    import gc
+
+    from orbits import startup
+
+    monkeypatch.setattr(startup, "_held", False)
+    assert gc.isenabled()
+    frozen = gc.get_freeze_count()
+    try:
+        startup.hold_collector()
+        assert not gc.isenabled() and startup.collector_held()
+        assert startup.release_collector() is True
+        assert gc.isenabled() and not startup.collector_held()
+        assert gc.get_freeze_count() >= frozen
+        assert startup.release_collector() is False  # once
+    finally:
+        gc.unfreeze()
+        gc.enable()
+
+
+def test_a_collector_the_caller_turned_off_stays_off(monkeypatch):
+    import gc
+
+    from orbits import startup
+
+    monkeypatch.setattr(startup, "_held", False)
+    gc.disable()
+    try:
+        startup.hold_collector()
+        assert not startup.collector_held()
+        assert startup.release_collector() is False
+        assert not gc.isenabled()
+    finally:
+        gc.enable()
+
+
+def test_deferred_modules_load_on_first_use():
+    code = (
+        "import sys\n"
+        "from orbits import startup\n"
+        "assert startup.defer_unused_modules() == ['numpy.f2py', 'numpy.testing']\n"
+        "import numpy\n"
+        "f2py = getattr(numpy, 'f2py')\n"  # as SciPy's copy of the namespace
+        "assert type(f2py).__name__ == '_LazyModule'\n"  # nothing run yet
+        "assert 'numpy.f2py.crackfortran' not in sys.modules\n"
+        "import numpy.f2py\n"  # an import statement loads it
+        "assert numpy.f2py is f2py and type(f2py).__name__ == 'module'\n"
+        "assert callable(f2py.run_main)\n"
+        "from numpy.testing import assert_allclose\n"
+        "assert_allclose(1.0, 1.0)\n"
+        "assert startup.defer_unused_modules() == []  # already imported\n"
+        "assert startup.defer_unused_modules(['no_such_module.x']) == []\n"
+    )
+    loaded_after(code)
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["phase", "--preset", "fig6", "--theta", "0.5"],
+        ["survey", "--resolution", "6", "--n-max", "3", "--out", "{tmp}/s"],
+    ],
+)
+def test_the_command_line_releases_the_collector(argv, tmp_path):
+    """entry() holds the collector through the start-up; the command line
+    (before a command) or the survey (after its first chunk) turns it on."""
+    argv = [a.format(tmp=tmp_path) for a in argv]
+    code = (
+        "import gc, sys\n"
+        "from orbits.__main__ import entry\n"
+        f"sys.argv = ['orbits'] + {argv!r}\n"
+        "assert entry() == 0\n"
+        "assert gc.isenabled() and gc.get_freeze_count() > 0\n"
+        "from orbits import startup\n"
+        "assert not startup.collector_held()\n"
+        "assert type(sys.modules['numpy.f2py']).__name__ == '_LazyModule'\n"
+    )
+    loaded_after(code)
+
+
+def _run_script(body, argv):
+    script = (
+        "import atexit, sys, threading, time\n"
+        "from orbits.__main__ import run\n"
+        f"sys.argv = ['orbits'] + {argv!r}\n" + body
+    )
+    return subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=120
+    )
+
+
+@pytest.mark.parametrize(
+    ("argv", "code"),
+    [(["phase", "--preset", "fig6", "--theta", "0.5"], 0), (["phase", "--theta", "0.5"], 2)],
+)
+def test_the_quick_exit_flushes_and_runs_the_exit_handlers(argv, code):
+    """run() ends the process without the heap's tear-down, but as an exit:
+    the exit code, everything printed, the atexit handlers."""
+    done = _run_script(
+        "atexit.register(lambda: print('handler ran', flush=True))\n"
+        "sys.stdout.write('unflushed ')\n"
+        "sys.exit(run())\n",
+        argv,
+    )
+    assert done.returncode == code, done.stderr
+    assert done.stdout.startswith("unflushed ")
+    assert done.stdout.rstrip().endswith("handler ran")
+    if code == 0:
+        assert "total" in done.stdout
+    else:
+        assert done.stderr.startswith("orbits: error:") and len(done.stderr.splitlines()) == 1
+
+
+def test_the_quick_exit_waits_for_a_running_thread():
+    """A thread that is not a daemon (none of orbits' own) keeps the ordinary exit."""
+    done = _run_script(
+        "import orbits.__main__ as script\n"
+        "over = threading.Event()\n"
+        "entry = script.entry\n"
+        "script.entry = lambda: (entry(), over.set())[0]\n"
+        "def late():\n"  # still working when the command is over
+        "    over.wait()\n"
+        "    time.sleep(0.3)\n"
+        "    print('thread finished', flush=True)\n"
+        "threading.Thread(target=late).start()\n"
+        "sys.exit(run())\n",
+        ["phase", "--preset", "fig6", "--theta", "0.5"],
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.rstrip().endswith("thread finished")

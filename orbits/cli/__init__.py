@@ -20,6 +20,7 @@ import sys
 
 from .._version import __version__
 from ..errors import InputError, OrbitsError
+from ..startup import release_collector
 from . import animate, bench, catalog, figures, phase, survey, verify
 from .phase import OMEGA_UNITS, format_value
 from .shared import (
@@ -335,6 +336,10 @@ def main(argv=None):
 
             set_num_threads(args.threads)
         announce_compilation()
+        if not getattr(args, "holds_collector", False):
+            # the start-up ends here (orbits.startup); a survey ends it
+            # after its first chunk, once pandas and pyarrow are loaded
+            release_collector()
         code = args.run(args)
         for note in getattr(args, "notes", ()):
             print(f"orbits: note: {note}", file=sys.stderr)

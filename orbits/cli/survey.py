@@ -252,4 +252,6 @@ def add_parser(subparsers):
     )
     parser.add_argument("--json", action="store_true", help="print the report as JSON")
     parser.add_argument("--out", metavar="DIR", help="survey directory")
-    parser.set_defaults(run=_cmd_survey)
+    # the survey releases the start-up's hold on the garbage collector
+    # (orbits.startup) after its first chunk, not before the command
+    parser.set_defaults(run=_cmd_survey, holds_collector=True)

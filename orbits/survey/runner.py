@@ -21,6 +21,7 @@ from ..bodies import as_moments, region_grid
 from ..device import check_device, cuda_kernels
 from ..errors import ArgumentTypeError, InputError, OrbitsError
 from ..limits import check_resolution
+from ..startup import release_collector
 from . import compute
 from .compute import LAYOUTS, check_survey_bounds
 from .ledger import FORMATS, Ledger, one_line, part_name, sha256_file
@@ -191,6 +192,10 @@ class Survey:
         with self._record_lock:  # chunks finish on several threads
             self.ledger.record(index, entry)
             self._summaries[index] = summary
+        # a command's start-up ends with its first chunk on disk: pandas and
+        # pyarrow are loaded by then (a no-op unless the command line held
+        # the collector, and after the first chunk)
+        release_collector()
 
     def run(self, scheduler=None, progress=None, notify=None, status=None):
         """Compute and write every missing chunk; then the report.
