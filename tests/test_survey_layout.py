@@ -19,7 +19,6 @@ import pandas as pd
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from long_run import BUSY_CPU_SECONDS, _cpu_seconds
 
 import orbits
 from orbits.cli import main
@@ -154,7 +153,8 @@ def _ledger(directory):
 
 def test_a_kill_while_several_chunks_are_in_flight(tmp_path):
     """SIGKILL while the pool holds chunks: only whole chunks in the ledger, then a resume."""
-    argv = ["survey", "--resolution", "200", "--n-max", "8", "--chunk", "150"]
+    # 232 chunks: the kill comes once two are in the ledger, long before the end
+    argv = ["survey", "--resolution", "300", "--n-max", "10", "--chunk", "150"]
     reference = tmp_path / "reference"
     assert main([*argv, "--out", str(reference)]) == 0
     target = tmp_path / "killed"
@@ -167,7 +167,7 @@ def test_a_kill_while_several_chunks_are_in_flight(tmp_path):
     )
     deadline = time.monotonic() + 120
     while proc.poll() is None and time.monotonic() < deadline:
-        if _cpu_seconds(proc.pid) >= BUSY_CPU_SECONDS and len(_ledger(target)) >= 2:
+        if len(_ledger(target)) >= 2:  # started, and chunks are in flight
             break
         time.sleep(0.01)
     assert proc.poll() is None, "the run ended before it could be killed"
