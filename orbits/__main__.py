@@ -8,9 +8,10 @@ traceback; nothing can have been written yet.
 The start-up runs on one core however many the machine has, so
 :func:`entry` keeps it short (:mod:`orbits.startup`): the cyclic garbage
 collector is held off while the libraries are imported (the command line
-releases it before a command, the survey after its first chunk), and
-``numpy.f2py`` and ``numpy.testing``, which SciPy's copy of the NumPy
-namespace would import for nothing, load only if used.  When the command is
+releases it before a command, the survey after its first chunk), OpenBLAS's
+idle threads sleep instead of spinning for 0.1 s each, and ``numpy.f2py``
+and ``numpy.testing``, which SciPy's copy of the NumPy namespace would
+import for nothing, load only if used.  When the command is
 over, the living objects are frozen out of the collector
 (:func:`gc.freeze`): the interpreter's shutdown then frees them without
 tracing the whole heap of NumPy, numba and pandas several times over, a few
@@ -77,6 +78,7 @@ def entry():
         from . import startup
 
         startup.hold_collector()
+        startup.calm_blas_threads()  # before NumPy loads OpenBLAS
         startup.defer_unused_modules()
         from .cli import main
 

@@ -7,6 +7,7 @@ fresh interpreter has loaded.
 """
 
 import json
+import os
 import subprocess
 import sys
 
@@ -232,3 +233,49 @@ def test_the_quick_exit_waits_for_a_running_thread():
     )
     assert done.returncode == 0, done.stderr
     assert done.stdout.rstrip().endswith("thread finished")
+
+
+def test_blas_threads_sleep_in_a_command_and_a_user_setting_is_kept():
+    code = (
+        "import os, sys\n"
+        "from orbits.__main__ import entry\n"
+        "sys.argv = ['orbits', 'phase', '--preset', 'fig6', '--theta', '0.5']\n"
+        "assert entry() == 0\n"
+        "print(os.environ['OPENBLAS_THREAD_TIMEOUT'])\n"
+    )
+    for given, expected in ((None, "4"), ("12", "12")):
+        env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_THREAD_TIMEOUT"}
+        if given is not None:
+            env["OPENBLAS_THREAD_TIMEOUT"] = given
+        done = subprocess.run(
+            [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=env
+        )
+        assert done.returncode == 0, done.stderr
+        assert done.stdout.strip().splitlines()[-1] == expected
+
+
+def test_blas_threads_use_no_cpu_while_idle():
+    """OpenBLAS's worker threads (one per extra CPU) spun 0.1 s each at load."""
+    if len(os.sched_getaffinity(0)) < 2:
+        pytest.skip("one CPU: OpenBLAS starts no worker thread")
+    code = (
+        "import os, sys\n"
+        "from orbits import startup\n"
+        "startup.calm_blas_threads()\n"
+        "import numpy, scipy.linalg, time\n"
+        "time.sleep(0.3)\n"
+        "me = os.getpid()\n"
+        "ticks = 0\n"
+        "for tid in os.listdir('/proc/self/task'):\n"
+        "    if int(tid) != me:\n"
+        "        fields = open(f'/proc/self/task/{tid}/stat').read().rsplit(')', 1)[1].split()\n"
+        "        ticks += int(fields[11]) + int(fields[12])\n"
+        "print(ticks / os.sysconf('SC_CLK_TCK'))\n"
+    )
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_THREAD_TIMEOUT"}
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=env
+    )
+    assert done.returncode == 0, done.stderr
+    # spinning threads take ~0.1 CPU s each; sleeping ones a few ticks at most
+    assert float(done.stdout.strip()) < 0.03
