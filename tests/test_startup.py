@@ -279,3 +279,39 @@ def test_blas_threads_use_no_cpu_while_idle():
     assert done.returncode == 0, done.stderr
     # spinning threads take ~0.1 CPU s each; sleeping ones a few ticks at most
     assert float(done.stdout.strip()) < 0.03
+
+
+def test_a_survey_with_nothing_to_compute_and_a_check_release_the_collector(tmp_path):
+    """The survey releases the start-up's hold after its first chunk; a rerun
+    that finds every chunk done, and --check, read parts without the hold."""
+    out = str(tmp_path / "s")
+    runs = [
+        ["survey", "--resolution", "6", "--n-max", "3", "--out", out],
+        ["survey", "--resolution", "6", "--n-max", "3", "--out", out],  # all done
+        ["survey", "--check", out],
+    ]
+    code = (
+        "import gc, sys\n"
+        "import orbits.startup as startup\n"
+        "from orbits.__main__ import entry\n"
+        "import orbits.survey.runner as runner\n"
+        "seen = []\n"
+        "report = runner.survey_report\n"
+        "def watched(*args, **kwargs):\n"
+        "    seen.append(gc.isenabled())\n"
+        "    return report(*args, **kwargs)\n"
+        "runner.survey_report = watched\n"
+        "import orbits.survey.report as reports\n"
+        "check = reports.check_survey\n"
+        "def checked(*args, **kwargs):\n"
+        "    seen.append(gc.isenabled())\n"
+        "    return check(*args, **kwargs)\n"
+        "import orbits.survey\n"
+        "orbits.survey.check_survey = checked\n"
+        f"for argv in {runs!r}:\n"
+        "    sys.argv = ['orbits'] + argv\n"
+        "    assert entry() == 0\n"
+        "    assert gc.isenabled() and not startup.collector_held()\n"
+        "assert seen == [True, True, True], seen\n"
+    )
+    loaded_after(code)

@@ -22,6 +22,9 @@ def _cmd_survey(args):
     from ..survey import Survey, check_survey
 
     if args.check:
+        from ..startup import release_collector
+
+        release_collector()  # --check reads every part: no start-up hold
         return _check_survey_directory(args, check_survey)
     if args.out is None:
         raise InputError("orbits survey: --out DIR is required (or --check DIR)")

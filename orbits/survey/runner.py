@@ -274,6 +274,9 @@ class Survey:
             # this lock: no need to hash all parts again
             if self.missing():
                 raise InputError(f"{self.out_dir} is incomplete ({len(self.missing())} chunks)")
+            # a run with nothing left to compute reads the parts for its
+            # report: not with the start-up's collector hold
+            release_collector()
             return survey_report(
                 self.out_dir,
                 self.n_max,
