@@ -1,9 +1,9 @@
-"""The command line's start-up: the cyclic collector held, unused modules deferred.
+"""The command line's start-up: the collector held, BLAS threads calmed, modules deferred.
 
 A command's start-up (the interpreter, NumPy, numba and the first kernel
 loaded from its cache, pandas, pyarrow) runs on one core whatever the
 machine has, so every tenth of a second it takes is a tenth that more
-cores cannot shorten.  Two costs there buy a command nothing:
+cores cannot shorten.  Three costs there buy a command nothing:
 
 * **The cyclic garbage collector.**  Importing these libraries creates
   about 150,000 container objects, and the collector traces the growing
@@ -21,7 +21,6 @@ cores cannot shorten.  Two costs there buy a command nothing:
   ``numpy.testing``.  :func:`defer_unused_modules` registers both as lazy
   modules (:class:`importlib.util.LazyLoader`): they load on the first use
   of one of their attributes, as before, and not at all otherwise.
-
 * **BLAS threads that spin.**  NumPy's and SciPy's OpenBLAS each start a
   thread per extra core when they load, and each of those threads spins
   for about 0.1 s (2^28 cycles) before it first sleeps: 0.2 CPU seconds on
@@ -33,10 +32,10 @@ cores cannot shorten.  Two costs there buy a command nothing:
 Only :func:`orbits.__main__.entry` calls :func:`hold_collector`,
 :func:`calm_blas_threads` and :func:`defer_unused_modules`: the library
 never changes the collector, the environment or the modules of a user's
-own process.  :func:`release_collector` is a no-op
-unless the collector is held, so the layers that end a start-up (the
-command line before a command, the survey after its first chunk) call it
-without asking who started them.
+own process.  :func:`release_collector` is a no-op unless the collector
+is held, so the layers that end a start-up (the command line before a
+command, the survey after its first chunk) call it without asking who
+started them.
 """
 
 import gc
