@@ -19,6 +19,11 @@ from .shared import (
     progress_bar,
 )
 
+# check (a)'s integration tolerance and error factor, quoted by the help
+# without importing orbits.checks (SciPy); tests/test_checks.py checks that
+# they are orbits.checks.VERIFY_ODE_RTOL and ODE_ERROR_FACTOR
+_ODE_RTOL = 1e-12
+_ODE_ERROR_FACTOR = 6.0
 # the words that end the summary's reason for rows on the separatrix
 SEPARATRIX = "on the separatrix have no closed form"
 _CHECK_LABELS = (
@@ -115,6 +120,16 @@ def _print_summary(summary, args, one):
             f"{summary['phase_resolution']:.3g} rad apart: there a discrepancy up to "
             f"{summary['phase_ulps']} of those spacings ({allowance:.3g} rad) passes"
         )
+    ode = summary["checks"]["ode_rotation"]
+    if ode.get("within_integrator_error_only"):
+        notes.append(
+            f"(a) ODE rotation: {ode['within_integrator_error_only']} discrepancy(ies) beyond "
+            f"the tolerance are within the integrator's own error, "
+            f"{summary['ode_error_factor']:g} x rtol ({summary['ode_rtol']:g}) x |w0| T "
+            f"(T the period it found; its error grows with the turns integrated), here up "
+            f"to {ode['largest_allowance']:.3g} rad; the largest discrepancy is "
+            f"{ode['max_fraction_of_allowance']:.2g} of its allowance"
+        )
     notes.append(
         f"public routes: orbits.total_phase (both SIMD kernels), orbits.phases "
         f"('orbits phase') and orbits.spin_phases against the scalar closed form of "
@@ -135,13 +150,15 @@ def add_parser(subparsers):
         "the closed-form total phase (eqn:GeometricPhase) is "
         "compared with (a) the rotation about M after one period "
         "of Euler's equations integrated numerically (DOP853, "
-        "rtol 1e-12), (b) Montgomery's 2ET/M - Omega by quadrature "
+        f"rtol {_ODE_RTOL:g}), (b) Montgomery's 2ET/M - Omega by quadrature "
         "along the polhode, and (c) phi(T) of the exact motion; and "
         "that the closed form as orbits.total_phase, orbits.phases ('orbits "
         f"phase') and orbits.spin_phases compute it agrees with it to {ROUTE_ULPS} "
         "ulps.  Exits with 1 if any discrepancy exceeds the tolerance (or "
         f"{PHASE_ULPS} spacings of doubles at the phase, where that is larger: "
-        "near the sphere the phases reach 1e9 rad, where doubles are 1e-7 apart), "
+        "near the sphere the phases reach 1e9 rad, where doubles are 1e-7 apart; "
+        f"for (a) also {_ODE_ERROR_FACTOR:g} x rtol x |w0| T, its integrator's own "
+        "error, which grows with the period T it integrates), "
         "if a check gives no value, or if an angle lies on the separatrix.  "
         "The defaults give the paper's 6446 initial conditions.",
     )
@@ -177,7 +194,8 @@ def add_parser(subparsers):
         type=finite,
         default=1e-9,
         help="largest allowed discrepancy, radians (default 1e-9); a discrepancy "
-        f"within {PHASE_ULPS} spacings of doubles at the phase passes too",
+        f"within {PHASE_ULPS} spacings of doubles at the phase passes too, and for "
+        f"check (a) one within {_ODE_ERROR_FACTOR:g} x rtol x |w0| T (its integrator's error)",
     )
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument(

@@ -287,6 +287,49 @@ def rotation_about_momentum(q, i1, i2, i3, w1, w2, w3):
 STEP_BUDGET_EXHAUSTED = -1.0
 # the step budget of the ODE check in :func:`check_batch`
 ODE_MAX_STEPS = 10_000_000
+# ``ode_period`` of :func:`check_batch` for a row not integrated because one
+# period needs more steps than ODE_MAX_STEPS (:func:`ode_steps_at_least`)
+STEP_BUDGET_PREDICTED = -2.0
+# A lower bound on the compiled DOP853's steps per unit of T * sqrt(2E/I3)
+# (the period times the least |omega| on the orbit) at rtol <= 1e-12 and
+# atol <= 1e-14, a tenth of the least rate measured: 2.60 steps (bodies
+# (1, 1.001, 1.002) and (1, 1.0001, 1.0002), tending to 2.60 as the body
+# nears the sphere) and 2.7 to 250 on (1, 2, 3), (0.3, 0.7, 0.9), thin rods,
+# nearly prolate and oblate bodies, at theta = 0.02 ... 1.55: no step
+# turned the body by more than 1/2.6 = 0.38 rad (the local error of a
+# rotation by h |omega| grows as (h |omega|)^9; tests/test_checks.py counts
+# the steps against this bound).
+ODE_STEPS_PER_TURN_AT_LEAST = 0.26
+# the tolerances the bound was measured at (tighter ones take more steps)
+ODE_PREDICTION_RTOL = 1e-12
+ODE_PREDICTION_ATOL = 1e-14
+
+
+@njit(cache=True, nogil=True)
+def ode_steps_at_least(i1, i2, i3, w1, w2, w3, period):
+    """A lower bound on the DOP853 steps of one period, from the period.
+
+    Parameters
+    ----------
+    i1, i2, i3 : float
+        Principal moments, ascending (any scale).
+    w1, w2, w3 : float
+        The spin (any magnitude), rad per unit time.
+    period : float
+        The orbit's period, in the same unit of time.
+
+    Returns
+    -------
+    float
+        ``ODE_STEPS_PER_TURN_AT_LEAST * period * sqrt(2E/I3)``: steps (a
+        count, dimensionless) the compiled DOP853 takes at least at rtol
+        1e-12, atol 1e-14 (|omega| >= sqrt(2E/I3) all along the orbit);
+        0 where ``period`` is not finite and positive.
+    """
+    if not (period > 0.0 and math.isfinite(period)):
+        return 0.0
+    two_e = i1 * w1 * w1 + i2 * w2 * w2 + i3 * w3 * w3
+    return ODE_STEPS_PER_TURN_AT_LEAST * period * math.sqrt(two_e / i3)
 
 
 @njit(cache=True, nogil=True)
@@ -478,7 +521,11 @@ def check_batch(moments, theta, phi, ode_rtol, ode_atol, quad_rtol, out):
     ``theta_c``) and omega0.  Every column but ``branch`` is NaN on the rows
     of branch 0; a row whose integration ran out of steps has
     ``ode_period`` equal to :data:`STEP_BUDGET_EXHAUSTED` (see
-    :func:`rotation_after_periods`).  Every entry of ``out`` is written.
+    :func:`rotation_after_periods`), and one not integrated because both
+    periods (closed form and quadrature) need more than
+    :data:`ODE_MAX_STEPS` steps (:func:`ode_steps_at_least`, applied at
+    ``ode_rtol <= 1e-12`` and ``ode_atol <= 1e-14``) has
+    :data:`STEP_BUDGET_PREDICTED`.  Every entry of ``out`` is written.
     """
     for k in prange(moments.shape[0]):
         i1 = moments[k, 0]
@@ -506,9 +553,25 @@ def check_batch(moments, theta, phi, ode_rtol, ode_atol, quad_rtol, out):
         out[k, 3] = total
         out[k, 4] = solid
         out[k, 5] = period
-        ode_period, angle, off_axis = rotation_after_periods(
-            i1, i2, i3, w1, w2, w3, 1, ode_rtol, ode_atol, ODE_MAX_STEPS
+        # a period that needs more than ODE_MAX_STEPS steps by both
+        # independent periods (closed form and quadrature; a NaN period
+        # bounds nothing) is not integrated: the integration would end in
+        # STEP_BUDGET_EXHAUSTED after 4 to 7 s of steps (a nearly
+        # symmetric body)
+        fewest = min(
+            ode_steps_at_least(i1, i2, i3, w1, w2, w3, orbit[_motion.SLOT_PERIOD]),
+            ode_steps_at_least(i1, i2, i3, w1, w2, w3, period),
         )
+        if (
+            ode_rtol <= ODE_PREDICTION_RTOL
+            and ode_atol <= ODE_PREDICTION_ATOL
+            and fewest > ODE_MAX_STEPS
+        ):
+            ode_period, angle, off_axis = STEP_BUDGET_PREDICTED, np.nan, np.nan
+        else:
+            ode_period, angle, off_axis = rotation_after_periods(
+                i1, i2, i3, w1, w2, w3, 1, ode_rtol, ode_atol, ODE_MAX_STEPS
+            )
         out[k, 6] = ode_period
         out[k, 7] = angle
         out[k, 8] = off_axis
