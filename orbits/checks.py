@@ -37,7 +37,13 @@ from .core import checks as _checks
 from .core import phase as _phase
 from .core.ode import STATE_SIZE, euler_rhs
 from .errors import AngleError, ArgumentTypeError, InputError, OrbitsError
-from .limits import PHASE_ULPS, ROUTE_ULPS, check_verify_size
+from .limits import (
+    ODE_ERROR_FACTOR,
+    PHASE_ULPS,
+    ROUTE_ULPS,
+    VERIFY_ODE_RTOL,
+    check_verify_size,
+)
 from .motion import Motion, as_body
 from .threads import threads_for
 
@@ -459,26 +465,11 @@ def closure_errors(moments, dtheta, periods, rtol=1e-13):
     return out
 
 
-# the integration and quadrature tolerances of verify's checks
-VERIFY_ODE_RTOL = 1e-12
+# the integration and quadrature tolerances of verify's checks (the ODE's
+# rtol, VERIFY_ODE_RTOL, and check (a)'s ODE_ERROR_FACTOR are in
+# orbits.limits, which the command line's help quotes too)
 VERIFY_ODE_ATOL = 1e-14
 VERIFY_QUAD_RTOL = 1e-14
-# Check (a)'s own error budget: verify allows it ODE_ERROR_FACTOR * rtol *
-# |w0| T (rad), where T is the period the integration found and |w0| T the
-# angle the body turns through at its initial rate in it (radians; the
-# integration takes ~2.7 steps per radian).  DOP853's global error in the
-# rotation about M grows in proportion to both: over the 644,600 initial
-# conditions of verify(29300) and 330 more on thin rods, nearly prolate,
-# oblate and nearly spherical bodies, |error| / (rtol |w0| T) was at most
-# 0.62 wherever the error is the integrator's, falling ~10x per decade of
-# rtol (e.g. (1, 1.0001, 1.0002) at theta = 0.0357: 5.1e-8, 5.0e-9,
-# 4.7e-10 at rtol 1e-11, 1e-12, 1e-13, a ratio of 0.11; the 0.62 row, at
-# relative separatrix gap 2.7e-2: 6.2e-12, 1.5e-12, 1.3e-13); the factor
-# is ten times that.  Not covered: the rows within ~3e-5 (relative gap) of
-# the separatrix whose error does not fall with rtol -- the rounding of
-# the state, which the orbit's sensitivity there amplifies (ratios up to
-# 25, 3.0e-9 rad, at gap 9e-8).
-ODE_ERROR_FACTOR = 6.0
 # the public routes of the closed form verify evaluates (summary["routes"])
 ROUTES = (
     ("total_phase", "orbits.total_phase, bodies in one call (SIMD kernel total_phase_many)"),
@@ -848,7 +839,7 @@ def _summarize(table, tolerance, exhausted, route_failures=None, predicted=None)
     has_closed = np.isfinite(closed) & np.isfinite(table["closed_form_theta"].to_numpy())
     on_separatrix = int(np.count_nonzero(~has_closed))
     spacing = np.where(has_closed, np.spacing(np.abs(np.where(has_closed, closed, 1.0))), np.nan)
-    allowance = np.where(has_closed, _allowance(closed, tolerance), np.nan)
+    allowance = np.maximum(tolerance, PHASE_ULPS * spacing)  # NaN off has_closed
     limits = {
         "closed_form_routes": ROUTE_ULPS * spacing,
         "ode_rotation": _ode_limit(table, allowance),

@@ -953,11 +953,12 @@ def test_verify_does_not_integrate_a_period_beyond_the_step_budget():
 
 def test_cli_help_quotes_check_a_error_budget(capsys):
     """The help states check (a)'s criterion with the constants verify applies
-    (quoted without importing orbits.checks)."""
+    (one definition in orbits.limits, which the help reads without SciPy)."""
+    from orbits import limits
     from orbits.cli import verify as command
 
-    assert command._ODE_ERROR_FACTOR == checks.ODE_ERROR_FACTOR
-    assert command._ODE_RTOL == checks.VERIFY_ODE_RTOL
+    assert command.ODE_ERROR_FACTOR is checks.ODE_ERROR_FACTOR is limits.ODE_ERROR_FACTOR
+    assert command.VERIFY_ODE_RTOL is checks.VERIFY_ODE_RTOL is limits.VERIFY_ODE_RTOL
     with pytest.raises(SystemExit):
         main(["verify", "--help"])
     text = " ".join(capsys.readouterr().out.split())

@@ -2,8 +2,10 @@
 
 from ..errors import InputError
 from ..limits import (
+    ODE_ERROR_FACTOR,
     PHASE_ULPS,
     ROUTE_ULPS,
+    VERIFY_ODE_RTOL,
     VERIFY_SECONDS_PER_CONDITION,
     check_verify_size,
 )
@@ -19,11 +21,6 @@ from .shared import (
     progress_bar,
 )
 
-# check (a)'s integration tolerance and error factor, quoted by the help
-# without importing orbits.checks (SciPy); tests/test_checks.py checks that
-# they are orbits.checks.VERIFY_ODE_RTOL and ODE_ERROR_FACTOR
-_ODE_RTOL = 1e-12
-_ODE_ERROR_FACTOR = 6.0
 # the words that end the summary's reason for rows on the separatrix
 SEPARATRIX = "on the separatrix have no closed form"
 _CHECK_LABELS = (
@@ -150,14 +147,14 @@ def add_parser(subparsers):
         "the closed-form total phase (eqn:GeometricPhase) is "
         "compared with (a) the rotation about M after one period "
         "of Euler's equations integrated numerically (DOP853, "
-        f"rtol {_ODE_RTOL:g}), (b) Montgomery's 2ET/M - Omega by quadrature "
+        f"rtol {VERIFY_ODE_RTOL:g}), (b) Montgomery's 2ET/M - Omega by quadrature "
         "along the polhode, and (c) phi(T) of the exact motion; and "
         "that the closed form as orbits.total_phase, orbits.phases ('orbits "
         f"phase') and orbits.spin_phases compute it agrees with it to {ROUTE_ULPS} "
         "ulps.  Exits with 1 if any discrepancy exceeds the tolerance (or "
         f"{PHASE_ULPS} spacings of doubles at the phase, where that is larger: "
         "near the sphere the phases reach 1e9 rad, where doubles are 1e-7 apart; "
-        f"for (a) also {_ODE_ERROR_FACTOR:g} x rtol x |w0| T, its integrator's own "
+        f"for (a) also {ODE_ERROR_FACTOR:g} x rtol x |w0| T, its integrator's own "
         "error, which grows with the period T it integrates), "
         "if a check gives no value, or if an angle lies on the separatrix.  "
         "The defaults give the paper's 6446 initial conditions.",
@@ -195,7 +192,7 @@ def add_parser(subparsers):
         default=1e-9,
         help="largest allowed discrepancy, radians (default 1e-9); a discrepancy "
         f"within {PHASE_ULPS} spacings of doubles at the phase passes too, and for "
-        f"check (a) one within {_ODE_ERROR_FACTOR:g} x rtol x |w0| T (its integrator's error)",
+        f"check (a) one within {ODE_ERROR_FACTOR:g} x rtol x |w0| T (its integrator's error)",
     )
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument(
