@@ -25,6 +25,8 @@ import gc
 import signal
 import sys
 
+from . import startup
+
 
 class _Stopped(BaseException):
     def __init__(self, signum):
@@ -75,8 +77,6 @@ def entry():
         if refusal:  # numba would raise inside its import: a traceback
             print(f"orbits: error: {refusal}", file=sys.stderr)
             return 2
-        from . import startup
-
         startup.hold_collector()
         startup.calm_blas_threads()  # before NumPy loads OpenBLAS
         startup.defer_unused_modules()
@@ -95,6 +95,9 @@ def entry():
         # the run is over: a signal during interpreter shutdown changes nothing
         for number in previous:
             signal.signal(number, _ignore)
+        # a command that ended before it released the start-up's hold (an
+        # error, a stop) gives the collector back too
+        startup.release_collector()
         # the shutdown's collections would trace every object still alive
         # (0.25-0.5 s after a survey, on one core): leave them all to be
         # freed by reference counting as the modules are cleared

@@ -315,3 +315,17 @@ def test_a_survey_with_nothing_to_compute_and_a_check_release_the_collector(tmp_
         "assert seen == [True, True, True], seen\n"
     )
     loaded_after(code)
+
+
+def test_a_command_that_fails_before_its_first_chunk_gives_the_collector_back(tmp_path):
+    """The survey holds the collector until its first chunk; a refusal before
+    it (exit 2) must not leave the caller's process without a collector."""
+    code = (
+        "import gc, sys\n"
+        "from orbits.__main__ import entry\n"
+        "from orbits import startup\n"
+        "sys.argv = ['orbits', 'survey', '--resolution', '6', '--n-max', '3']\n"
+        "assert entry() == 2\n"  # no --out
+        "assert gc.isenabled() and not startup.collector_held()\n"
+    )
+    loaded_after(code)
