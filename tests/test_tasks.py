@@ -56,15 +56,21 @@ def test_take_task_counts_up_in_one_thread():
     assert counter[0] == 45
 
 
-def _search(moments, levels, threads):
-    count, capacity = moments.shape[0], 2 * levels.size + 8
-    out = (
+def _outputs(count, levels):
+    """The search's output arrays (branch, level, offset, counts, info), filled
+    with values no search writes."""
+    capacity = 2 * levels.size + 8
+    return (
         np.full((count, capacity), -7, dtype=np.int8),
         np.full((count, capacity), -7, dtype=np.int64),
         np.full((count, capacity), np.nan),
         np.full(count, -7, dtype=np.int64),
         np.full((count, kernels.INFO_SIZE), np.nan),
     )
+
+
+def _search(moments, levels, threads):
+    out = _outputs(moments.shape[0], levels)
     previous = numba.get_num_threads()
     numba.set_num_threads(min(threads, TOP))
     try:
@@ -84,14 +90,7 @@ def test_the_search_is_the_same_bits_on_any_thread_count():
     moments = np.ascontiguousarray(np.stack([i1, i2, i3], axis=1) / i3[:, None] * 0.75)
     p, q, values = phase_levels(12, 2)
     levels = np.ascontiguousarray(values[searched(p, q)])
-    capacity = 2 * levels.size + 8
-    expected = (
-        np.full((len(moments), capacity), -7, dtype=np.int8),
-        np.full((len(moments), capacity), -7, dtype=np.int64),
-        np.full((len(moments), capacity), np.nan),
-        np.full(len(moments), -7, dtype=np.int64),
-        np.full((len(moments), kernels.INFO_SIZE), np.nan),
-    )
+    expected = _outputs(len(moments), levels)
     for b in range(len(moments)):
         expected[3][b] = kernels.search_body(
             *moments[b], levels, expected[0][b], expected[1][b], expected[2][b], expected[4][b]
