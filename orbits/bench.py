@@ -853,13 +853,14 @@ def bench_cuda_total_phase(points=100_000_000, repeats=7, seed=0):
 
     Raises DeviceError (one line) without a usable GPU or numba-cuda.
     """
-    from .device import cuda_kernels
+    from .device import cuda_kernels, run_cuda
 
     gpu = cuda_kernels()
     body = Body.preset("fig6")
     moments = body.normalized_moments
     theta = np.random.default_rng(seed).uniform(0.0, 0.5 * np.pi, points)
-    kernel = gpu.total_phase_kernel_seconds(*moments, theta, repeats)
+    # a numba-cuda that cannot compile here: DeviceError, one line
+    kernel = run_cuda(gpu.total_phase_kernel_seconds, *moments, theta, repeats)
     end_to_end = best_time(lambda: total_phase(body, theta, device="cuda"), repeats)
     cpu_points = min(points, 10_000_000)
     cpu = best_time(lambda: total_phase(body, theta[:cpu_points]), max(1, repeats // 2))
@@ -903,7 +904,7 @@ def bench_cuda_search(resolution=400, n_max=30, repeats=3):
     Raises DeviceError (one line) without a usable GPU or numba-cuda.
     """
     from .bodies import region_grid, unit_moments
-    from .device import cuda_kernels
+    from .device import cuda_kernels, run_cuda
     from .search import phase_levels, search_bodies, searched
 
     gpu = cuda_kernels()
@@ -922,7 +923,7 @@ def bench_cuda_search(resolution=400, n_max=30, repeats=3):
             np.empty(count, np.int64),
             np.empty((count, rows.info.shape[1])),
         )
-        return gpu.search_many(moments, levels, *outputs)
+        return run_cuda(gpu.search_many, moments, levels, *outputs)
 
     kernel = min(kernel_only() for _ in range(repeats))
     end_to_end = best_time(lambda: search_bodies(moments, levels, device="cuda"), repeats)

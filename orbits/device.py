@@ -74,9 +74,17 @@ def run_cuda(kernel, *args):
         from numba import cuda  # already imported by cuda_kernels
 
         version = getattr(cuda, "__version__", None) or _numba_cuda_version()
+        text = _one_line(error)
+        # seen on a GPU machine whose image paired numba-cuda 0.30.4 with
+        # NumPy 2.5.2, which orbits[cuda] rules out
+        hint = (
+            "; orbits[cuda] needs NumPy < 2.5 with this numba-cuda: pip install 'numpy<2.5'"
+            if "row_stack" in text
+            else ""
+        )
         raise DeviceError(
             f"the CUDA kernel {getattr(kernel, '__name__', kernel)} failed "
-            f"(numba-cuda {version}, NumPy {numpy.__version__}): {_one_line(error)}"
+            f"(numba-cuda {version}, NumPy {numpy.__version__}): {text}{hint}"
         ) from None
 
 

@@ -133,6 +133,76 @@ def test_compile_failure_is_one_line():
     message = str(caught.value)
     assert "\n" not in message
     assert "row_stack" in message and "NumPy" in message
+    assert message.endswith("pip install 'numpy<2.5'")
+
+
+@needs_numba_cuda
+def test_compile_failure_in_bench_and_survey_is_one_line(tmp_path):
+    """The GPU bench rows and ``orbits survey --device cuda`` with a numba-cuda
+    that cannot compile (as on a machine with numba-cuda 0.30.4 beside NumPy
+    2.5): exit 2 with one line, and the survey's directory never made."""
+    out = _run(
+        f"""
+        import contextlib, io, json
+        from pathlib import Path
+        from orbits.cli import main
+        from orbits.core import cuda as kernels
+
+        def broken(*args):
+            raise AttributeError("module 'numpy' has no attribute 'row_stack'")
+
+        kernels.search_many = kernels.total_phase_kernel_seconds = broken
+        result = {{}}
+        target = Path({str(tmp_path)!r}) / "survey"
+        for name, argv in (
+            ("cuda_phase", ["bench", "--device", "cuda", "--only", "cuda_phase", "--quick"]),
+            ("cuda_search", ["bench", "--device", "cuda", "--only", "cuda_search", "--quick"]),
+            ("survey", ["survey", "--device", "cuda", "--resolution", "6", "--n-max", "3",
+                        "--out", str(target)]),
+        ):
+            err = io.StringIO()
+            with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+                try:
+                    code = main(argv)
+                except SystemExit as stop:
+                    code = stop.code
+            result[name] = [code, err.getvalue()]
+        result["made"] = target.exists()
+        print(json.dumps(result))
+        """
+    )
+    assert out.pop("made") is False
+    for name, (code, err) in out.items():
+        assert code == 2, (name, err)
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and "row_stack" in lines[0] and "Traceback" not in err, (name, err)
+
+
+@needs_numba_cuda
+def test_small_launches_do_not_warn_about_occupancy():
+    """numba-cuda warns "Grid size 1 will likely result in GPU
+    under-utilization" when a kernel is configured with few blocks (seen on
+    an H200 for a survey's last chunk); our launches configure without it,
+    and other warnings still pass."""
+    out = _run(
+        """
+        import json, warnings
+        from orbits.core import cuda as kernels
+
+        class Kernel:
+            def __getitem__(self, config):
+                warnings.warn("Grid size 1 will likely result in GPU under-utilization due "
+                              "to low occupancy.")
+                warnings.warn("something else")
+                return config
+
+        with warnings.catch_warnings(record=True) as seen:
+            warnings.simplefilter("always")
+            config = kernels._configured(Kernel(), 130, 64)
+        print(json.dumps([list(config), [str(w.message) for w in seen]]))
+        """
+    )
+    assert out == [[3, 64], ["something else"]]
 
 
 @needs_numba_cuda

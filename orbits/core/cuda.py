@@ -22,6 +22,7 @@ results may differ from the CPU path by a few ulps.
 
 import math
 import time
+import warnings
 
 import numpy as np
 from numba import config, cuda, float64, int64
@@ -38,6 +39,17 @@ SEARCH_THREADS_PER_BLOCK = 64
 
 def _blocks(n, per_block):
     return max(1, (n + per_block - 1) // per_block)
+
+
+def _configured(kernel, n, per_block):
+    """``kernel[blocks, per_block]`` for ``n`` threads, without numba-cuda's
+    low-occupancy warning: a small launch here (a survey's last chunk, the
+    one-body check before a survey, a few angles) is what was asked for, and
+    the warning offered the user nothing to act on (seen on an H200: "Grid
+    size 1 will likely result in GPU under-utilization", once per launch)."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=r"Grid size \d+ will likely result in GPU")
+        return kernel[_blocks(n, per_block), per_block]
 
 
 @cuda.jit(device=True)
@@ -152,9 +164,7 @@ def search_many(moments, levels, root_branch, root_level, root_offset, counts, i
     ]
     cuda.synchronize()
     start = time.perf_counter()
-    _search_kernel[_blocks(n, SEARCH_THREADS_PER_BLOCK), SEARCH_THREADS_PER_BLOCK](
-        d_moments, d_levels, *outputs
-    )
+    _configured(_search_kernel, n, SEARCH_THREADS_PER_BLOCK)(d_moments, d_levels, *outputs)
     cuda.synchronize()
     seconds = time.perf_counter() - start
     for device_array, host in zip(outputs, (root_branch, root_level, root_offset, counts, info)):
@@ -171,7 +181,7 @@ def total_phase_one_body(i1, i2, i3, phi, angles, from_offset, fold_limit, out, 
     d_angles = cuda.to_device(angles)
     d_out = cuda.device_array(n, dtype=np.float64)
     d_status = cuda.device_array(n, dtype=np.int8)
-    _total_phase_one_body_kernel[_blocks(n, THREADS_PER_BLOCK), THREADS_PER_BLOCK](
+    _configured(_total_phase_one_body_kernel, n, THREADS_PER_BLOCK)(
         float(i1), float(i2), float(i3), float(phi), d_angles, bool(from_offset),
         float(fold_limit), d_out, d_status,
     )  # fmt: skip
@@ -187,7 +197,7 @@ def total_phase_many(i1, i2, i3, phi, angles, from_offset, fold_limit, out, stat
     args = [cuda.to_device(np.ascontiguousarray(a)) for a in (i1, i2, i3, phi, angles)]
     d_out = cuda.device_array(n, dtype=np.float64)
     d_status = cuda.device_array(n, dtype=np.int8)
-    _total_phase_many_kernel[_blocks(n, THREADS_PER_BLOCK), THREADS_PER_BLOCK](
+    _configured(_total_phase_many_kernel, n, THREADS_PER_BLOCK)(
         *args, bool(from_offset), float(fold_limit), d_out, d_status
     )
     d_out.copy_to_host(out)
@@ -202,7 +212,7 @@ def phases_columns(i1, i2, i3, phi, angles, from_offset, fold_limit, columns, br
         return
     args = [cuda.to_device(np.ascontiguousarray(a)) for a in (i1, i2, i3, phi, angles)]
     outputs = [cuda.device_array(a.shape, dtype=a.dtype) for a in (columns, branch, status)]
-    _phases_kernel[_blocks(n, THREADS_PER_BLOCK), THREADS_PER_BLOCK](
+    _configured(_phases_kernel, n, THREADS_PER_BLOCK)(
         *args, bool(from_offset), float(fold_limit), *outputs
     )
     for device_array, host in zip(outputs, (columns, branch, status)):
@@ -217,7 +227,7 @@ def total_phase_kernel_seconds(i1, i2, i3, angles, repeats):
     d_angles = cuda.to_device(np.ascontiguousarray(angles))
     d_out = cuda.device_array(n, dtype=np.float64)
     d_status = cuda.device_array(n, dtype=np.int8)
-    launch = _total_phase_one_body_kernel[_blocks(n, THREADS_PER_BLOCK), THREADS_PER_BLOCK]
+    launch = _configured(_total_phase_one_body_kernel, n, THREADS_PER_BLOCK)
     args = (float(i1), float(i2), float(i3), 0.0, d_angles, False, 2.0**21, d_out, d_status)
     launch(*args)
     best = math.inf

@@ -111,6 +111,11 @@ class Survey:
             # recomputed cheaply; read_survey derives the other columns
             "columns": columns,
         }
+        if self.device == "cuda":
+            # the search kernel compiled and run on the first body now: a
+            # numba-cuda that cannot compile here is a DeviceError before
+            # the directory is made, not after (the compile is needed anyway)
+            compute.search_chunk(self.moments[:1], self.n_max, self.q_max, device="cuda")
         self.ledger = Ledger(self.out_dir, self.parameters, source, skipped)
         self._record_lock = threading.Lock()
         # bodies_summary of each chunk written by the current run
