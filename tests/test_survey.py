@@ -12,7 +12,7 @@ import pytest
 
 import orbits
 from orbits import InputError
-from orbits.atomic import csv_float_options
+from orbits.atomic import FLOAT_FORMAT, csv_float_options
 from orbits.cli import main
 from orbits.survey import (
     BODY_COLUMNS,
@@ -97,6 +97,28 @@ def test_parquet_and_csv_engines_agree(tmp_path):
         pd.testing.assert_frame_equal(again, table, check_exact=True, check_dtype=False)
     write_part(table, tmp_path / "t.parquet", "parquet")
     pd.testing.assert_frame_equal(pd.read_parquet(tmp_path / "t.parquet"), table, check_exact=True)
+
+
+def test_write_part_returns_the_hash_of_the_bytes_it_wrote(tmp_path):
+    """write_part hashes the part in memory: the digest it returns is the
+    file's, and the Parquet bytes are those of pandas' own to_parquet (the
+    route the survey used before, with pyarrow's threads), compact and full
+    layouts alike; CSV through both engines as the plain writers give it."""
+    for columns in ("compact", "all"):
+        bodies, table = compute_chunk(orbits.region_sample(40), 8, columns=columns)
+        for name, frame in (("bodies", bodies), ("orbits", table)):
+            path = tmp_path / f"{columns}-{name}.parquet"
+            digest = write_part(frame, path, "parquet")
+            assert digest == sha256_file(path)
+            text = [c for c in frame.columns if frame[c].dtype.kind not in "biuf"]
+            frame.to_parquet(tmp_path / "pandas.parquet", index=False, use_dictionary=text)
+            assert path.read_bytes() == (tmp_path / "pandas.parquet").read_bytes()
+    bodies, table = compute_chunk(orbits.region_sample(20), 5)
+    for engine in ("arrow", "pandas"):
+        path = tmp_path / f"{engine}.csv"
+        assert write_part(table, path, "csv", engine=engine) == sha256_file(path)
+    table.to_csv(tmp_path / "plain.csv", index=False, float_format=FLOAT_FORMAT)
+    assert (tmp_path / "pandas.csv").read_bytes() == (tmp_path / "plain.csv").read_bytes()
 
 
 def test_other_parameters_are_refused(tmp_path):

@@ -24,7 +24,7 @@ from ..limits import check_resolution
 from ..startup import release_collector
 from . import compute
 from .compute import LAYOUTS, check_survey_bounds
-from .ledger import FORMATS, Ledger, one_line, part_name, sha256_file
+from .ledger import FORMATS, Ledger, one_line, part_name
 from .report import bodies_summary, survey_report
 from .tables import require_pyarrow, write_part
 
@@ -187,11 +187,11 @@ class Survey:
         }
         for table, frame in (("orbits", orbits), ("bodies", bodies)):
             name = part_name(table, index, self.format)
-            write_part(frame, self.out_dir / name, self.format)
             entry[table] = {
                 "file": name,
                 "rows": int(len(frame)),
-                "sha256": sha256_file(self.out_dir / name),
+                # of the bytes written, hashed before they went to disk
+                "sha256": write_part(frame, self.out_dir / name, self.format),
             }
         summary = bodies_summary(bodies)  # for the report: no reading back
         with self._record_lock:  # chunks finish on several threads

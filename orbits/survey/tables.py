@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..atomic import FLOAT_FORMAT, atomic_path, csv_float_options, read_bytes_nofollow
+from ..atomic import FLOAT_FORMAT, csv_float_options, read_bytes_nofollow, write_bytes_atomic
 from ..cells import neutralize, unneutralize
 from ..errors import InputError
 from ..search import CATALOG_COLUMNS
@@ -25,30 +25,50 @@ def require_pyarrow():
 
 
 def write_part(frame, path, fmt, engine=None):
-    """Write one table part atomically.
+    """Write one table part atomically; return the SHA-256 (hex) of its bytes.
+
+    The part is made in memory, hashed there and written with one call
+    (:func:`orbits.atomic.write_bytes_atomic`): the ledger's hash is that
+    of the bytes on disk without reading them back.  The DataFrame becomes
+    an Arrow table on this thread (``nthreads=1``): pyarrow's default starts
+    a pool of as many threads as the machine has cores for every table,
+    and the survey already writes its chunks side by side.  The bytes are
+    those of ``frame.to_parquet(path, index=False, use_dictionary=...)``
+    (tests/test_survey.py checks it).
 
     CSV goes through pyarrow's writer when it is installed (ten times
     faster than pandas here, and like it writes the shortest decimal that
     reads back to the same double); otherwise through pandas.  Names are
     neutralised against spreadsheet formulas (:func:`orbits.cells.neutralize`).
     """
+    import hashlib
+
     if engine is None:
         engine = "arrow" if have_pyarrow() else "pandas"
     if fmt == "csv" and "name" in frame.columns:
         frame = frame.assign(name=[neutralize(str(v)) for v in frame["name"]])
-    with atomic_path(path) as temporary:
+    if fmt == "parquet" or engine == "arrow":
+        import pyarrow as pa
+
+        table = pa.Table.from_pandas(frame, preserve_index=False, nthreads=1)
+        sink = pa.BufferOutputStream()
         if fmt == "parquet":
+            import pyarrow.parquet as pq
+
             # dictionary pages only for text columns: on doubles they never
             # pay off and cost pyarrow ~4x the write time
             text = [name for name in frame.columns if frame[name].dtype.kind not in "biuf"]
-            frame.to_parquet(temporary, index=False, use_dictionary=text)
-        elif engine == "arrow":
-            from pyarrow import Table
+            pq.write_table(table, sink, compression="snappy", use_dictionary=text)
+        else:
             from pyarrow.csv import write_csv
 
-            write_csv(Table.from_pandas(frame, preserve_index=False), temporary)
-        else:
-            frame.to_csv(temporary, index=False, float_format=FLOAT_FORMAT)
+            write_csv(table, sink)
+        data = memoryview(sink.getvalue())
+    else:
+        data = frame.to_csv(index=False, float_format=FLOAT_FORMAT).encode("utf-8")
+    digest = hashlib.sha256(data).hexdigest()
+    write_bytes_atomic(path, data)
+    return digest
 
 
 def have_pyarrow():
