@@ -218,7 +218,9 @@ def search_bodies(moments, levels, *, capacity=None, device="cpu"):
     on the CPU (all of numba's threads) or, with ``device="cuda"``, on an
     NVIDIA GPU (one thread per body, the same scalar search code,
     :func:`orbits.core.search.search_body_with`).  The roots agree between
-    the devices; on hardware the last bits may differ (fused multiply-adds).
+    the devices; on hardware the last bits may differ (fused multiply-adds):
+    on an NVIDIA H200 the root counts were equal and ``dtheta`` within
+    3.9e-13 relative over 61,625 bodies (n <= 30).
 
     Parameters
     ----------
