@@ -22,7 +22,6 @@ from ..limits import (
     search_estimate,
     short_number,
 )
-from ..phases import phase_limits
 from ..search import catalog_rows, phase_levels, search_bodies, searched
 from ..threads import threads_for
 
@@ -45,6 +44,8 @@ BODY_COLUMNS = (
 )
 # relative slack for "the numerical minimum is the end value"
 _END_TOLERANCE = 1e-12
+# how near (rad) the minimum's dtheta must lie to its branch's end
+_END_SLACK = 1e-9 * math.pi
 
 
 # the per-root columns a compact survey keeps (everything else is derived)
@@ -282,44 +283,25 @@ def _flatten(moments, levels, branch, level, offset, found, info):
 
 
 def _body_rows(found, ids, n, q):
+    """The bodies table of a searched chunk: one compiled pass
+    (:func:`orbits.core.rows.body_columns`) and the per-body counts."""
     import pandas as pd
 
-    moments, info = found.moments, found.info
-    norm = np.linalg.norm(moments, axis=1)
-    limits = phase_limits(moments)
-    theta_c = info[:, _kernels.INFO_WIDTH_SAM]
-    sam_min = info[:, _kernels.INFO_MIN_SAM]
-    lam_min = info[:, _kernels.INFO_MIN_LAM]
-    use_sam = sam_min <= lam_min
-    # >= 2 pi for every body (orbits.search._at_least_two_pi)
-    minimum = np.maximum(np.where(use_sam, sam_min, lam_min), 2.0 * np.pi)
-    where = np.where(use_sam, info[:, _kernels.INFO_MIN_AT_SAM], info[:, _kernels.INFO_MIN_AT_LAM])
-    end_value = np.minimum(limits.theta_zero, limits.theta_half_pi)
-    at_end = (
-        np.abs(np.abs(where) - np.where(use_sam, theta_c, info[:, _kernels.INFO_WIDTH_LAM]))
-        <= 1e-9 * np.pi
-    ) & (minimum >= end_value * (1.0 - _END_TOLERANCE))
+    floats, at_end, unresolved = _rows.body_columns(
+        found.moments, found.info, _END_SLACK, _END_TOLERANCE
+    )
     counts, n_small, n_large = _rows.body_counts(found.body, n, q, len(ids))
+    columns = {"body": ids}
+    columns.update(zip(_rows.BODY_FLOAT_COLUMNS, floats))
+    columns.update(
+        min_at_end=at_end,
+        orbits=counts,
+        n_smallest=n_small,
+        n_largest=n_large,
+        unresolved=unresolved,
+    )
     return pd.DataFrame(
-        {
-            "body": ids,
-            "I1": moments[:, 0] / norm,
-            "I2": moments[:, 1] / norm,
-            "I3": moments[:, 2] / norm,
-            "theta_crit": theta_c,
-            "limit_theta_zero": limits.theta_zero,
-            "limit_theta_half_pi": limits.theta_half_pi,
-            "min_total_phase": minimum,
-            "min_dtheta": where,
-            "min_theta": theta_c + where,
-            "min_at_end": at_end,
-            "orbits": counts,
-            "n_smallest": n_small,
-            "n_largest": n_large,
-            "unresolved": (
-                info[:, _kernels.INFO_UNREACHED_SAM] + info[:, _kernels.INFO_UNREACHED_LAM]
-            ).astype(np.int64),
-        },
+        columns,
         columns=list(BODY_COLUMNS),
         copy=False,  # one block per column: no consolidating copy
     )
