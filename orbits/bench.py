@@ -9,7 +9,8 @@ nothing) and its ``timed`` says what each figure is:
 * most rows run both sides in this process, best of several runs after an
   untimed warm-up run (so numba compilation is excluded);
 * ``search_evaluations``, ``survey_threads`` and ``survey_bytes`` time one
-  run of each side, after a warm-up;
+  run of each side, after a warm-up; ``survey_tables`` the best of three
+  passes of each, taken in turns, after a warm-up pass;
 * ``survey``'s baseline is not run on every body: a loop over every k-th
   body of the grid, ``k = count // 500`` (500 to 999 bodies, or all when
   fewer), is timed once and scaled to the whole grid;
@@ -778,6 +779,78 @@ def bench_survey_threads(resolution=300, n_max=30):
     }
 
 
+def bench_survey_tables(resolution=1612, n_max=10, chunks=16, chunk=20_000, repeats=3):
+    """The survey's table work alone, on one thread and on all in effect.
+
+    The part of a survey that runs beside the search: searched chunks made
+    into their two tables, written, hashed and entered in the ledger
+    (:func:`orbits.survey.compute.chunk_tables` and
+    :meth:`orbits.survey.Survey.write_chunk`), ``chunks`` chunks of
+    ``chunk`` bodies of the grid, by a pool of one thread and of
+    :func:`orbits.get_num_threads` threads (the survey's own table pool
+    has as many).  The searches are done first and not timed; each timed
+    pass gets fresh searches (a chunk's flat rows are made by its table
+    work) and a fresh directory.  Best of ``repeats`` passes of each,
+    taken in turns, after a warm-up pass.  Where the pool stops gaining is
+    the part of the work that holds the interpreter lock.
+    """
+    import shutil
+    import tempfile
+    from concurrent.futures import ThreadPoolExecutor
+
+    from .survey import Survey, compute
+
+    top = get_num_threads()
+    directory = tempfile.mkdtemp(prefix="orbits-bench-")
+    try:
+        grid = Survey.grid(os.path.join(directory, "grid"), resolution, n_max, chunk=chunk)
+        count = min(int(chunks), grid.chunks)
+        bodies = sum(grid.chunk_moments(i).shape[0] for i in range(count))
+
+        def one_pass(threads, label):
+            found = [compute.search_chunk(grid.chunk_moments(i), n_max) for i in range(count)]
+            survey = Survey.grid(os.path.join(directory, label), resolution, n_max, chunk=chunk)
+            survey.out_dir.mkdir()
+
+            def finish(index):
+                tables = compute.chunk_tables(found[index], index * chunk, survey.columns)
+                survey.write_chunk(index, *tables)
+
+            with survey.lock():
+                survey.prepare()
+                start = time.perf_counter()
+                with ThreadPoolExecutor(threads) as pool:
+                    list(pool.map(finish, range(count)))
+                elapsed = time.perf_counter() - start
+            shutil.rmtree(survey.out_dir)
+            return elapsed
+
+        one_pass(top, "warm")
+        singles, everys = [], []
+        for k in range(repeats):
+            singles.append(one_pass(1, f"one-{k}"))
+            everys.append(one_pass(top, f"all-{k}"))
+    finally:
+        shutil.rmtree(directory, ignore_errors=True)
+    single, every = min(singles), min(everys)
+    return {
+        "task": f"survey tables, {count} chunks of {chunk} bodies, n <= {n_max}: "
+        f"{plural(top, 'thread')} vs 1",
+        "timed": f"best of {repeats} passes of each, taken in turns, after a warm-up "
+        "pass; the searches done first, untimed; in this process",
+        "ours_s": every,
+        "baseline": "the same chunks' tables and files on one thread",
+        "baseline_s": single,
+        "speedup": single / every,
+        "bodies_per_s": bodies / every,
+        "threads": top,
+        "note": f"{single / count * 1e3:.1f} ms a chunk on one thread, "
+        f"{every / count * 1e3:.1f} ms on {plural(top, 'thread')} ({bodies} bodies: "
+        "tables, Parquet parts, SHA-256, ledger); what does not shrink with "
+        "threads holds the interpreter lock",
+    }
+
+
 def bench_survey_bytes(resolution=300, n_max=30):
     """Bytes per body on disk: the compact layout (default) against ``columns="all"``.
 
@@ -843,6 +916,7 @@ BENCHMARKS = {
     "survey_threads": bench_survey_threads,
     "search_scaling": bench_search_scaling,
     "survey_bytes": bench_survey_bytes,
+    "survey_tables": bench_survey_tables,
 }
 
 
@@ -1000,7 +1074,7 @@ def load_check(rows):
     so that the rest of the machine is the same), ``slowdown`` = loaded/idle
     and ``holds`` (slowdown <= :data:`LOAD_LIMIT`).  Rows without a task of
     their own (``_ours``: startup, cold_compile, search_evaluations,
-    survey_scaling, survey_bytes) are not re-timed.  The busy process is
+    survey_scaling, survey_bytes, survey_tables) are not re-timed.  The busy process is
     ours and is always stopped.
     """
     for row in rows:
@@ -1041,6 +1115,8 @@ def _quick_kwargs(name, gpu):
         return {"points": 100_000}
     if name in ("survey", "survey_scaling", "survey_threads", "search_scaling", "survey_bytes"):
         return {"resolution": 60}
+    if name == "survey_tables":
+        return {"resolution": 400, "chunks": 4}
     if name == "startup":
         return {"repeats": 2}
     if name == "search_evaluations":

@@ -539,3 +539,34 @@ def test_cuda_phase_labels_under_the_simulator():
     assert "timed on all the angles" in row["timed"]
     assert "theta folded and checked in the kernel" in row["note"]
     assert "fold and checks on the host" not in row["note"]
+
+
+def test_survey_tables_times_the_table_work_of_real_chunks(monkeypatch, tmp_path):
+    """survey_tables: every pass makes and writes each chunk once (warm-up,
+    then one thread and all in turns), its parts are the survey's own (the
+    ledger verifies them), the bodies are counted right, and nothing is
+    left in the temporary directory."""
+    import tempfile
+
+    from orbits.survey import Survey
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    written, verified = [], []
+    real_write = Survey.write_chunk
+
+    def write_chunk(self, index, bodies, orbits):
+        real_write(self, index, bodies, orbits)
+        written.append((self.out_dir.name, index, len(bodies)))
+        if index == 2:
+            verified.append(self.verify())  # the parts just written check out
+
+    monkeypatch.setattr(Survey, "write_chunk", write_chunk)
+    row = bench.bench_survey_tables(resolution=40, n_max=3, chunks=3, chunk=100, repeats=2)
+    passes = sorted({name for name, _, _ in written})
+    assert passes == ["all-0", "all-1", "one-0", "one-1", "warm"]
+    assert sorted(written) == sorted((p, i, 100) for p in passes for i in range(3))
+    assert verified == [[]] * 5
+    assert row["bodies_per_s"] == pytest.approx(300 / row["ours_s"])
+    assert row["speedup"] == pytest.approx(row["baseline_s"] / row["ours_s"])
+    assert "3 chunks of 100 bodies" in row["task"] and "ms a chunk" in row["note"]
+    assert list(tmp_path.iterdir()) == []
