@@ -16,8 +16,10 @@ arrays the caller provides.
 
 With ``NUMBA_ENABLE_CUDASIM=1`` the kernels run in numba's CUDA simulator
 (slow: Python per thread), which is how the tests check them without a GPU.
-On hardware NVVM contracts ``a * b + c`` into fused multiply-adds, so
-results may differ from the CPU path by a few ulps.
+On hardware NVVM contracts ``a * b + c`` into fused multiply-adds and
+CUDA's own ``log`` and trigonometric functions round differently, so the
+last bits differ from the CPU path (measured on an NVIDIA H200: the total
+phase within 2.4e-15 relative, the search's ``dtheta`` within 3.9e-13).
 """
 
 import math

@@ -1,13 +1,14 @@
-"""Survey table kernels: the search's per-body roots to flat rows, and per-body counts.
+"""Survey table kernels: the search's roots to flat rows, and the bodies' columns.
 
 The search (:func:`orbits.core.search.search_many`) leaves each body's roots
 in its own row of fixed-width arrays.  :func:`flat_rows` turns them into the
 survey's flat per-root columns (body, branch, level, dtheta), sorted by body
 and then by ``dtheta``; :func:`body_counts` gives each body's number of
 orbits and its smallest and largest integer multiple ``n`` (the
-``n_smallest``/``n_largest`` columns) without a group-by.
+``n_smallest``/``n_largest`` columns) without a group-by; and
+:func:`body_columns` the rest of the bodies table.
 
-Both run on one thread and release the GIL (``nogil``): the survey runs
+All run on one thread and release the GIL (``nogil``): the survey runs
 several chunks at once, one per thread, so no kernel here launches a
 parallel region of its own (numba's ``workqueue`` layer forbids concurrent
 launches).
