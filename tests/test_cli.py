@@ -67,6 +67,10 @@ class TestPhase:
             (["phase", "--moments", "1", "2", "4", "--theta", "0.3"], ["triangle"]),
             (["phase", "--moments", "1", "2", "nan", "--theta", "0.3"], ["not a finite number"]),
             (["phase", "--preset", "fig6", "--dtheta", "2"], ["outside [0, pi/2]", "not folded"]),
+            (
+                ["animate", "--preset", "fig6", "--dtheta", "5", "--out", "never.gif"],
+                ["theta_c + dtheta", "outside [0, pi/2]", "not folded"],
+            ),
             (["phase", "--preset", "nope", "--theta", "1"], ["invalid choice"]),
             (["phase", "--preset", "fig6"], ["--theta", "required"]),
             (

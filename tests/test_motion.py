@@ -804,3 +804,16 @@ def test_pi_far_matches_mpmath():
             ref = mp.ellippi(n_mp, m_mp)
             worst = max(worst, abs(pi_far_complete(kc, ratio, width) / ref - 1))
     assert worst <= 8e-15
+
+
+@pytest.mark.parametrize("dtheta", [2.0, -1.5, 1e300])
+def test_dtheta_out_of_range_is_said_as_total_phase_says_it(dtheta):
+    """Motion.from_spin (and so orbits animate --dtheta) refuses a dtheta that
+    takes theta out of [0, pi/2] with the message of total_phase: the sum
+    theta_c + dtheta, and that dtheta is not folded."""
+    with pytest.raises(AngleError) as from_motion:
+        Motion.from_spin(FIG6, dtheta=dtheta)
+    with pytest.raises(AngleError) as from_phase:
+        orbits.total_phase(FIG6, dtheta=dtheta)
+    assert str(from_motion.value) == str(from_phase.value)
+    assert "theta_c + dtheta" in str(from_motion.value) and "not folded" in str(from_motion.value)
