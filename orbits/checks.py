@@ -38,6 +38,7 @@ from .core import phase as _phase
 from .core.ode import STATE_SIZE, euler_rhs
 from .errors import AngleError, ArgumentTypeError, InputError, OrbitsError
 from .limits import (
+    GAP_ROUNDING_FACTOR,
     ODE_ERROR_FACTOR,
     PHASE_ULPS,
     ROUTE_ULPS,
@@ -606,8 +607,11 @@ def verify(n_bodies=293, n_angles=22, *, tolerance=TOLERANCE, progress=None, chu
         a phase of 1e8 rad than ~1e-8 rad.  Check (a) is also allowed its
         integrator's own error, :func:`ode_error_budget` (``6 * rtol * |w0|
         T``, T the period it found; 5.7e-7 rad for the 15,000 turns of
-        (1, 1.0001, 1.0002) at theta = 0.75), where that is larger: the
-        table's ``ode_allowance`` is what each row was held to.
+        (1, 1.0001, 1.0002) at theta = 0.75), and next to the separatrix
+        what one rounding of its state moves the phase,
+        :func:`gap_rounding_allowance` (``20 * eps / g * |d Delta alpha /
+        d ln g|``, g the relative gap), where those are larger: the table's
+        ``ode_allowance`` is what each row was held to.
     progress : callable, optional
         ``progress(done)`` after each chunk of initial conditions.
     chunk : int
@@ -748,14 +752,62 @@ def _allowance(closed, tolerance):
     return np.maximum(tolerance, PHASE_ULPS * spacing)
 
 
+def gap_rounding_allowance(relative_gap, gap_slope):
+    """What the rounding of a double state moves check (a) by, radians.
+
+    Parameters
+    ----------
+    relative_gap : float or array_like
+        The orbit's distance from the separatrix, ``g = |M^2 - 2 E I2| /
+        (I3 (I3 - I2) w3^2 + I1 (I2 - I1) w1^2)``: the gap over the two
+        terms it is the difference of (the ``relative_gap`` column of
+        verify's table).
+    gap_slope : float or array_like
+        ``|d Delta alpha / d ln g|`` (rad; ``gap_slope``).
+
+    Returns
+    -------
+    float or ndarray
+        ``GAP_ROUNDING_FACTOR * eps / g * |d Delta alpha / d ln g|``: a double
+        state holds ``g`` only to about ``eps / g`` relative, so an
+        integration in doubles cannot place the phase closer than that next
+        to the separatrix, whatever its tolerance (see
+        :data:`orbits.limits.GAP_ROUNDING_FACTOR`).  Far from it the term
+        is negligible.
+
+    Examples
+    --------
+    >>> from orbits import checks
+    >>> f"{checks.gap_rounding_allowance(2.97e-7, 6.7645):.3g}"  # verify(29300), row 301239
+    '1.01e-07'
+    """
+    eps = np.finfo(float).eps
+    gap = np.asarray(relative_gap, dtype=float)
+    slope = np.asarray(gap_slope, dtype=float)
+    # a zero gap (the separatrix, or one that underflowed) allows nothing:
+    # NaN, which the allowance's fmax passes over
+    safe = np.where(gap > 0.0, gap, np.nan)
+    term = GAP_ROUNDING_FACTOR * eps * slope / safe
+    return float(term) if term.ndim == 0 else term
+
+
 def _ode_limit(table, allowance):
-    """What check (a) is allowed at each row: the larger of ``allowance``
-    and its integrator's error budget (:func:`ode_error_budget` of the
-    period it found; a table without ``ode_period`` has none)."""
-    if "ode_period" not in table:
-        return allowance
-    budget = ode_error_budget(table["ode_period"].to_numpy())
-    return np.fmax(allowance, budget)
+    """What check (a) is allowed at each row: the largest of ``allowance``,
+    its integrator's error budget (:func:`ode_error_budget` of the period it
+    found) and, next to the separatrix, the rounding of the state
+    (:func:`gap_rounding_allowance`); a table without those columns has
+    only ``allowance``."""
+    limit = allowance
+    if "ode_period" in table:
+        limit = np.fmax(limit, ode_error_budget(table["ode_period"].to_numpy()))
+    if "relative_gap" in table and "gap_slope" in table:
+        limit = np.fmax(
+            limit,
+            gap_rounding_allowance(
+                table["relative_gap"].to_numpy(), table["gap_slope"].to_numpy()
+            ),
+        )
+    return limit
 
 
 def _add_routes(table, unit, moments, theta, n_angles, one_body):
@@ -821,8 +873,10 @@ def _summarize(table, tolerance, exhausted, route_failures=None, predicted=None)
     spacing(|Delta alpha|))`` (the public routes: within ``ROUTE_ULPS *
     spacing``, whatever the tolerance); the ODE check (a) also within its
     integrator's own error, :func:`ode_error_budget` of the period it found
-    (``ODE_ERROR_FACTOR * rtol * |w0| T``), where that is larger.  Each
-    check reports the largest allowance it was held to and its largest
+    (``ODE_ERROR_FACTOR * rtol * |w0| T``), and next to the separatrix
+    within the rounding of its state, :func:`gap_rounding_allowance`, where
+    those are larger.  Each check reports the largest allowance it was
+    held to and its largest
     discrepancy as a fraction of the allowance at that row.  A row on the
     separatrix (no closed form) or a check that gave no value is counted
     and explained; its discrepancy is ``None``, never NaN.  The ODE check
@@ -919,6 +973,7 @@ def _summarize(table, tolerance, exhausted, route_failures=None, predicted=None)
         "route_ulps": ROUTE_ULPS,
         "ode_rtol": VERIFY_ODE_RTOL,
         "ode_error_factor": ODE_ERROR_FACTOR,
+        "gap_rounding_factor": GAP_ROUNDING_FACTOR,
         "largest_allowance": float(np.max(allowance[has_closed])) if has_closed.any() else None,
         "on_separatrix": on_separatrix,
         "passed": bool(passed),

@@ -2,6 +2,7 @@
 
 from ..errors import InputError
 from ..limits import (
+    GAP_ROUNDING_FACTOR,
     ODE_ERROR_FACTOR,
     PHASE_ULPS,
     ROUTE_ULPS,
@@ -123,9 +124,11 @@ def _print_summary(summary, args, one):
             f"(a) ODE rotation: {ode['within_integrator_error_only']} discrepancy(ies) beyond "
             f"the tolerance are within the integrator's own error, "
             f"{summary['ode_error_factor']:g} x rtol ({summary['ode_rtol']:g}) x |w0| T "
-            f"(T the period it found; its error grows with the turns integrated), here up "
-            f"to {ode['largest_allowance']:.3g} rad; the largest discrepancy is "
-            f"{ode['max_fraction_of_allowance']:.2g} of its allowance"
+            f"(T the period it found; its error grows with the turns integrated), or, "
+            f"next to the separatrix, {summary['gap_rounding_factor']:g} x eps / g x "
+            f"|d Delta alpha / d ln g| (what a rounding of the state moves the phase by; "
+            f"g the relative gap), here up to {ode['largest_allowance']:.3g} rad; the "
+            f"largest discrepancy is {ode['max_fraction_of_allowance']:.2g} of its allowance"
         )
     notes.append(
         f"public routes: orbits.total_phase (both SIMD kernels), orbits.phases "
@@ -155,7 +158,9 @@ def add_parser(subparsers):
         f"{PHASE_ULPS} spacings of doubles at the phase, where that is larger: "
         "near the sphere the phases reach 1e9 rad, where doubles are 1e-7 apart; "
         f"for (a) also {ODE_ERROR_FACTOR:g} x rtol x |w0| T, its integrator's own "
-        "error, which grows with the period T it integrates), "
+        "error, which grows with the period T it integrates, and next to the "
+        f"separatrix {GAP_ROUNDING_FACTOR:g} x eps / g x |d Delta alpha / d ln g|, "
+        "what a rounding of the state moves the phase by, g the relative gap), "
         "if a check gives no value, or if an angle lies on the separatrix.  "
         "The defaults give the paper's 6446 initial conditions.",
     )
@@ -192,7 +197,9 @@ def add_parser(subparsers):
         default=1e-9,
         help="largest allowed discrepancy, radians (default 1e-9); a discrepancy "
         f"within {PHASE_ULPS} spacings of doubles at the phase passes too, and for "
-        f"check (a) one within {ODE_ERROR_FACTOR:g} x rtol x |w0| T (its integrator's error)",
+        f"check (a) one within {ODE_ERROR_FACTOR:g} x rtol x |w0| T (its integrator's error) "
+        f"or, next to the separatrix, {GAP_ROUNDING_FACTOR:g} x eps / g x |d Delta alpha / "
+        "d ln g| (the rounding of its state)",
     )
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.add_argument(

@@ -493,7 +493,11 @@ CHECK_COLUMNS = (
     "w1",
     "w2",
     "w3",
+    "relative_gap",
+    "gap_slope",
 )
+# the relative change of the gap by which gap_slope is differenced
+GAP_SLOPE_STEP = 1e-6
 
 
 @njit(cache=True, nogil=True, parallel=True)
@@ -512,15 +516,21 @@ def check_batch(moments, theta, phi, ode_rtol, ode_atol, quad_rtol, out):
     the reference their values are compared with.
 
     ``moments`` (n, 3) sorted ascending; ``theta``, ``phi`` (n,) the unit
-    initial spin.  ``out`` (n, 14) follows :data:`CHECK_COLUMNS`: the
+    initial spin.  ``out`` (n, 16) follows :data:`CHECK_COLUMNS`: the
     closed-form total phase (Bulirsch ``cel``) of omega0 and of ``theta``,
     the exact-motion ``phi(T)`` phase, Montgomery's total phase, solid angle
     and period, the ODE period, rotation angle mod 2 pi and off-axis size,
     the closed-form period, the branch (+1 SAM, -1 LAM, 0 where ``theta``
     has no closed form: on the separatrix, or within the rounding error of
-    ``theta_c``) and omega0.  Every column but ``branch`` is NaN on the rows
-    of branch 0; a row whose integration ran out of steps has
-    ``ode_period`` equal to :data:`STEP_BUDGET_EXHAUSTED` (see
+    ``theta_c``), omega0, the orbit's relative distance from the separatrix
+    ``g = |M^2 - 2 E I2| / (I3 (I3 - I2) w3^2 + I1 (I2 - I1) w1^2)`` (the
+    gap over the two terms it is the difference of, which a rounding of
+    the spin moves by ``eps`` each) and ``|d Delta alpha / d ln g|`` (the
+    closed form at ``g (1 +- GAP_SLOPE_STEP)``, a central difference): a
+    rounding of the state moves the phase by that times ``eps / g``
+    (check (a)'s conditioning next to the separatrix).  Every
+    column but ``branch`` is NaN on the rows of branch 0; a row whose
+    integration ran out of steps has ``ode_period`` equal to :data:`STEP_BUDGET_EXHAUSTED` (see
     :func:`rotation_after_periods`), and one not integrated because both
     periods (closed form and quadrature) need more than
     :data:`ODE_MAX_STEPS` steps (:func:`ode_steps_at_least`, applied at
@@ -580,6 +590,17 @@ def check_batch(moments, theta, phi, ode_rtol, ode_atol, quad_rtol, out):
         out[k, 11] = w1
         out[k, 12] = w2
         out[k, 13] = w3
+        # the gap relative to its two terms, which a rounding of the spin
+        # moves by eps each (I1 <= I2 <= I3: both are >= 0)
+        terms = i3 * (i3 - i2) * w3 * w3 + i1 * (i2 - i1) * w1 * w1
+        out[k, 14] = abs(v_scale * v_offset * v_closing) / terms
+        up = _phase.total_from_spin(
+            i1, i2, i3, w1, w2, w3, v_scale, v_offset * (1.0 + GAP_SLOPE_STEP), v_closing
+        )
+        down = _phase.total_from_spin(
+            i1, i2, i3, w1, w2, w3, v_scale, v_offset * (1.0 - GAP_SLOPE_STEP), v_closing
+        )
+        out[k, 15] = abs(up - down) / (2.0 * GAP_SLOPE_STEP)
 
 
 # Full integration from a double omega0 keeps ~1e-10 only while the orbit
