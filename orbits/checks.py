@@ -921,7 +921,8 @@ def _summarize(table, tolerance, exhausted, route_failures=None, predicted=None)
         }
         reasons = []
         if name == "ode_rotation":
-            # beyond what (b) and (c) are allowed, within the integrator's error
+            # beyond what (b) and (c) are allowed, within the integrator's
+            # error or, next to the separatrix, the rounding of its state
             entry["within_integrator_error_only"] = int(
                 np.count_nonzero(ran & ~beyond & ~(errors <= allowance))
             )
