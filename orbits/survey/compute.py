@@ -25,17 +25,11 @@ from ..limits import (
 from ..search import catalog_rows, phase_levels, search_bodies, searched
 from ..threads import threads_for
 
+# the bodies table; its float columns are those orbits.core.rows.body_columns
+# computes, in its order
 BODY_COLUMNS = (
     "body",
-    "I1",
-    "I2",
-    "I3",
-    "theta_crit",
-    "limit_theta_zero",
-    "limit_theta_half_pi",
-    "min_total_phase",
-    "min_dtheta",
-    "min_theta",
+    *_rows.BODY_FLOAT_COLUMNS,
     "min_at_end",
     "orbits",
     "n_smallest",
