@@ -834,7 +834,7 @@ def bench_survey_tables(resolution=1612, n_max=10, chunks=16, chunk=20_000, repe
         shutil.rmtree(directory, ignore_errors=True)
     single, every = min(singles), min(everys)
     return {
-        "task": f"survey tables, {count} chunks of {chunk} bodies, n <= {n_max}: "
+        "task": f"survey tables, {count} chunks of up to {chunk} bodies, n <= {n_max}: "
         f"{plural(top, 'thread')} vs 1",
         "timed": f"best of {repeats} passes of each, taken in turns, after a warm-up "
         "pass; the searches done first, untimed; in this process",
