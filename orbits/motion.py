@@ -55,7 +55,6 @@ import numpy as np
 
 from ._args import integer, real_array, real_scalar
 from .bodies import Body
-from .cells import exact_number
 from .core import grid as _grid_kernels
 from .core import motion as _kernels
 from .core import phase as _phase
@@ -343,21 +342,16 @@ class Motion:
                     [np.sin(angle) * np.cos(phi), np.sin(angle) * np.sin(phi), np.cos(angle)]
                 ),
             )
-        constants = _phase.body_constants(*body.unit_moments, phi)
         status, theta_, _, _, w1, w2, w3, scale, offset, closing = _phase.spin_from_angle(
-            constants, angle, from_offset
+            _phase.body_constants(*body.unit_moments, phi), angle, from_offset
         )
         if status == _phase.STATUS_NOT_FINITE:
             raise AngleError(f"{'dtheta' if from_offset else 'theta'} must be finite")
-        if status == _phase.STATUS_OUT_OF_RANGE and not from_offset:
-            raise AngleError(f"theta = {theta_!r} is outside [0, pi/2]")
         if status == _phase.STATUS_OUT_OF_RANGE:
-            # a dtheta (a theta outside is folded above): as total_phase says it
-            raise AngleError(
-                f"theta_c + dtheta = {exact_number(constants[2])} + {exact_number(angle)} "
-                "is outside [0, pi/2]; dtheta is an offset from theta_c and is not folded "
-                "(pass theta, which is folded by the top's symmetries)"
-            )
+            if from_offset:
+                # refused as total_phase refuses it (theta_c + dtheta, not folded)
+                total_phase(body, dtheta=angle, phi=phi)
+            raise AngleError(f"theta = {theta_!r} is outside [0, pi/2]")
         if status == _phase.STATUS_SEPARATRIX:
             raise SeparatrixError(
                 "the spin lies on the separatrix, or theta is within the rounding "
