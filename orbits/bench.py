@@ -657,7 +657,7 @@ def bench_survey_scaling(resolution=500, n_max=30, repeats=3):
         ones.append(_survey_command_wall(resolution, n_max, {cpus[0]})[0])
         runs.append(_survey_command_wall(resolution, n_max, set(cpus), threads))
         # the fixed cost of a survey command (interpreter, NumPy, numba and
-        # its first kernel, pandas, pyarrow, the files): a grid of 2, one CPU
+        # its first kernel, pyarrow, the files): a grid of 2, one CPU
         fixeds.append(_survey_command_wall(2, 1, {cpus[0]})[0])
     one, fixed = min(ones), min(fixeds)
     wall, bodies, size = min(runs)
@@ -784,7 +784,7 @@ def bench_survey_tables(resolution=1612, n_max=10, chunks=16, chunk=20_000, repe
 
     The part of a survey that runs beside the search: searched chunks made
     into their two tables, written, hashed and entered in the ledger
-    (:func:`orbits.survey.compute.chunk_tables` and
+    (:func:`orbits.survey.compute.chunk_columns` and
     :meth:`orbits.survey.Survey.write_chunk`), ``chunks`` chunks of
     ``chunk`` bodies of the grid, by a pool of one thread and of
     :func:`orbits.get_num_threads` threads (the survey's own table pool
@@ -813,7 +813,7 @@ def bench_survey_tables(resolution=1612, n_max=10, chunks=16, chunk=20_000, repe
             survey.out_dir.mkdir()
 
             def finish(index):
-                tables = compute.chunk_tables(found[index], index * chunk, survey.columns)
+                tables = compute.chunk_columns(found[index], index * chunk, survey.columns)
                 survey.write_chunk(index, *tables)
 
             with survey.lock():

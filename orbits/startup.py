@@ -1,7 +1,7 @@
 """The command line's start-up: the collector held, BLAS threads calmed, modules deferred.
 
 A command's start-up (the interpreter, NumPy, numba and the first kernel
-loaded from its cache, pandas, pyarrow) runs on one core whatever the
+loaded from its cache, pandas or pyarrow) runs on one core whatever the
 machine has, so every tenth of a second it takes is a tenth that more
 cores cannot shorten.  Three costs there buy a command nothing:
 

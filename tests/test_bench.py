@@ -556,7 +556,7 @@ def test_survey_tables_times_the_table_work_of_real_chunks(monkeypatch, tmp_path
 
     def write_chunk(self, index, bodies, orbits):
         real_write(self, index, bodies, orbits)
-        written.append((self.out_dir.name, index, len(bodies)))
+        written.append((self.out_dir.name, index, len(bodies["body"])))
         if index == 2:
             verified.append(self.verify())  # the parts just written check out
 

@@ -8,6 +8,8 @@ import time
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
 import pytest
 
 import orbits
@@ -17,9 +19,12 @@ from orbits.cli import main
 from orbits.survey import (
     BODY_COLUMNS,
     Survey,
+    chunk_columns,
+    chunk_tables,
     compute_chunk,
     load_manifest,
     read_survey,
+    search_chunk,
     sha256_file,
     survey_grid,
     write_part,
@@ -101,24 +106,105 @@ def test_parquet_and_csv_engines_agree(tmp_path):
 
 def test_write_part_returns_the_hash_of_the_bytes_it_wrote(tmp_path):
     """write_part hashes the part in memory: the digest it returns is the
-    file's, and the Parquet bytes are those of pandas' own to_parquet (the
-    route the survey used before, with pyarrow's threads), compact and full
-    layouts alike; CSV through both engines as the plain writers give it."""
+    file's.  A table gives the same bytes as arrays (what a survey run
+    writes, chunk_columns) and as a DataFrame (chunk_tables), compact and
+    full layouts alike; pandas reads the part back to the DataFrame, types
+    and all (the branch a categorical); CSV through both engines."""
     for columns in ("compact", "all"):
-        bodies, table = compute_chunk(orbits.region_sample(40), 8, columns=columns)
-        for name, frame in (("bodies", bodies), ("orbits", table)):
+        found = search_chunk(orbits.region_sample(40), 8)
+        arrays = chunk_columns(found, 7, columns)
+        frames = chunk_tables(found, 7, columns)
+        for name, plain, frame in zip(("bodies", "orbits"), arrays, frames, strict=True):
             path = tmp_path / f"{columns}-{name}.parquet"
-            digest = write_part(frame, path, "parquet")
+            digest = write_part(plain, path, "parquet")
             assert digest == sha256_file(path)
-            text = [c for c in frame.columns if frame[c].dtype.kind not in "biuf"]
-            frame.to_parquet(tmp_path / "pandas.parquet", index=False, use_dictionary=text)
-            assert path.read_bytes() == (tmp_path / "pandas.parquet").read_bytes()
+            assert write_part(frame, tmp_path / "frame.parquet", "parquet") == digest
+            assert path.read_bytes() == (tmp_path / "frame.parquet").read_bytes()
+            pd.testing.assert_frame_equal(pd.read_parquet(path), frame, check_exact=True)
+            assert pq.read_schema(path).metadata is None  # no pandas metadata
     bodies, table = compute_chunk(orbits.region_sample(20), 5)
     for engine in ("arrow", "pandas"):
         path = tmp_path / f"{engine}.csv"
         assert write_part(table, path, "csv", engine=engine) == sha256_file(path)
     table.to_csv(tmp_path / "plain.csv", index=False, float_format=FLOAT_FORMAT)
     assert (tmp_path / "pandas.csv").read_bytes() == (tmp_path / "plain.csv").read_bytes()
+
+
+def test_parts_keep_nan_and_types_without_pandas_metadata(tmp_path):
+    """Parts are plain Arrow: NaN stays a NaN (never a null), booleans,
+    int8 codes and names keep their types, and an empty table is a table."""
+    columns = {
+        "body": np.array([3, 4, 5], dtype=np.int64),
+        "name": ["a", "=b", "é"],
+        "x": np.array([np.nan, -0.0, 1.5]),
+        "flag": np.array([True, False, True]),
+        "branch": np.array([1, 0, 1], dtype=np.int8),
+    }
+    write_part(columns, tmp_path / "t.parquet", "parquet")
+    arrow = pq.read_table(tmp_path / "t.parquet")
+    assert arrow.column("x").null_count == 0
+    branch = arrow.schema.field("branch").type
+    assert pa.types.is_dictionary(branch) and branch.index_type == pa.int8()
+    assert arrow.schema.field("flag").type == pa.bool_()
+    assert arrow.column("branch").to_pylist() == ["LAM", "SAM", "LAM"]
+    back = pd.read_parquet(tmp_path / "t.parquet")
+    assert np.isnan(back["x"][0]) and np.signbit(back["x"][1]) and back["x"][2] == 1.5
+    assert back["flag"].tolist() == [True, False, True]
+    assert back["branch"].astype(str).tolist() == ["LAM", "SAM", "LAM"]
+    assert back["name"].tolist() == ["a", "=b", "é"]
+    empty = {name: values[:0] for name, values in columns.items()}
+    write_part(empty, tmp_path / "e.parquet", "parquet")
+    assert pq.read_table(tmp_path / "e.parquet").schema.equals(arrow.schema)
+    with pytest.raises(InputError, match="codes outside"):
+        write_part({"branch": np.array([2], dtype=np.int8)}, tmp_path / "b.parquet", "parquet")
+    nullable = pd.DataFrame({"n": pd.array([1, None], dtype="Int64")})
+    with pytest.raises(InputError, match="missing values"):
+        write_part(nullable, tmp_path / "n.parquet", "parquet")
+    assert not (tmp_path / "b.parquet").exists() and not (tmp_path / "n.parquet").exists()
+
+
+def test_a_survey_run_never_loads_pandas(tmp_path):
+    """The survey command makes and writes its default (compact) tables
+    without pandas (its import is serial start-up): with pandas made
+    unimportable it still runs, Parquet and CSV, and so does a survey of
+    named bodies.  (A ``--bodies`` CSV is read, and ``--columns all`` rows
+    are made, through pandas.)"""
+    guard = (
+        "import sys\n"
+        "class NoPandas:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name == 'pandas' or name.startswith('pandas.'):\n"
+        "            raise ImportError('pandas is not to be loaded by a survey run')\n"
+        "sys.meta_path.insert(0, NoPandas())\n"
+    )
+    command = guard + "from orbits.cli import main\nmain(sys.argv[1:])\n"
+    for k, extra in enumerate(([], ["--format", "csv"])):
+        out = tmp_path / f"s{k}"
+        arguments = ["survey", "--resolution", "12", "--n-max", "5", *extra, "--out", str(out)]
+        done = subprocess.run(
+            [sys.executable, "-c", command, *arguments],
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
+        assert done.returncode == 0, done.stderr[-2000:]
+        assert (out / "report.json").is_file()
+    named = guard + (
+        "from orbits import Body\n"
+        "from orbits.survey import Survey\n"
+        "bodies = [Body([1, 2, 3], name='phone'), Body([0.1, 1, 1.05], name='rod')]\n"
+        "Survey.from_bodies(sys.argv[1], bodies, 6).run()\n"
+        "assert 'pandas' not in sys.modules\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", named, str(tmp_path / "named")],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    bodies, _ = read_survey(tmp_path / "named")
+    assert bodies["name"].tolist() == ["phone", "rod"]
 
 
 def test_other_parameters_are_refused(tmp_path):

@@ -28,7 +28,9 @@ Chunks run in-process -- the search on all cores (numba), each searched
 chunk's tables, files and hashes on a pool of threads beside it -- or on a
 ``dask.distributed`` cluster (``scheduler="tcp://host:port"`` or a
 ``Client``): the same functions compute each chunk there and the results
-come back to be written here, so both engines write identical files.
+come back to be written here, so both engines write identical files.  The
+tables are made and written from arrays (:func:`chunk_columns`, pyarrow):
+a survey run does not load pandas; :func:`read_survey` gives DataFrames.
 
 The package's modules, bottom to top:
 
@@ -43,11 +45,13 @@ The package's modules, bottom to top:
 
 from .compute import (
     BODY_COLUMNS,
+    CATEGORIES,
     COMPACT_COLUMNS,
     GRID_INSIDE,
     LAYOUTS,
     UNIT_COLUMNS,
     check_survey_bounds,
+    chunk_columns,
     chunk_tables,
     compute_chunk,
     derive_orbit_rows,
@@ -77,9 +81,11 @@ from .tables import read_part, read_survey, read_table, survey_grid, write_part
 
 __all__ = [
     "BODY_COLUMNS",
+    "CATEGORIES",
     "COMPACT_COLUMNS",
     "LAYOUTS",
     "UNIT_COLUMNS",
+    "chunk_columns",
     "chunk_tables",
     "derive_orbit_rows",
     "search_chunk",

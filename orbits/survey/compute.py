@@ -49,6 +49,8 @@ COMPACT_COLUMNS = ("body", "branch", "n", "q", "dtheta")
 # orbits.catalog bit for bit
 UNIT_COLUMNS = ("unit_I1", "unit_I2", "unit_I3")
 LAYOUTS = ("compact", "all")
+# columns stored as codes into these labels (orbits.core.rows.CODE_SAM, CODE_LAM)
+CATEGORIES = {"branch": ("SAM", "LAM")}
 
 
 # --------------------------------------------------------------- computing
@@ -158,16 +160,42 @@ def compute_chunk(moments, n_max, q_max=1, first_id=0, columns="all"):
 
 
 def chunk_tables(found, first_id, columns="all"):
-    """The two tables of a searched chunk (:func:`search_chunk`).
+    """The two tables of a searched chunk (:func:`search_chunk`), as DataFrames.
 
-    Runs on one thread (the survey runs chunks side by side); see
-    :func:`compute_chunk` for the arguments and the result.
+    :func:`chunk_columns` made into DataFrames (the branch a categorical);
+    see :func:`compute_chunk` for the arguments and the result.
     """
-    import pandas as pd
+    return tuple(as_frame(table) for table in chunk_columns(found, first_id, columns))
 
+
+def chunk_columns(found, first_id, columns="all"):
+    """The two tables of a searched chunk, as the survey writes them.
+
+    Runs on one thread (the survey runs chunks side by side).  The compact
+    tables are plain arrays, made without pandas: a survey command never
+    loads it (its import is a tenth of a second of serial start-up).
+
+    Parameters
+    ----------
+    found : ChunkSearch
+    first_id : int
+        Survey-wide id of the chunk's first body.
+    columns : {"all", "compact"}
+        As :func:`compute_chunk`.
+
+    Returns
+    -------
+    bodies : dict
+        Column name to 1-d array, in table order (:data:`BODY_COLUMNS`,
+        then with ``"compact"`` :data:`UNIT_COLUMNS`).
+    orbits : dict or pandas.DataFrame
+        ``"compact"``: :data:`COMPACT_COLUMNS`, the branch as its codes
+        into :data:`CATEGORIES` ``["branch"]``.  ``"all"``: the catalog
+        DataFrame (:func:`orbits.search.catalog_rows`).
+    """
     if columns not in LAYOUTS:
         raise InputError(f"columns must be one of {', '.join(LAYOUTS)}, got {columns!r}")
-    ids = first_id + np.arange(found.moments.shape[0])
+    ids = first_id + np.arange(found.moments.shape[0], dtype=np.int64)
     n, q = found.p[found.level], found.q[found.level]
     if columns == "all":
         orbits = catalog_rows(
@@ -180,22 +208,32 @@ def chunk_tables(found, first_id, columns="all"):
             found.levels,
         )
     else:
-        orbits = pd.DataFrame(
-            {
-                "body": ids[found.body],
-                "branch": pd.Categorical.from_codes(found.code, categories=["SAM", "LAM"]),
-                "n": n,
-                "q": q,
-                "dtheta": found.offset,
-            },
-            columns=list(COMPACT_COLUMNS),
-            copy=False,
+        orbits = dict(
+            zip(COMPACT_COLUMNS, (ids[found.body], found.code, n, q, found.offset), strict=True)
         )
-    bodies = _body_rows(found, ids, n, q)
+    bodies = _body_columns(found, ids, n, q)
     if columns == "compact":
         for k, name in enumerate(UNIT_COLUMNS):
             bodies[name] = found.moments[:, k]
     return bodies, orbits
+
+
+def as_frame(table):
+    """A table of :func:`chunk_columns` as a pandas DataFrame (a DataFrame as it is).
+
+    Columns named in :data:`CATEGORIES` hold codes and become categoricals.
+    """
+    import pandas as pd
+
+    if isinstance(table, pd.DataFrame):
+        return table
+    data = {
+        name: pd.Categorical.from_codes(values, categories=list(CATEGORIES[name]))
+        if name in CATEGORIES
+        else values
+        for name, values in table.items()
+    }
+    return pd.DataFrame(data, columns=list(data), copy=False)
 
 
 def derive_orbit_rows(compact, unit, first_id, n_max, q_max):
@@ -276,17 +314,15 @@ def _flatten(moments, levels, branch, level, offset, found, info):
     return body[order], code[order], rows_level[order], rows_offset[order]
 
 
-def _body_rows(found, ids, n, q):
+def _body_columns(found, ids, n, q):
     """The bodies table of a searched chunk: one compiled pass
     (:func:`orbits.core.rows.body_columns`) and the per-body counts."""
-    import pandas as pd
-
     floats, at_end, unresolved = _rows.body_columns(
         found.moments, found.info, _END_SLACK, _END_TOLERANCE
     )
     counts, n_small, n_large = _rows.body_counts(found.body, n, q, len(ids))
     columns = {"body": ids}
-    columns.update(zip(_rows.BODY_FLOAT_COLUMNS, floats))
+    columns.update(zip(_rows.BODY_FLOAT_COLUMNS, floats, strict=True))
     columns.update(
         min_at_end=at_end,
         orbits=counts,
@@ -294,11 +330,7 @@ def _body_rows(found, ids, n, q):
         n_largest=n_large,
         unresolved=unresolved,
     )
-    return pd.DataFrame(
-        columns,
-        columns=list(BODY_COLUMNS),
-        copy=False,  # one block per column: no consolidating copy
-    )
+    return columns
 
 
 # --------------------------------------------------------------- bounds

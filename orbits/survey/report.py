@@ -3,6 +3,8 @@
 import json
 from pathlib import Path
 
+import numpy as np
+
 from ..atomic import read_bytes_nofollow, write_text_atomic
 from ..errors import InputError
 from .ledger import REPORT, check_parts, load_manifest
@@ -21,47 +23,54 @@ def bodies_summary(bodies):
 
     Parameters
     ----------
-    bodies : pandas.DataFrame
-        The columns of :data:`orbits.survey.BODY_COLUMNS`.
+    bodies : dict or pandas.DataFrame
+        The columns of :data:`orbits.survey.BODY_COLUMNS` (arrays, as
+        :func:`orbits.survey.compute.chunk_columns` makes them, or a
+        DataFrame read back).
 
     Returns
     -------
     dict
         ``bodies``, ``orbits``, ``two_pi``, ``unresolved`` (counts),
-        ``min``, ``max`` (of ``min_total_phase``, rad) and
-        ``counterexamples`` (records of the bodies whose minimum is not at
-        an end, in the table's order).
+        ``min``, ``max`` (of ``min_total_phase``, rad; NaN skipped, NaN
+        when none) and ``counterexamples`` (records of the bodies whose
+        minimum is not at an end, in the table's order).
     """
-    at_end = bodies["min_at_end"].astype(bool).to_numpy()
-    # usually none: no empty frame built and converted (0.5 ms a chunk, under the GIL)
-    counterexamples = (
-        []
-        if at_end.all()
-        else bodies.loc[~at_end, list(COUNTEREXAMPLE_COLUMNS)].to_dict("records")
-    )
+    at_end = np.asarray(bodies["min_at_end"]).astype(bool)
+    minimum = np.asarray(bodies["min_total_phase"], dtype=float)
+    # usually none: no records made (under the GIL)
+    counterexamples = []
+    if not at_end.all():
+        inside = [np.asarray(bodies[name])[~at_end].tolist() for name in COUNTEREXAMPLE_COLUMNS]
+        counterexamples = [dict(zip(COUNTEREXAMPLE_COLUMNS, row)) for row in zip(*inside)]
     return {
-        "bodies": int(len(bodies)),
-        "orbits": int(bodies["orbits"].sum()),
+        "bodies": int(at_end.size),
+        "orbits": int(np.asarray(bodies["orbits"]).sum()),
         "counterexamples": counterexamples,
-        "two_pi": int((bodies["n_smallest"] == 1).sum()),
-        "min": float(bodies["min_total_phase"].min()),
-        "max": float(bodies["min_total_phase"].max()),
-        "unresolved": int((bodies["unresolved"] > 0).sum()),
+        "two_pi": int((np.asarray(bodies["n_smallest"]) == 1).sum()),
+        "min": _skipping_nan(np.min, minimum),
+        "max": _skipping_nan(np.max, minimum),
+        "unresolved": int((np.asarray(bodies["unresolved"]) > 0).sum()),
     }
+
+
+def _skipping_nan(reduce, values):
+    """``reduce`` of the values that are not NaN (as pandas reduces a column); NaN if none."""
+    values = values[~np.isnan(values)]
+    return float(reduce(values)) if values.size else float("nan")
 
 
 def combined_summary(summaries):
     """One :func:`bodies_summary` of consecutive tables' summaries (given in order)."""
-    import pandas as pd
-
+    minima = np.array([s["min"] for s in summaries], dtype=float)
+    maxima = np.array([s["max"] for s in summaries], dtype=float)
     return {
         "bodies": sum(s["bodies"] for s in summaries),
         "orbits": sum(s["orbits"] for s in summaries),
         "counterexamples": [row for s in summaries for row in s["counterexamples"]],
         "two_pi": sum(s["two_pi"] for s in summaries),
-        # pandas' reductions, as on the whole column (NaN skipped)
-        "min": float(pd.Series([s["min"] for s in summaries], dtype=float).min()),
-        "max": float(pd.Series([s["max"] for s in summaries], dtype=float).max()),
+        "min": _skipping_nan(np.min, minima),
+        "max": _skipping_nan(np.max, maxima),
         "unresolved": sum(s["unresolved"] for s in summaries),
     }
 

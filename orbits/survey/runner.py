@@ -176,20 +176,28 @@ class Survey:
         return self.moments[index * self.chunk : (index + 1) * self.chunk]
 
     def write_chunk(self, index, bodies, orbits):
-        """Write one chunk (orbits, then bodies), then its ledger entry."""
+        """Write one chunk (orbits, then bodies), then its ledger entry.
+
+        ``bodies`` and ``orbits`` as :func:`compute.chunk_columns` makes
+        them (dicts of arrays), or DataFrames (:func:`compute.chunk_tables`).
+        """
+        count = len(bodies["body"])
         if self.names is not None:
-            bodies.insert(
-                1, "name", self.names[index * self.chunk : index * self.chunk + len(bodies)]
-            )
+            names = self.names[index * self.chunk : index * self.chunk + count]
+            if isinstance(bodies, dict):
+                bodies = {"body": bodies["body"], "name": names, **bodies}
+            else:  # a DataFrame
+                bodies = bodies.copy()
+                bodies.insert(1, "name", names)
         entry = {
             "first_body": int(index * self.chunk),
-            "last_body": int(index * self.chunk + len(bodies) - 1),
+            "last_body": int(index * self.chunk + count - 1),
         }
         for table, frame in (("orbits", orbits), ("bodies", bodies)):
             name = part_name(table, index, self.format)
             entry[table] = {
                 "file": name,
-                "rows": int(len(frame)),
+                "rows": int(len(frame["body"])),
                 # of the bytes written, hashed before they went to disk
                 "sha256": write_part(frame, self.out_dir / name, self.format),
             }
@@ -197,9 +205,9 @@ class Survey:
         with self._record_lock:  # chunks finish on several threads
             self.ledger.record(index, entry)
             self._summaries[index] = summary
-        # a command's start-up ends with its first chunk on disk: pandas and
-        # pyarrow are loaded by then (a no-op unless the command line held
-        # the collector, and after the first chunk)
+        # a command's start-up ends with its first chunk on disk: pyarrow
+        # and the table kernels are loaded by then (a no-op unless the
+        # command line held the collector, and after the first chunk)
         release_collector()
 
     def run(self, scheduler=None, progress=None, notify=None, status=None):
@@ -332,9 +340,9 @@ class Survey:
                 pool.shutdown(wait=True)
 
     def _finish_chunk(self, index, found):
-        bodies, orbits = compute.chunk_tables(found, index * self.chunk, self.columns)
+        bodies, orbits = compute.chunk_columns(found, index * self.chunk, self.columns)
         self.write_chunk(index, bodies, orbits)
-        return len(bodies)
+        return len(bodies["body"])
 
     @staticmethod
     def _collect(done, progress):
@@ -434,15 +442,18 @@ class Survey:
                 ) from None
             self.write_chunk(index, bodies, orbits)
             if progress is not None:
-                progress(len(bodies))
+                progress(len(bodies["body"]))
 
     def report(self):
         """Summary of a complete survey from its verified parts; written to ``report.json``."""
         return survey_report(self.out_dir, self.n_max, self.q_max, len(self.skipped))
 
 
-def _chunk_on_worker(expected, *arguments):
-    """:func:`compute.compute_chunk` on a dask worker that runs the client's orbits.
+def _chunk_on_worker(expected, moments, n_max, q_max, first_id, columns):
+    """A chunk's tables on a dask worker that runs the client's orbits.
+
+    The search and :func:`compute.chunk_columns`, as a local run makes
+    them (so the parts' bytes are the same).
 
     ``expected``: the client's ``(version, source fingerprint)``; a worker
     with other code would write other numbers under the client's version.
@@ -454,7 +465,8 @@ def _chunk_on_worker(expected, *arguments):
             f"not this run's {expected[0]} (sources {expected[1][:12] or 'unknown'}): "
             "install the same orbits on the workers as here"
         )
-    return compute.compute_chunk(*arguments)
+    chunk = compute.search_chunk(moments, n_max, q_max)
+    return compute.chunk_columns(chunk, first_id, columns)
 
 
 class _Done:

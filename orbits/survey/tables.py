@@ -7,6 +7,7 @@ ledger (:mod:`orbits.survey.ledger`), checks each against its entry, and
 joins them.
 """
 
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -15,7 +16,7 @@ from ..atomic import FLOAT_FORMAT, csv_float_options, read_bytes_nofollow, write
 from ..cells import neutralize, unneutralize
 from ..errors import InputError
 from ..search import CATALOG_COLUMNS
-from .compute import BODY_COLUMNS, UNIT_COLUMNS, derive_orbit_rows
+from .compute import BODY_COLUMNS, CATEGORIES, UNIT_COLUMNS, as_frame, derive_orbit_rows
 from .ledger import check_parts, entry_problem, load_manifest, one_line
 
 
@@ -24,51 +25,168 @@ def require_pyarrow():
         raise InputError("--format parquet needs pyarrow: pip install 'orbits[parquet]'")
 
 
-def write_part(frame, path, fmt, engine=None):
+def write_part(table, path, fmt, engine=None):
     """Write one table part atomically; return the SHA-256 (hex) of its bytes.
 
+    Parameters
+    ----------
+    table : dict or pandas.DataFrame
+        Column name to 1-d array, in order, as
+        :func:`orbits.survey.compute.chunk_columns` makes them (columns
+        named in :data:`~orbits.survey.compute.CATEGORIES` hold codes), or
+        a DataFrame.
+    path : path
+    fmt : {"parquet", "csv"}
+    engine : {"arrow", "pandas"}, optional
+        The CSV writer (default: pyarrow's).
+
+    Notes
+    -----
     The part is made in memory, hashed there and written with one call
     (:func:`orbits.atomic.write_bytes_atomic`): the ledger's hash is that
-    of the bytes on disk without reading them back.  The DataFrame becomes
-    an Arrow table on this thread (``nthreads=1``): pyarrow's default starts
-    a pool of as many threads as the machine has cores for every table,
-    and the survey already writes its chunks side by side.  The bytes are
-    those of ``frame.to_parquet(path, index=False, use_dictionary=...)``
-    (tests/test_survey.py checks it).
+    of the bytes on disk without reading them back.  Parquet parts carry
+    a plain Arrow schema, without pandas' metadata (a survey run needs no
+    pandas); ``pandas.read_parquet`` reads them back with the same types
+    (the branch a categorical, tests/test_survey.py checks it).  A DataFrame becomes
+    an Arrow table on this thread (``nthreads=1``): pyarrow's default
+    starts a pool of as many threads as the machine has cores for every
+    table, and the survey already writes its chunks side by side.
 
-    CSV goes through pyarrow's writer when it is installed (ten times
-    faster than pandas here, and like it writes the shortest decimal that
-    reads back to the same double); otherwise through pandas.  Names are
+    CSV goes through pyarrow's writer (ten times faster than pandas here,
+    and like it writes the shortest decimal that reads back to the same
+    double), or through pandas with ``engine="pandas"``.  Names are
     neutralised against spreadsheet formulas (:func:`orbits.cells.neutralize`).
     """
     import hashlib
 
     if engine is None:
         engine = "arrow" if have_pyarrow() else "pandas"
-    if fmt == "csv" and "name" in frame.columns:
-        frame = frame.assign(name=[neutralize(str(v)) for v in frame["name"]])
+    if engine not in ("arrow", "pandas"):
+        raise InputError(f"engine must be 'arrow' or 'pandas', got {engine!r}")
+    if fmt == "csv" and "name" in _names(table):
+        names = [neutralize(str(v)) for v in table["name"]]
+        table = table.assign(name=names) if hasattr(table, "assign") else {**table, "name": names}
     if fmt == "parquet" or engine == "arrow":
         import pyarrow as pa
 
-        table = pa.Table.from_pandas(frame, preserve_index=False, nthreads=1)
+        arrow = arrow_table(table)
         sink = pa.BufferOutputStream()
         if fmt == "parquet":
             import pyarrow.parquet as pq
 
             # dictionary pages only for text columns: on doubles they never
             # pay off and cost pyarrow ~4x the write time
-            text = [name for name in frame.columns if frame[name].dtype.kind not in "biuf"]
-            pq.write_table(table, sink, compression="snappy", use_dictionary=text)
+            text = [
+                field.name
+                for field in arrow.schema
+                if not pa.types.is_integer(field.type)
+                and not pa.types.is_floating(field.type)
+                and not pa.types.is_boolean(field.type)
+            ]
+            pq.write_table(arrow, sink, compression="snappy", use_dictionary=text)
         else:
             from pyarrow.csv import write_csv
 
-            write_csv(table, sink)
+            write_csv(arrow, sink)
         data = memoryview(sink.getvalue())
     else:
+        frame = as_frame(table)
         data = frame.to_csv(index=False, float_format=FLOAT_FORMAT).encode("utf-8")
     digest = hashlib.sha256(data).hexdigest()
     write_bytes_atomic(path, data)
     return digest
+
+
+def arrow_table(table):
+    """A part's Arrow table, built from buffers: pyarrow never loads pandas here.
+
+    ``pyarrow.array`` and ``Table.from_pandas`` import pandas on their
+    first call (to test for pandas objects), a tenth of a second and more
+    of a survey's serial start-up; the columns here go in as buffers.
+    Numbers and booleans keep their type (int8/int64, float64, bool; NaN
+    stays NaN, never null); text is ``large_string``; a column named in
+    :data:`~orbits.survey.compute.CATEGORIES` (codes) is a dictionary of
+    its labels with int8 indices, as a pandas categorical.  A DataFrame is
+    taken apart the same way (its categoricals by their codes), so a table
+    gives the same bytes as arrays or as a DataFrame.
+
+    Raises
+    ------
+    InputError
+        A column that is neither numbers, booleans, text nor a
+        categorical of text.
+    """
+    import pyarrow as pa
+
+    names, arrays = [], []
+    for name, values in _columns(table):
+        names.append(name)
+        arrays.append(_arrow_array(name, values))
+    return pa.Table.from_arrays(arrays, names=names)
+
+
+def _columns(table):
+    """(name, values) of each column: arrays, lists, or (codes, labels) pairs."""
+    if isinstance(table, Mapping):
+        for name, values in table.items():
+            yield name, (values, CATEGORIES[name]) if name in CATEGORIES else values
+        return
+    for name in table.columns:  # a DataFrame
+        column = table[name]
+        if column.dtype.name == "category":
+            yield name, (column.cat.codes.to_numpy(), [str(v) for v in column.cat.categories])
+        elif column.dtype.kind in "biuf":
+            if not isinstance(column.dtype, np.dtype):  # pandas' nullable Int64, boolean, ...
+                if column.isna().any():
+                    raise InputError(f"column {name!r} has missing values: not a table column")
+                yield name, column.to_numpy(dtype=column.dtype.numpy_dtype)
+            else:
+                yield name, column.to_numpy()
+        else:
+            yield name, column.tolist()
+
+
+def _arrow_array(name, values):
+    import pyarrow as pa
+
+    if isinstance(values, tuple):  # codes into labels
+        codes, labels = values
+        codes = np.asarray(codes)
+        if codes.size and (codes.min() < 0 or codes.max() >= len(labels)):
+            raise InputError(f"column {name!r} has codes outside its {len(labels)} labels")
+        return pa.DictionaryArray.from_arrays(
+            _number_array(codes.astype(np.int8)), _text_array(labels)
+        )
+    if isinstance(values, np.ndarray) and values.dtype.kind in "biuf":
+        return _number_array(values)
+    if isinstance(values, np.ndarray) and values.dtype.kind not in "OUS":
+        raise InputError(f"column {name!r} has dtype {values.dtype}: not a table column")
+    return _text_array([str(v) for v in values])
+
+
+def _number_array(values):
+    import pyarrow as pa
+
+    values = np.ascontiguousarray(values, dtype=values.dtype.newbyteorder("="))
+    if values.dtype == np.bool_:  # Arrow packs booleans, least significant bit first
+        bits = np.packbits(values, bitorder="little")
+        return pa.Array.from_buffers(pa.bool_(), values.size, [None, pa.py_buffer(bits)])
+    kind = pa.from_numpy_dtype(values.dtype)
+    return pa.Array.from_buffers(kind, values.size, [None, pa.py_buffer(values)])
+
+
+def _text_array(strings):
+    import pyarrow as pa
+
+    encoded = [text.encode("utf-8") for text in strings]
+    offsets = np.zeros(len(encoded) + 1, dtype=np.int64)
+    np.cumsum([len(text) for text in encoded], out=offsets[1:])
+    buffers = [None, pa.py_buffer(offsets), pa.py_buffer(b"".join(encoded))]
+    return pa.Array.from_buffers(pa.large_string(), len(encoded), buffers)
+
+
+def _names(table):
+    return list(table.columns) if hasattr(table, "columns") else list(table)
 
 
 def have_pyarrow():
