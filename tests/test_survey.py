@@ -157,10 +157,12 @@ def test_parts_keep_nan_and_types_without_pandas_metadata(tmp_path):
     assert pq.read_table(tmp_path / "e.parquet").schema.equals(arrow.schema)
     with pytest.raises(InputError, match="codes outside"):
         write_part({"branch": np.array([2], dtype=np.int8)}, tmp_path / "b.parquet", "parquet")
+    with pytest.raises(InputError, match="not text"):  # not stringified silently
+        write_part(pd.DataFrame({"flag": [True, None]}), tmp_path / "o.parquet", "parquet")
     nullable = pd.DataFrame({"n": pd.array([1, None], dtype="Int64")})
     with pytest.raises(InputError, match="missing values"):
         write_part(nullable, tmp_path / "n.parquet", "parquet")
-    assert not (tmp_path / "b.parquet").exists() and not (tmp_path / "n.parquet").exists()
+    assert not any((tmp_path / f"{k}.parquet").exists() for k in "bno")
 
 
 def test_a_survey_run_never_loads_pandas(tmp_path):

@@ -113,8 +113,8 @@ def arrow_table(table):
     Raises
     ------
     InputError
-        A column that is neither numbers, booleans, text nor a
-        categorical of text.
+        A column that is neither numbers, booleans, text (``str``) nor a
+        categorical of text, or a nullable column holding missing values.
     """
     import pyarrow as pa
 
@@ -159,9 +159,11 @@ def _arrow_array(name, values):
         )
     if isinstance(values, np.ndarray) and values.dtype.kind in "biuf":
         return _number_array(values)
-    if isinstance(values, np.ndarray) and values.dtype.kind not in "OUS":
-        raise InputError(f"column {name!r} has dtype {values.dtype}: not a table column")
-    return _text_array([str(v) for v in values])
+    texts = list(values)
+    if not all(isinstance(text, str) for text in texts):
+        kind = values.dtype if isinstance(values, np.ndarray) else "values"
+        raise InputError(f"column {name!r} holds {kind} that are not text: not a table column")
+    return _text_array(texts)
 
 
 def _number_array(values):
