@@ -29,6 +29,7 @@ from orbits.survey import (
     survey_grid,
     write_part,
 )
+from orbits.survey.tables import arrow_table
 
 
 def read_bytes(directory):
@@ -141,6 +142,9 @@ def test_parts_keep_nan_and_types_without_pandas_metadata(tmp_path):
         "branch": np.array([1, 0, 1], dtype=np.int8),
     }
     write_part(columns, tmp_path / "t.parquet", "parquet")
+    for table in (columns, {**columns, "x": columns["x"][::-1]}, {"x": columns["x"][::2]}):
+        arrow_table(table).validate(full=True)  # buffers Arrow accepts, strided input too
+    assert arrow_table({"x": columns["x"][::-1]}).column("x").to_pylist()[0] == 1.5
     arrow = pq.read_table(tmp_path / "t.parquet")
     assert arrow.column("x").null_count == 0
     branch = arrow.schema.field("branch").type
