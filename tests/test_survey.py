@@ -159,8 +159,15 @@ def test_parts_keep_nan_and_types_without_pandas_metadata(tmp_path):
     empty = {name: values[:0] for name, values in columns.items()}
     write_part(empty, tmp_path / "e.parquet", "parquet")
     assert pq.read_table(tmp_path / "e.parquet").schema.equals(arrow.schema)
-    with pytest.raises(InputError, match="codes outside"):
-        write_part({"branch": np.array([2], dtype=np.int8)}, tmp_path / "b.parquet", "parquet")
+    bad = {
+        "codes outside": {"branch": np.array([2], dtype=np.int8)},
+        "integer codes": {"branch": np.array([0.5])},
+        "a column is 1-d": {"x": np.zeros((2, 3))},
+        "different lengths": {"x": np.zeros(2), "y": np.zeros(3)},
+    }
+    for message, table in bad.items():
+        with pytest.raises(InputError, match=message):
+            write_part(table, tmp_path / "b.parquet", "parquet")
     with pytest.raises(InputError, match="not text"):  # not stringified silently
         write_part(pd.DataFrame({"flag": [True, None]}), tmp_path / "o.parquet", "parquet")
     nullable = pd.DataFrame({"n": pd.array([1, None], dtype="Int64")})

@@ -44,13 +44,13 @@ def write_part(table, path, fmt, engine=None):
     -----
     The part is made in memory, hashed there and written with one call
     (:func:`orbits.atomic.write_bytes_atomic`): the ledger's hash is that
-    of the bytes on disk without reading them back.  Parquet parts carry
-    a plain Arrow schema, without pandas' metadata (a survey run needs no
-    pandas); ``pandas.read_parquet`` reads them back with the same types
-    (the branch a categorical, tests/test_survey.py checks it).  A DataFrame becomes
-    an Arrow table on this thread (``nthreads=1``): pyarrow's default
-    starts a pool of as many threads as the machine has cores for every
-    table, and the survey already writes its chunks side by side.
+    of the bytes on disk without reading them back.  The Arrow table is
+    built from the columns' buffers on this thread (:func:`arrow_table`:
+    no pandas, and none of the thread pool pyarrow's own conversion starts
+    for every table while the survey writes its chunks side by side).
+    Parquet parts carry a plain Arrow schema, without pandas' metadata;
+    ``pandas.read_parquet`` reads them back with the same types (the
+    branch a categorical; tests/test_survey.py checks it).
 
     CSV goes through pyarrow's writer (ten times faster than pandas here,
     and like it writes the shortest decimal that reads back to the same
@@ -114,7 +114,8 @@ def arrow_table(table):
     ------
     InputError
         A column that is neither numbers, booleans, text (``str``) nor a
-        categorical of text, or a nullable column holding missing values.
+        categorical of text, is not 1-d, or is a nullable column holding
+        missing values; columns of different lengths.
     """
     import pyarrow as pa
 
@@ -122,6 +123,9 @@ def arrow_table(table):
     for name, values in _columns(table):
         names.append(name)
         arrays.append(_arrow_array(name, values))
+    lengths = {len(array) for array in arrays}
+    if len(lengths) > 1:
+        raise InputError(f"the columns have different lengths ({sorted(lengths)}): not a table")
     return pa.Table.from_arrays(arrays, names=names)
 
 
@@ -149,9 +153,13 @@ def _columns(table):
 def _arrow_array(name, values):
     import pyarrow as pa
 
+    if isinstance(values, np.ndarray) and values.ndim != 1:
+        raise InputError(f"column {name!r} has shape {values.shape}: a column is 1-d")
     if isinstance(values, tuple):  # codes into labels
         codes, labels = values
         codes = np.asarray(codes)
+        if codes.ndim != 1 or codes.dtype.kind not in "iu":
+            raise InputError(f"column {name!r} needs 1-d integer codes, got {codes.dtype}")
         if codes.size and (codes.min() < 0 or codes.max() >= len(labels)):
             raise InputError(f"column {name!r} has codes outside its {len(labels)} labels")
         return pa.DictionaryArray.from_arrays(
