@@ -893,7 +893,7 @@ def _summarize(table, tolerance, exhausted, route_failures=None, predicted=None)
     has_closed = np.isfinite(closed) & np.isfinite(table["closed_form_theta"].to_numpy())
     on_separatrix = int(np.count_nonzero(~has_closed))
     spacing = np.where(has_closed, np.spacing(np.abs(np.where(has_closed, closed, 1.0))), np.nan)
-    allowance = np.maximum(tolerance, PHASE_ULPS * spacing)  # NaN off has_closed
+    allowance = _allowance(closed, tolerance)  # as the table's ode_allowance was made
     limits = {
         "closed_form_routes": ROUTE_ULPS * spacing,
         "ode_rotation": _ode_limit(table, allowance),

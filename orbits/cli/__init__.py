@@ -338,7 +338,7 @@ def main(argv=None):
         announce_compilation()
         if not getattr(args, "holds_collector", False):
             # the start-up ends here (orbits.startup); a survey ends it
-            # after its first chunk, once pandas and pyarrow are loaded
+            # after its first chunk, once pyarrow and its table kernels are loaded
             release_collector()
         code = args.run(args)
         for note in getattr(args, "notes", ()):

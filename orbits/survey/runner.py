@@ -10,6 +10,7 @@ in-process or on a ``dask.distributed`` cluster, writes each chunk's parts
 import hashlib
 import json
 import threading
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
@@ -184,7 +185,7 @@ class Survey:
         count = len(bodies["body"])
         if self.names is not None:
             names = self.names[index * self.chunk : index * self.chunk + count]
-            if isinstance(bodies, dict):
+            if isinstance(bodies, Mapping):
                 bodies = {"body": bodies["body"], "name": names, **bodies}
             else:  # a DataFrame
                 bodies = bodies.copy()

@@ -63,9 +63,12 @@ def write_part(table, path, fmt, engine=None):
         engine = "arrow" if have_pyarrow() else "pandas"
     if engine not in ("arrow", "pandas"):
         raise InputError(f"engine must be 'arrow' or 'pandas', got {engine!r}")
-    if fmt == "csv" and "name" in _names(table):
+    if fmt == "csv" and "name" in table:  # a key, or a DataFrame's column
         names = [neutralize(str(v)) for v in table["name"]]
-        table = table.assign(name=names) if hasattr(table, "assign") else {**table, "name": names}
+        if isinstance(table, Mapping):
+            table = {**table, "name": names}
+        else:
+            table = table.assign(name=names)
     if fmt == "parquet" or engine == "arrow":
         import pyarrow as pa
 
@@ -193,10 +196,6 @@ def _text_array(strings):
     np.cumsum([len(text) for text in encoded], out=offsets[1:])
     buffers = [None, pa.py_buffer(offsets), pa.py_buffer(b"".join(encoded))]
     return pa.Array.from_buffers(pa.large_string(), len(encoded), buffers)
-
-
-def _names(table):
-    return list(table.columns) if hasattr(table, "columns") else list(table)
 
 
 def have_pyarrow():
