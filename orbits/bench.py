@@ -490,6 +490,79 @@ def _fresh_interpreter(args, env=None):
     return wall, cpu
 
 
+def uncompiled_modules():
+    """This package's modules that every fresh process compiles from source.
+
+    Python reads a module's bytecode from ``__pycache__`` when it is there
+    and up to date, and otherwise compiles the source and writes it there,
+    unless ``PYTHONDONTWRITEBYTECODE`` is set (inherited by every child
+    process the benchmarks start).  With it set and no cached bytecode (an
+    editable install on a machine that sets it), each fresh process
+    compiles orbits' modules again: a fixed cost on one core that an
+    installed package (whose bytecode pip wrote) does not pay.
+
+    Returns
+    -------
+    tuple of (int, float)
+        How many of the package's modules would be compiled by each fresh
+        process, and the seconds compiling all of them takes here (both 0
+        when bytecode is written or cached).
+    """
+    import importlib.util
+
+    if not os.environ.get("PYTHONDONTWRITEBYTECODE"):
+        return 0, 0.0
+    root = os.path.dirname(os.path.abspath(__file__))
+    missing = []
+    for folder, _, names in os.walk(root):
+        for name in names:
+            if not name.endswith(".py"):
+                continue
+            source = os.path.join(folder, name)
+            if not _bytecode_current(source, importlib.util):
+                missing.append(source)
+    start = time.perf_counter()
+    for source in missing:
+        with open(source, "rb") as handle:
+            compile(handle.read(), source, "exec", dont_inherit=True)
+    return len(missing), time.perf_counter() - start
+
+
+def _bytecode_current(source, util):
+    """Whether ``source`` has bytecode in ``__pycache__`` that Python would use.
+
+    The header of a ``.pyc`` (PEP 552): this interpreter's magic number,
+    then flags, then either a source hash (taken as current) or the
+    source's modification time and size, which must match.
+    """
+    try:
+        with open(util.cache_from_source(source), "rb") as handle:
+            header = handle.read(16)
+        status = os.stat(source)
+    except (OSError, NotImplementedError):
+        return False
+    if len(header) < 16 or header[:4] != util.MAGIC_NUMBER:
+        return False
+    if int.from_bytes(header[4:8], "little") & 1:  # hash-based
+        return True
+    mtime = int.from_bytes(header[8:12], "little")
+    size = int.from_bytes(header[12:16], "little")
+    return mtime == int(status.st_mtime) & 0xFFFFFFFF and size == status.st_size & 0xFFFFFFFF
+
+
+def _bytecode_note():
+    """A note's clause when fresh processes compile orbits' modules (else '')."""
+    count, seconds = uncompiled_modules()
+    if not count:
+        return ""
+    return (
+        f"; PYTHONDONTWRITEBYTECODE is set and {plural(count, 'module')} of orbits "
+        f"have no cached bytecode: each fresh process compiles those it imports "
+        f"(all of them: {seconds:.2f} s here), a start-up cost that an installed "
+        "package does not pay"
+    )
+
+
 def _median_wall(args, repeats):
     return float(np.median([_fresh_interpreter(args)[0] for _ in range(repeats)]))
 
@@ -515,7 +588,7 @@ def bench_startup(repeats=7):
         "speedup": numpy_s / help_s,
         "note": f"--help takes {help_s / numpy_s:.1f}x and import orbits "
         f"{import_s / numpy_s:.1f}x the time of import numpy (target <= 4x); "
-        f"medians of {repeats} runs",
+        f"medians of {repeats} runs" + _bytecode_note(),
     }
 
 
@@ -683,7 +756,7 @@ def bench_survey_scaling(resolution=500, n_max=30, repeats=3):
         "(whole command: start-up, search, tables, files, report); "
         f"a grid-2 survey takes {fixed:.2f} s on one CPU ({fixed / one:.0%} of the "
         "one-CPU run), a fixed cost that more CPUs cannot shorten: with it, "
-        f"{len(cpus)} CPUs can be at most {bound:.2f}x one (Amdahl)",
+        f"{len(cpus)} CPUs can be at most {bound:.2f}x one (Amdahl)" + _bytecode_note(),
     }
 
 

@@ -570,3 +570,48 @@ def test_survey_tables_times_the_table_work_of_real_chunks(monkeypatch, tmp_path
     assert row["speedup"] == pytest.approx(row["baseline_s"] / row["ours_s"])
     assert "3 chunks of up to 100 bodies" in row["task"] and "ms a chunk" in row["note"]
     assert list(tmp_path.iterdir()) == []
+
+
+def test_bytecode_current_reads_the_pyc_header_as_python_does(tmp_path):
+    import importlib.util
+    import os
+    import py_compile
+    import subprocess
+    import sys
+
+    source = tmp_path / "mod.py"
+    source.write_text("x = 1\n")
+    assert not bench._bytecode_current(str(source), importlib.util)  # no pyc yet
+    py_compile.compile(str(source), doraise=True)
+    assert bench._bytecode_current(str(source), importlib.util)
+    # Python itself agrees: it imports the module without writing a new pyc
+    cached = importlib.util.cache_from_source(str(source))
+    before = os.stat(cached).st_mtime_ns
+    subprocess.run(
+        [sys.executable, "-c", "import mod"],
+        cwd=tmp_path,
+        check=True,
+        env=dict(os.environ, PYTHONDONTWRITEBYTECODE=""),
+    )
+    assert os.stat(cached).st_mtime_ns == before
+    # a source changed after its pyc (another size): the pyc is stale
+    source.write_text("x = 12\n")
+    assert not bench._bytecode_current(str(source), importlib.util)
+    py_compile.compile(str(source), doraise=True)
+    assert bench._bytecode_current(str(source), importlib.util)
+    # another interpreter's magic number: not used by this one
+    with open(cached, "r+b") as handle:
+        handle.write(b"\0\0\0\0")
+    assert not bench._bytecode_current(str(source), importlib.util)
+
+
+def test_bytecode_note_only_when_fresh_processes_compile(monkeypatch):
+    monkeypatch.delenv("PYTHONDONTWRITEBYTECODE", raising=False)
+    assert bench.uncompiled_modules() == (0, 0.0)
+    assert bench._bytecode_note() == ""
+    monkeypatch.setenv("PYTHONDONTWRITEBYTECODE", "1")
+    monkeypatch.setattr(bench, "_bytecode_current", lambda source, util: False)
+    count, seconds = bench.uncompiled_modules()
+    assert count >= 40 and seconds > 0.0  # every module of the package
+    note = bench._bytecode_note()
+    assert f"{count} modules of orbits have no cached bytecode" in note
