@@ -629,6 +629,62 @@ def test_fold_angle_is_correctly_rounded():
     assert np.all((got >= 0) & (got <= math.pi / 2))
 
 
+def _near_multiples(k_values, half, ulps=6):
+    """Doubles within ``ulps`` ulps of (2k+1) pi/2 (``half``) or of k pi."""
+    out = []
+    for k in k_values:
+        base = (2 * k + 1) * math.pi / 2 if half else k * math.pi
+        step = np.spacing(max(base, 1.0))
+        out.extend(base + j * step for j in range(-ulps, ulps + 1))
+    out = np.array(out)
+    return out[np.abs(out) <= 2.0**21]
+
+
+def test_fold_angle_decides_the_side_of_pi_over_2_by_the_corrected_remainder():
+    """Near an odd multiple of pi/2 the fold by fl(pi) alone can land just
+    above pi/2 when the corrected remainder does not (a k pi_low of up to
+    8e-11): the result must still lie in [0, pi/2], within half an ulp of
+    mpmath's |x - k pi| reduced, and the phase must be that of the fold
+    (issue: 77 pi/2 was refused with an AngleError about dtheta)."""
+    from orbits.phases import fold_angle
+
+    ks = np.concatenate([np.arange(0, 2000), np.arange(600_000, 601_000)])
+    given = _near_multiples(ks, half=True)
+    got = fold_angle(np.concatenate([given, -given]))
+    assert np.all((got >= 0.0) & (got <= math.pi / 2))
+    with mp.workdps(60):
+        for x in given[::37]:
+            r = mp.mpf(x) - mp.pi * mp.nint(mp.mpf(x) / mp.pi)
+            exact = abs(r)
+            y = fold_angle(x)
+            assert abs(mp.mpf(float(y)) - exact) <= 1.2e-16 * exact, x
+    body = [0.26, 0.55, 0.793662]
+    for x in (77 * math.pi / 2, 1888193.0033834002):
+        assert fold_angle(x) <= math.pi / 2
+        assert orbits.total_phase(body, x) == pytest.approx(
+            float(orbits.total_phase(body, fold_angle(x))), rel=0, abs=0
+        )
+    # the whole batch of them, one call: every point computed
+    phase = orbits.total_phase(body, given)
+    assert np.all(np.isfinite(phase)) and np.all(phase >= 2 * math.pi)
+
+
+def test_fold_angle_near_multiples_of_pi_is_within_pi_low_rounding():
+    """Just off k pi the result is tiny: its error is the rounding of pi's
+    double-double times k, about 1.5e-26 rad at most up to 2**21 (measured
+    7.6e-27 rad at 1889039.6626035427); never negative."""
+    from orbits.phases import fold_angle
+
+    ks = np.concatenate([np.arange(1, 1500), np.arange(600_000, 601_000, 3)])
+    given = _near_multiples(ks, half=False)
+    got = fold_angle(given)
+    assert np.all((got >= 0.0) & (got <= math.pi / 2))
+    with mp.workdps(60):
+        for x, y in zip(given[::11], got[::11]):
+            exact = abs(mp.mpf(x) - mp.pi * mp.nint(mp.mpf(x) / mp.pi))
+            assert abs(mp.mpf(float(y)) - exact) <= 1.5e-26 + 1.2e-16 * exact, x
+
+
 @pytest.mark.parametrize("given, folded", FOLDS)
 def test_any_theta_and_phi_fold_to_the_same_phase(given, folded):
     from orbits.phases import fold_angle

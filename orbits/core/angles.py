@@ -33,7 +33,10 @@ def fold_one(x):
     below = high + low
     if below < 0.0:  # just below a multiple of pi
         return -below
-    if high <= HALF_PI:
+    # which side of pi/2 = HALF_PI + PI_LOW/2 the corrected remainder
+    # high + low lies on: high alone can exceed HALF_PI by up to k PI_LOW
+    # when the remainder does not (high - HALF_PI is exact, Sterbenz)
+    if (high - HALF_PI) + (low - 0.5 * PI_LOW) <= 0.0:
         return below
     return (math.pi - high) + (PI_LOW - low)
 
