@@ -182,6 +182,27 @@ class TestRealBodies:
         code, _, err = run(capsys, "phase", "--point-masses", str(path), "--theta", "0.3")
         assert code == 2 and "z" in err
 
+    def test_point_masses_file_reads_exactly_what_it_says(self, capsys, tmp_path):
+        """Columns in any order, # comments, blank lines: the moments are those
+        of Body.from_point_masses of the same numbers, bit for bit."""
+        from orbits.atomic import csv_float_options
+        from orbits.cli.shared import _point_masses_from_csv
+
+        path = tmp_path / "masses.csv"
+        path.write_text(
+            "# a made-up molecule\nz, x ,y,mass\n0,0,0,1.5 # at the origin\n\n"
+            "0,1e-10,0,2\n3.25,0,2,3\n-1,0,0.125,4\n"
+        )
+        masses, positions = _point_masses_from_csv(str(path))
+        assert masses.tolist() == [1.5, 2.0, 3.0, 4.0]
+        assert positions.tolist() == [[0, 0, 0], [1e-10, 0, 0], [0, 2, 3.25], [0, 0.125, -1]]
+        code, out, _ = run(capsys, "phase", "--point-masses", str(path), "--theta", "0.3", "--csv")
+        assert code == 0
+        body = orbits.Body.from_point_masses(masses, positions)
+        want = orbits.phases(body, 0.3)
+        got = pd.read_csv(io.StringIO(out), comment="#", **csv_float_options())
+        assert got["total_phase"].iloc[0] == want["total_phase"].iloc[0]
+
     def test_rotational_constants_defect(self, capsys):
         water = ("--rotational-constants", "835840.3", "435351.7", "278138.7", "--unit", "MHz")
         code, _, err = run(capsys, "phase", *water, "--theta", "0.3")

@@ -350,31 +350,89 @@ class _DeprecatedUnit(argparse.Action):
         setattr(namespace, self.dest, values)
 
 
+POINT_MASS_COLUMNS = ("mass", "x", "y", "z")
+
+
 def _point_masses_from_csv(path):
+    """``(masses, positions)`` of a point-mass CSV, read strictly.
+
+    A header naming ``mass, x, y, z`` (any order, nothing else), then one
+    row per mass with exactly those fields, each a plain decimal number
+    (:data:`orbits.catalog.NUMBER`: ``1_0``, non-ASCII digits, ``nan``,
+    ``0x10`` and empty cells are refused, not read as something else).
+    ``#`` starts a comment to the end of its line; blank lines are skipped.
+    """
+    import csv
+    import math
+
     import numpy as np
-    import pandas as pd
+
+    from ..atomic import read_limited
+    from ..catalog import NUMBER
+    from ..limits import input_limit
 
     try:
-        import io
-
-        from ..atomic import csv_float_options, read_limited
-        from ..limits import input_limit
-
-        data = read_limited(path, input_limit())
-        table = pd.read_csv(io.BytesIO(data), comment="#", **csv_float_options())
-    except (OSError, ValueError) as error:
-        raise InputError(f"cannot read point masses from {path}: {error}") from None
-    missing = {"mass", "x", "y", "z"} - set(table.columns)
-    if missing:
-        raise InputError(
-            f"{path}: point-mass CSV needs columns mass, x, y, z; "
-            f"missing {', '.join(sorted(missing))}"
-        )
+        text = read_limited(path, input_limit()).decode("utf-8")
+    except FileNotFoundError:
+        raise InputError(f"no point-mass file at {path}") from None
+    except IsADirectoryError:
+        raise InputError(f"{path} is a directory, not a point-mass CSV") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path} is not a CSV of point masses (not UTF-8 text)") from None
+    except OSError as error:
+        raise InputError(f"cannot read point masses from {path}: {error.strerror}") from None
+    header, order, rows = None, None, []
+    lines = [line.split("#", 1)[0] for line in text.splitlines()]
+    reader = csv.reader(lines, strict=True)
     try:
-        values = table[["mass", "x", "y", "z"]].to_numpy(dtype=float)
-    except ValueError:
-        raise InputError(f"{path}: mass, x, y, z must be numbers") from None
+        for record in reader:
+            line = reader.line_num
+            if not "".join(record).strip():
+                continue  # a blank or comment line
+            if header is None:
+                header = [cell.strip() for cell in record]
+                _check_point_mass_header(path, header)
+                order = [header.index(name) for name in POINT_MASS_COLUMNS]
+                continue
+            if len(record) != len(header):
+                raise InputError(
+                    f"{path}, line {line}: {len(record)} fields where the header has "
+                    f"{len(header)} (mass, x, y, z)"
+                )
+            cells = [record[k].strip() for k in order]
+            for name, cell in zip(POINT_MASS_COLUMNS, cells):
+                if not NUMBER.fullmatch(cell) or not math.isfinite(float(cell)):
+                    raise InputError(
+                        f"{path}, line {line}: {name} = {cell!r}; mass, x, y, z must be "
+                        "numbers (plain finite decimals)"
+                    )
+            rows.append([float(cell) for cell in cells])
+    except csv.Error as error:
+        raise InputError(f"{path} is not a CSV of point masses: {error}") from None
+    if header is None:
+        raise InputError(f"{path}: no header line (the columns mass, x, y, z)")
+    if not rows:
+        raise InputError(f"{path}: no point masses after the header")
+    values = np.array(rows, dtype=float)
     return values[:, 0], np.ascontiguousarray(values[:, 1:])
+
+
+def _check_point_mass_header(path, header):
+    missing = [name for name in POINT_MASS_COLUMNS if name not in header]
+    unknown = [name for name in header if name not in POINT_MASS_COLUMNS]
+    repeated = sorted({name for name in header if header.count(name) > 1})
+    if missing or unknown or repeated:
+        what = "; ".join(
+            filter(
+                None,
+                [
+                    missing and f"missing {', '.join(missing)}",
+                    unknown and f"unknown column(s) {', '.join(map(repr, unknown))}",
+                    repeated and f"repeated column(s) {', '.join(repeated)}",
+                ],
+            )
+        )
+        raise InputError(f"{path}: point-mass CSV needs columns mass, x, y, z; {what}")
 
 
 def _real_body_from_args(args):
