@@ -334,6 +334,16 @@ def _rows_problem(frame, table, entry, parameters):
 def read_survey(out_dir, verify=True):
     """``(bodies, orbits)`` DataFrames of a complete, verified survey directory.
 
+    The orbits have every catalog column (a compact survey's are derived
+    here), bit for bit those of :func:`orbits.catalog` of the moments the
+    survey was given (the grid of :func:`orbits.region_grid`, or the bodies
+    of a list); ``bodies``' ``I1, I2, I3`` are ``I/|I|`` rounded to doubles,
+    within an ulp of those, so :func:`orbits.catalog` of them agrees with
+    the orbit rows only to the moments' rounding (measured on a grid of 40:
+    total phase and period within 2e-15 relative; theta, m and the
+    geometric phase, ill-conditioned where small, within 7e-14), not to
+    the last bit.
+
     Raises
     ------
     InputError
