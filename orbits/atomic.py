@@ -80,12 +80,35 @@ def ensure_writable(path, stdout_hint=True):
     path = Path(path)
     directory = path.parent if str(path.parent) else Path(".")
     if not directory.is_dir():
+        if directory.exists():
+            raise InputError(f"cannot write {path}: {directory} is not a directory")
         raise InputError(f"cannot write {path}: directory {directory} does not exist")
     if not os.access(directory, os.W_OK | os.X_OK):
         raise InputError(f"cannot write {path}: directory {directory} is not writable")
     if path.is_dir():
         raise InputError(f"cannot write {path}: it is a directory")
     _refuse_special(path, stdout_hint)
+    probe_directory(directory, path)
+
+
+def probe_directory(directory, path=None):
+    """Raise :class:`InputError` unless a file can be created in ``directory``.
+
+    ``os.access`` answers from the permission bits, and for root almost
+    always yes: a read-only mount, ``/sys`` or ``/proc`` are found only by
+    trying.  The probe is an unnamed temporary file (``O_TMPFILE`` where
+    the file system has it, else a named one removed at once), so nothing
+    is left in the directory, even if the process is killed.  ``path``
+    names the target in the message (default: the directory).
+    """
+    import tempfile
+
+    try:
+        tempfile.TemporaryFile(dir=directory).close()
+    except OSError as error:
+        what = error.strerror or type(error).__name__
+        target = directory if path is None else path
+        raise InputError(f"cannot write {target}: {what} (in {directory})") from None
 
 
 def _refuse_special(path, stdout_hint=True):
@@ -150,6 +173,14 @@ def _target_mode(path):
 
 
 def _pid_alive(pid):
+    """Whether process ``pid`` exists and can still write (a zombie cannot).
+
+    ``os.kill(pid, 0)`` succeeds for a zombie -- a process that has ended
+    and waits for its parent to collect its status, for as long as the
+    parent takes (a killed survey's temporaries outlived the rerun that
+    should have removed them) -- so on Linux its state is read from
+    ``/proc/PID/stat``.
+    """
     if pid == os.getpid():
         return True
     try:
@@ -157,8 +188,22 @@ def _pid_alive(pid):
     except ProcessLookupError:
         return False
     except PermissionError:
-        return True  # exists, owned by someone else
-    return True
+        pass  # exists, owned by someone else
+    return not _zombie(pid)
+
+
+def _zombie(pid):
+    """Whether ``/proc/PID/stat`` says the process has ended (Z, or X: dead)."""
+    try:
+        with open(f"/proc/{int(pid)}/stat", "rb") as handle:
+            text = handle.read()
+    except FileNotFoundError:
+        return os.path.isdir("/proc/self")  # gone since os.kill, where /proc works
+    except OSError:
+        return False  # no /proc here (macOS) or not readable: taken as alive
+    # "pid (comm) state ...": comm may hold spaces and parentheses
+    state = text[text.rfind(b")") + 2 : text.rfind(b")") + 3]
+    return state in (b"Z", b"X")
 
 
 def remove_stale_temporaries(directory, name, regex=False):

@@ -405,7 +405,7 @@ CLI_CASES = [
     ("catalog-no-out", [C] + FIG6 + ["--n-max", "3"], {}, "--out"),
     # ------------------------------------------------------- catalog: targets
     ("out-no-directory", CAT + ["{d}/none/c.csv"], {}, "does not exist"),
-    ("out-parent-is-file", CAT + ["{d}/f/c.csv"], {"f": "x"}, "does not exist"),
+    ("out-parent-is-file", CAT + ["{d}/f/c.csv"], {"f": "x"}, "f is not a directory"),
     ("out-trailing-slash", CAT + ["{d}/newname/"], {}, "directory"),
     ("out-existing-directory", CAT + ["{d}/sub"], {"sub": DIRECTORY}, "directory"),
     ("out-existing-directory-slash", CAT + ["{d}/sub/"], {"sub": DIRECTORY}, "directory"),

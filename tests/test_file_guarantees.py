@@ -1,6 +1,7 @@
 """What sits on disk is complete: the survey ledger and lock, atomic output."""
 
 import fcntl
+import importlib
 import json
 import os
 import shutil
@@ -111,6 +112,32 @@ def test_a_stale_temporary_is_removed_a_live_one_kept(reference, tmp_path):
         path.write_bytes(b"partial")
     orbits.survey.Survey.grid(target, 6, 3, fmt="csv", chunk=3).run()
     assert not stale.exists() and live.exists() and other.exists()
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs Linux's /proc")
+def test_a_zombie_writers_temporary_is_stale(reference, tmp_path):
+    """A killed writer whose parent has not collected it yet is a zombie:
+    os.kill(pid, 0) still succeeds, but it will never write again."""
+    from orbits.atomic import _pid_alive
+
+    child = subprocess.Popen([sys.executable, "-c", "pass"])
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:  # ended, not yet waited for
+        with open(f"/proc/{child.pid}/stat", "rb") as handle:
+            if handle.read().rsplit(b")", 1)[1].split()[0] == b"Z":
+                break
+        time.sleep(0.01)
+    try:
+        os.kill(child.pid, 0)  # still there for the kernel
+        assert not _pid_alive(child.pid)
+        assert _pid_alive(os.getppid())
+        target = copy(reference, tmp_path)
+        stale = target / "orbits" / f".part-00000.csv.{child.pid}.x1.part"
+        stale.write_bytes(b"partial")
+        orbits.survey.Survey.grid(target, 6, 3, fmt="csv", chunk=3).run()
+        assert not stale.exists()
+    finally:
+        child.wait()
 
 
 # ------------------------------------------------------------------ lock
@@ -522,3 +549,44 @@ def test_only_the_directories_made_are_removed_and_only_while_empty(tmp_path):
     remove_directories(made)
     assert [p.name for p in tmp_path.iterdir()] == ["a"]
     assert list((tmp_path / "a").iterdir()) == []
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self"), reason="needs Linux's /proc")
+def test_an_unwritable_directory_is_refused_before_any_work(tmp_path, capsys):
+    """/proc takes no new file even for root, whom os.access tells it can:
+    the target is probed before the work (issue: catalog --verify ran to
+    its end, verify --table printed its table, then both failed)."""
+    from orbits.atomic import ensure_writable, probe_directory
+
+    with pytest.raises(orbits.InputError, match="cannot write /proc/orbits-probe.csv"):
+        ensure_writable("/proc/orbits-probe.csv")
+    probe_directory(tmp_path)  # a writable one: no error, nothing left in it
+    assert list(tmp_path.iterdir()) == []
+    calls = []
+    module = importlib.import_module("orbits.catalog")
+    original = module.catalog
+    spy = lambda *a, **k: calls.append(1) or original(*a, **k)  # noqa: E731
+    module.catalog = spy
+    try:
+        argv = ["catalog", "--preset", "fig6", "--n-max", "3", "--verify"]
+        assert main([*argv, "--out", "/proc/orbits-probe.csv"]) == 2
+        assert main([*argv, "--out", str(tmp_path / "c.csv")]) == 0  # the spy works
+    finally:
+        module.catalog = original
+    assert calls == [1]
+    capsys.readouterr()
+    assert main([*argv, "--out", "/proc/orbits-probe.csv"]) == 2
+    out, err = capsys.readouterr()
+    assert out == ""
+    assert err.count("\n") == 1 and "cannot write /proc/orbits-probe.csv" in err
+    assert main(["verify", "--bodies", "2", "--angles", "2", "--table", "/proc/t.csv"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and "cannot write /proc/t.csv" in err
+
+
+def test_a_file_where_the_directory_should_be_is_named_so(tmp_path):
+    from orbits.atomic import ensure_writable
+
+    (tmp_path / "afile").write_text("x")
+    with pytest.raises(orbits.InputError, match="afile is not a directory"):
+        ensure_writable(tmp_path / "afile" / "a.csv")

@@ -15,8 +15,9 @@ catalog column on read, bit for bit those of :func:`orbits.catalog` of the
 moments the survey was given (its grid, :func:`orbits.region_grid`, or its
 list); the bodies table's ``I1, I2, I3`` are ``I/|I|`` rounded, within an
 ulp of those, so :func:`orbits.catalog` of a row's ``I1, I2, I3`` agrees
-only to the moments' rounding, not to the last bit (about 570 bytes per body at n <= 30 in Parquet, against about 4,100 with
-``columns="all"``, which keeps the full catalog rows on disk).
+only to the moments' rounding, not to the last bit.  About 570 bytes per
+body at n <= 30 in Parquet, against about 4,100 with ``columns="all"``,
+which keeps the full catalog rows on disk.
 
 The bodies are cut into chunks; each finished chunk is written atomically
 (orbits, then bodies), and then recorded in the manifest's ledger (file
