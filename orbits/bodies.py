@@ -55,6 +55,13 @@ def _exact_difference(a, b):
     return d, e == 0.0
 
 
+# the moment unit of bodies built from lengths and masses (Body.moment_unit)
+SI_FROM_INPUTS = "kg m^2 (lengths in m, mass in kg)"
+
+# the smallest normal double: below it a moment keeps only part of its digits
+_TINY = float(np.finfo(float).tiny)
+
+
 def canonical_moments(moments):
     """Validate sorted moments and bring them to the scale-free canonical form.
 
@@ -76,7 +83,8 @@ def canonical_moments(moments):
     Raises
     ------
     NonPhysicalBodyError
-        A moment not finite or not positive; ``I3 > I1 + I2`` by more than
+        A moment not finite, not positive or subnormal (below 2.2e-308,
+        where a double keeps only part of its 53 bits); ``I3 > I1 + I2`` by more than
         ``8 eps I3``; or within that slack with no double-precision body on
         the flat edge that differs from it in one moment by the excess.
     SymmetricTopError
@@ -99,6 +107,15 @@ def canonical_moments(moments):
     bad = flat[:, 0] <= 0.0
     if bad.any():
         raise NonPhysicalBodyError(f"moments {_row(flat, bad)} must all be positive")
+    bad = flat[:, 0] < _TINY
+    if bad.any():
+        # a subnormal double carries fewer than 53 bits (1e-320: about 11),
+        # so the body would be a rounding of the one meant
+        raise NonPhysicalBodyError(
+            f"moments {_row(flat, bad)} include one below the smallest normal double "
+            "(2.2e-308), which keeps only part of its digits: give the moments in "
+            "larger units"
+        )
     _, exponent = np.frexp(flat[:, 2])
     exponent = exponent.astype(np.int64)
     with np.errstate(under="ignore"):
@@ -312,6 +329,8 @@ class Body:
         # ("t-handle", l1, l2, w), ("box", a, b, c), ("cylinder", a, length, b) or
         # ("mesh", vertices about the centre of mass, faces); None when unknown
         self.shape = None
+        # the unit of the moments where a constructor knows it (moment_unit)
+        self._moment_unit = None
 
     # -- constructors --------------------------------------------------
     @classmethod
@@ -573,6 +592,19 @@ class Body:
         return self._unit
 
     @property
+    def moment_unit(self):
+        """The unit of :attr:`moments` where the constructor knows it, else None.
+
+        ``"kg m^2"`` for :meth:`from_rotational_constants` (Planck's
+        constant in SI); ``"kg m^2 (lengths in m, mass in kg)"`` for
+        :meth:`box`, :meth:`cylinder`, :meth:`from_point_masses` and
+        :meth:`from_mesh`, whose moments are in the units of their inputs
+        (mass times length squared); None for moments given as numbers (any
+        unit, any scale).  Notebook views label energies and momenta by it.
+        """
+        return self._moment_unit
+
+    @property
     def exponent(self):
         """``moments = unit_moments * 2**exponent``."""
         return self._exponent
@@ -626,7 +658,7 @@ class Body:
         from .units import html_table
 
         kind = self.shape[0] if self.shape is not None else None
-        unit = "kg m^2 (lengths in m, mass in kg)" if kind in ("box", "cylinder", "mesh") else ""
+        unit = self._moment_unit or ""
         rows = [(f"I{k + 1}", float(v), unit) for k, v in enumerate(self._moments)]
         rows += [(f"I{k + 1} / |I|", float(v), "") for k, v in enumerate(self.normalized_moments)]
         rows += [
@@ -701,6 +733,7 @@ class Body:
         )
         body = cls(moments, name=name)
         body.shape = ("box", a, b, c)
+        body._moment_unit = SI_FROM_INPUTS
         return body
 
     @classmethod
@@ -746,6 +779,7 @@ class Body:
             )
         body = cls(moments, name=name)
         body.shape = ("cylinder", float(radius), float(length), float(radius_y))
+        body._moment_unit = SI_FROM_INPUTS
         return body
 
     @classmethod
@@ -846,7 +880,9 @@ class Body:
         rounding = 4.0 * (masses.size + 4) * _EPS * float(masses @ reach**2) + 4.0 * shift * float(
             masses @ (reach + shift)
         )
-        return _from_tensor(cls, tensor, name, defect, rounding, "point masses", exponent)
+        body = _from_tensor(cls, tensor, name, defect, rounding, "point masses", exponent)
+        body._moment_unit = SI_FROM_INPUTS
+        return body
 
     @classmethod
     def from_mesh(cls, path, *, density=1.0, name=None, defect="error"):
@@ -935,6 +971,7 @@ class Body:
             mesh.triangles - centre, mesh.area_faces
         ) + 16.0 * (len(mesh.faces) + 4) * _EPS * float(np.abs(np.trace(tensor)))
         body = _from_tensor(cls, tensor, name, defect, rounding, f"mesh {path}", exponent)
+        body._moment_unit = SI_FROM_INPUTS
         body.shape = (
             "mesh",
             np.ldexp(np.asarray(mesh.vertices - centre, dtype=float), x_exp),
@@ -1019,7 +1056,9 @@ class Body:
             ),
             stacklevel=2,
         )
-        return cls((i_a, i_b, i_c), name=name)
+        body = cls((i_a, i_b, i_c), name=name)
+        body._moment_unit = "kg m^2"
+        return body
 
 
 class InertialDefectWarning(UserWarning):

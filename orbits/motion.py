@@ -569,7 +569,7 @@ class Motion:
         """The motion in a notebook: spin, branch, period, E, |L|, D and the phases."""
         from .units import html_table
 
-        real = self.body.shape is not None and self.body.shape[0] in ("box", "cylinder", "mesh")
+        real = self.body.moment_unit is not None  # kg m^2: SI energies and momenta
         total = self.total_phase()
         periods = self.tumbling_periods()
         w = self.omega0

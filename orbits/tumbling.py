@@ -20,6 +20,10 @@ from .cells import exact_number
 from .errors import InputError
 from .limits import plural
 
+# the range of normal doubles
+_TINY = float(np.finfo(float).tiny)
+_HUGE = float(np.finfo(float).max)
+
 TWO_PI = 2.0 * math.pi
 
 
@@ -266,7 +270,9 @@ def spins_with_periods(body_or_moments, p_psi, p_phi):
     Raises
     ------
     InputError
-        A period not finite and positive, or no spin with that ratio.
+        A period not finite and positive, no spin with that ratio, or a
+        ``P_psi`` whose spin (``|omega0|``, its energy or momentum) does not
+        fit a normal double: the periods (or moments) need other units.
     """
     import pandas as pd
 
@@ -280,7 +286,17 @@ def spins_with_periods(body_or_moments, p_psi, p_phi):
     i3 = float(body.moments[2])
     for dtheta, theta in zip(table["dtheta"].to_numpy(), table["theta"].to_numpy()):
         unit = Motion.from_spin(body, dtheta=float(dtheta))
-        motion = Motion.from_spin(body, dtheta=float(dtheta), speed=unit.period / p_psi)
+        speed = unit.period / p_psi
+        # |omega0| = T(1) / P_psi, the energy ~ |omega|^2 I3 and the momentum
+        # ~ |omega| I3 of the spin must all be normal doubles
+        scales = (speed, speed * speed * i3, speed * i3)
+        if not all(_TINY <= value <= _HUGE for value in scales):
+            raise InputError(
+                f"P_psi = {p_psi!r} needs |omega0| = {speed:.3g} rad per time unit, "
+                "whose energy or momentum with these moments does not fit a double: "
+                "give the periods (or the moments) in other units"
+            )
+        motion = Motion.from_spin(body, dtheta=float(dtheta), speed=speed)
         periods = motion.tumbling_periods()
         rows.append(
             {

@@ -348,3 +348,27 @@ def test_point_masses_at_1e200_exit_2_without_traceback(tmp_path):
     assert done.returncode == 2, done.stderr
     assert done.stderr.count("\n") == 1 and "Traceback" not in done.stderr
     assert "I3 = 3.68e+400: it overflows a double" in done.stderr
+
+
+def test_molecules_and_point_masses_show_si_units_in_notebooks():
+    """A body whose constructor knows its moments' unit labels E, |L| and D in
+    J, J s and kg m^2 (a molecule's were shown as 'I rad^2/s^2')."""
+    import re
+
+    def text(motion):
+        return " ".join(re.sub("<[^>]+>", " ", motion._repr_html_()).split())
+
+    molecule = Body.from_rotational_constants(10, 5, 4, unit="GHz")
+    masses = Body.from_point_masses([1.0, 2.0, 3.0], np.eye(3))
+    assert molecule.moment_unit == "kg m^2"
+    assert masses.moment_unit == Body.box(1, 2, 3).moment_unit
+    assert masses.moment_unit.startswith("kg m^2")
+    assert Body((1.0, 2.0, 2.5)).moment_unit is None
+    for body in (molecule, masses):
+        shown = text(Motion.from_spin(body, 0.3, speed=1e3))
+        assert re.search(
+            r"energy E \S+ J angular momentum \|L\| \S+ J s D = M\^2 / \(2E\) \S+ kg m\^2", shown
+        ), shown
+        assert "kg m^2" in " ".join(re.sub("<[^>]+>", " ", body._repr_html_()).split())
+    plain = text(Motion.from_spin(Body((1.0, 2.0, 2.5)), 0.3))
+    assert "I rad^2/s^2" in plain and " J " not in plain

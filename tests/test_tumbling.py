@@ -216,3 +216,12 @@ def test_scalar_time_shapes():
     assert motion.omega([1.0]).shape == (1, 3)
     assert motion.omega(np.zeros((2, 5))).shape == (2, 5, 3)
     np.testing.assert_array_equal(motion.omega(1.0), motion.omega([1.0])[0])
+
+
+@pytest.mark.parametrize("periods", [(2e-308, 1e-308), (1e-300, 1e-300), (1e300, 1e300)])
+def test_periods_beyond_a_double_name_the_period_not_a_speed(periods):
+    """|omega0| = T/P_psi overflowing (or its energy underflowing) is the
+    periods' unit, said so; not 'speed must be positive, got inf', an
+    argument the caller never gave."""
+    with pytest.raises(orbits.InputError, match=r"P_psi = .* give the periods"):
+        orbits.spins_with_periods(orbits.Body.preset("fig6"), *periods)
