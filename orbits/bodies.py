@@ -833,6 +833,16 @@ class Body:
             raise NonPhysicalBodyError("point masses must all be positive")
         for k in np.flatnonzero(masses < _SMALLEST_NORMAL)[:1]:
             _refuse_below_normal(f"point mass #{k}", float(masses[k]))
+        if masses.size < 3:
+            what = (
+                "a single point mass: every moment about its centre of mass is zero"
+                if masses.size == 1
+                else "2 point masses lie on a line: the moment about it is zero"
+            )
+            raise NonPhysicalBodyError(
+                f"{what}, which is no rigid body of this library; an asymmetric body "
+                "needs at least 3 masses, not on one line"
+            )
         reach_given = float(np.max(np.abs(positions)))
         if reach_given == 0.0:
             raise NonPhysicalBodyError(

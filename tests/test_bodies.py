@@ -470,3 +470,10 @@ def test_subnormal_moments_are_refused_normal_ones_kept():
     scaled = np.array([1.0, 2.0, 2.9]) * 2.0**-1021
     assert scaled[0] >= tiny
     assert orbits.total_phase(scaled, 0.5) == orbits.total_phase((1.0, 2.0, 2.9), 0.5)
+
+
+def test_one_or_two_point_masses_are_refused_for_what_they_are():
+    with pytest.raises(NonPhysicalBodyError, match="a single point mass: every moment"):
+        Body.from_point_masses([1.0], [[1.0, 2.0, 3.0]])
+    with pytest.raises(NonPhysicalBodyError, match="2 point masses lie on a line"):
+        Body.from_point_masses([1.0, 2.0], [[0.0, 0.0, 0.0], [1.0, 0.5, 0.0]])
