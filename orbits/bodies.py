@@ -58,9 +58,6 @@ def _exact_difference(a, b):
 # the moment unit of bodies built from lengths and masses (Body.moment_unit)
 SI_FROM_INPUTS = "kg m^2 (lengths in m, mass in kg)"
 
-# the smallest normal double: below it a moment keeps only part of its digits
-_TINY = float(np.finfo(float).tiny)
-
 
 def canonical_moments(moments):
     """Validate sorted moments and bring them to the scale-free canonical form.
@@ -83,8 +80,7 @@ def canonical_moments(moments):
     Raises
     ------
     NonPhysicalBodyError
-        A moment not finite, not positive or subnormal (below 2.2e-308,
-        where a double keeps only part of its 53 bits); ``I3 > I1 + I2`` by more than
+        A moment not finite or not positive; ``I3 > I1 + I2`` by more than
         ``8 eps I3``; or within that slack with no double-precision body on
         the flat edge that differs from it in one moment by the excess.
     SymmetricTopError
@@ -95,7 +91,12 @@ def canonical_moments(moments):
     Every kernel receives ``unit``, so Delta alpha, theta_crit, the roots of
     the search and whole catalogs are bit-identical for moments scaled by a
     power of two, and free of overflow and underflow for any scale of
-    doubles.  The flat edge is decided exactly (:func:`flat_excess`): on it
+    doubles.  A subnormal moment (below 2.2e-308) is taken as the exact
+    double it is, with its fewer significant bits (``1e-320`` typed in
+    Python is already rounded to about 11 bits, and the body is that of the
+    rounded double); the command line refuses such decimals as typed.
+
+    The flat edge is decided exactly (:func:`flat_excess`): on it
     ``min Delta alpha = 2 pi``, reached only in the limit theta -> 0, so no
     body beyond rounding of the edge can report an n = 1 orbit.
     """
@@ -107,15 +108,6 @@ def canonical_moments(moments):
     bad = flat[:, 0] <= 0.0
     if bad.any():
         raise NonPhysicalBodyError(f"moments {_row(flat, bad)} must all be positive")
-    bad = flat[:, 0] < _TINY
-    if bad.any():
-        # a subnormal double carries fewer than 53 bits (1e-320: about 11),
-        # so the body would be a rounding of the one meant
-        raise NonPhysicalBodyError(
-            f"moments {_row(flat, bad)} include one below the smallest normal double "
-            "(2.2e-308), which keeps only part of its digits: give the moments in "
-            "larger units"
-        )
     _, exponent = np.frexp(flat[:, 2])
     exponent = exponent.astype(np.int64)
     with np.errstate(under="ignore"):
