@@ -360,7 +360,11 @@ def read_catalog(path, *, check=True):
         byte, e.g. a truncated file); row count not as recorded; wrong or
         misordered columns; a cell of the wrong type (``abc`` in a numeric
         column); bad branch labels; ``n``/``q`` not integers >= 1;
-        non-finite numbers.
+        non-finite numbers; a row that is no closed orbit as the search
+        writes it (``n/q`` not above 1 or not in lowest terms, ``dtheta``
+        on the wrong side for its branch, ``total_phase`` or ``residual``
+        beyond ``1e-10 * 2 pi n/q``, a repeated row), with or without
+        ``check``.
     """
     path = path_argument("path", path)
     try:
@@ -439,9 +443,61 @@ def read_catalog(path, *, check=True):
             raise InputError(f"{path}: column {name} must hold numbers")
     if not np.all(np.isfinite(numeric.to_numpy(dtype=float))):
         raise InputError(f"{path}: non-finite numbers")
+    _check_orbit_rows(path, frame)
     frame["body"] = frame["body"].map(unneutralize).astype(frame["body"].dtype)
     frame.attrs["header"] = header
     return frame
+
+
+def _check_orbit_rows(path, frame):
+    """Refuse rows that no search writes: each must be a closed orbit of its level.
+
+    The checksum finds damage, not a hand edit whose checksum was rewritten
+    with it; these cheap checks find the edits that would change what a
+    row means: a level ``n/q`` not above 1 or not in lowest terms, a
+    ``dtheta`` on the wrong side of the separatrix for its branch (SAM
+    below it, LAM above), a total phase (or residual) more than
+    :data:`orbits.search.RESIDUAL_TOLERANCE` of its level away from
+    ``2 pi n/q``, and a row given twice.
+    """
+    import math
+
+    from .search import RESIDUAL_TOLERANCE
+
+    if frame.empty:
+        return
+    n, q = frame["n"].to_numpy(), frame["q"].to_numpy()
+    dtheta = frame["dtheta"].to_numpy(dtype=float)
+    sam = frame["branch"].to_numpy() == "SAM"
+    target = 2.0 * math.pi * n / q
+    # a little over the search's own bound: 2 pi n/q rounds differently here
+    allowed = RESIDUAL_TOLERANCE * target * (1.0 + 1e-6) + 4.0 * np.spacing(target)
+    reasons = [
+        (n <= q, "its level n/q is not above 1 (2 pi n/q <= 2 pi has no closed orbit)"),
+        (np.gcd(n, q) != 1, "n/q is not in lowest terms"),
+        (sam & ~(dtheta < 0.0), "a SAM orbit must have dtheta < 0 (theta below theta_crit)"),
+        (~sam & ~(dtheta > 0.0), "a LAM orbit must have dtheta > 0 (theta above theta_crit)"),
+        (
+            ~(np.abs(frame["total_phase"].to_numpy(dtype=float) - target) <= allowed),
+            "its total_phase is not 2 pi n/q",
+        ),
+        (
+            ~(np.abs(frame["residual"].to_numpy(dtype=float)) <= allowed),
+            "its residual is too large",
+        ),
+        (
+            frame.duplicated(["body", "branch", "n", "q", "dtheta"]).to_numpy(),
+            "it repeats an earlier row",
+        ),
+    ]
+    for bad, why in reasons:
+        if bad.any():
+            rows = np.flatnonzero(bad)
+            more = f" (and {rows.size - 1} more)" if rows.size > 1 else ""
+            raise InputError(
+                f"{path}, data row {rows[0] + 1}{more}: {why}; not a catalog orbits "
+                "wrote (edited by hand?)"
+            )
 
 
 def _one_line(error):

@@ -92,6 +92,14 @@ def test_csv_round_trip_is_bit_exact(tmp_path):
         (lambda f: f.assign(branch="XAM"), "SAM or LAM"),
         (lambda f: f.assign(n=0), "integers >= 1"),
         (lambda f: f.assign(period=np.inf), "non-finite"),
+        # hand edits that keep the schema (the checksum rewritten with them)
+        (lambda f: f.assign(dtheta=np.abs(f["dtheta"])), "a SAM orbit must have dtheta < 0"),
+        (lambda f: f.assign(dtheta=-np.abs(f["dtheta"])), "a LAM orbit must have dtheta > 0"),
+        (lambda f: f.assign(total_phase=99.0), "total_phase is not 2 pi n/q"),
+        (lambda f: f.assign(residual=1e-3), "residual is too large"),
+        (lambda f: f.assign(n=2 * f["n"], q=2), "not in lowest terms"),
+        (lambda f: f.assign(n=1), "not above 1"),
+        (lambda f: pd.concat([f, f.iloc[[2]]], ignore_index=True), "repeats an earlier row"),
     ],
 )
 def test_read_catalog_checks_schema(tmp_path, mutate, message):
