@@ -223,7 +223,9 @@ def closed_herpolhode_figure(body, row, name=None, *, limit=None, radii=None):
     figure = new_figure(5.2, 5.9)
     ax = figure.add_subplot()
     draw_closed_herpolhode(ax, body, row, limit=limit, radii=radii)
-    ax.set_title(plotting.orbit_label(row, name or body.name or "body"), fontsize="small")
+    ax.set_title(
+        plotting.orbit_label(row, name or body.name or "body"), fontsize="small", wrap=True
+    )
     _marks_legend(figure)
     return figure
 
@@ -320,9 +322,14 @@ def _sheet_columns(count):
     return max(1, min(8, math.ceil(math.sqrt(count * 1.5))))
 
 
+# the narrowest contact sheet (in) that holds its title and the legend of
+# the marks in one line each (a sheet of one or two orbits was cut at the sides)
+_SHEET_MIN_WIDTH = 6.4
+
+
 def _sheet_size(count, columns):
     """Width and height (in) of a contact sheet of ``count`` panels in ``columns``."""
-    return 2.0 * columns, 2.2 * math.ceil(count / columns) + 1.0
+    return max(2.0 * columns, _SHEET_MIN_WIDTH), 2.2 * math.ceil(count / columns) + 1.0
 
 
 # measured here (2-core VM, 2026-11-24): herpolhode_set of fig6 with n_max = 6
@@ -461,7 +468,7 @@ def contact_sheet(body, orbits, columns=None):
             linewidth=0.6,
         )
         multiple = f"{row.n}" if row.q == 1 else f"{row.n}/{row.q}"
-        half = f" ({_periods_text(row)})" if plotting.drawn_periods(row) != row.q else ""
+        half = f" ({_periods_text(row)})" if plotting.drawn_periods(row) != 1.0 else ""
         ax.set_title(
             rf"{row.branch} $2\pi\cdot{multiple}${half}"
             + "\n"
@@ -479,8 +486,9 @@ def contact_sheet(body, orbits, columns=None):
     figure.suptitle(
         f"Closed herpolhodes of {literal_text(body.name or 'the body')} in the invariable plane\n"
         r"one scale ($|\omega_0|$ = 1 rad/s), left to right in $\theta$; "
-        "odd n close after T/2",
+        "each drawn until it closes",
         fontsize="medium",
+        wrap=True,
     )
     _marks_legend(figure, fontsize="small")
     figure.get_layout_engine().set(w_pad=0.15, h_pad=0.08)  # inches: clear of the edges

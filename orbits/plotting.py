@@ -306,7 +306,7 @@ def orbit_label(row, body_name=None, precision=6):
         + rf"$\theta-\theta_c$ = {row.dtheta:.3e} rad"
     )
     periods = drawn_periods(row)
-    if periods != row.q:
+    if periods != 1.0:  # T/2 for odd n; q/2 or q periods for p/q
         closes = getattr(row, "closes_after", periods)
         text += f"; closes after {closes} T (drawn once)"
     return text
