@@ -300,6 +300,24 @@ class FrameData:
     plane_height: float
 
 
+# the traced polhode and herpolhode: at least this many steps per period T
+# (a smooth curve at any frame count), and at most this many points in all
+TRACE_SAMPLES_PER_PERIOD = 256
+TRACE_MAX_SAMPLES = 1_000_000
+
+
+def _trace_steps(asked, times, period):
+    """Steps per frame interval: ``asked``, or more for TRACE_SAMPLES_PER_PERIOD
+    steps per period, within TRACE_MAX_SAMPLES points in all."""
+    intervals = len(times) - 1
+    span = float(times[-1] - times[0])
+    if not (intervals > 0 and span > 0.0 and math.isfinite(period) and period > 0.0):
+        return asked
+    needed = math.ceil(TRACE_SAMPLES_PER_PERIOD * span / (period * intervals))
+    cap = max(1, TRACE_MAX_SAMPLES // intervals)
+    return max(asked, min(needed, cap))
+
+
 class PoinsotScene:
     """The geometry of every frame of a Poinsot animation (nothing drawn).
 
@@ -311,7 +329,11 @@ class PoinsotScene:
     solid : "auto", "ellipsoid" or tuple
         The solid; see :func:`solid_faces`.
     subsamples : int
-        Steps of the traced curves per frame interval (>= 1).
+        Steps of the traced curves per frame interval (>= 1); more where
+        that is needed for :data:`TRACE_SAMPLES_PER_PERIOD` steps per period
+        T of the motion (a few frames would otherwise trace the polhode as
+        chords through the ellipsoid and the herpolhode as a polygon), up
+        to :data:`TRACE_MAX_SAMPLES` in all.
 
     Raises
     ------
@@ -328,8 +350,10 @@ class PoinsotScene:
     semi_axes : ndarray (3,)
         ``1/sqrt(I_k)``: the inertia ellipsoid's semi-axes (body frame).
     dense_times : ndarray
-        The traced curves' times: ``subsamples`` steps per frame interval,
-        holding the frame times exactly at multiples of ``subsamples``.
+        The traced curves' times: :attr:`subsamples` steps per frame interval,
+        holding the frame times exactly at multiples of it.
+    subsamples : int
+        The steps per frame interval used (at least the one asked for).
     rho_space, rho_body : ndarray (len(dense_times), 3)
         ``omega / sqrt(2E)`` at ``dense_times``: the herpolhode (space
         frame) and the polhode (body frame).
@@ -354,7 +378,7 @@ class PoinsotScene:
             )
         self.motion = motion
         self.times = frame_times(times)
-        subsamples = integer("subsamples", subsamples)
+        subsamples = _trace_steps(integer("subsamples", subsamples), self.times, motion.period)
         body = motion.body
         moments = body.moments
         two_e = 2.0 * motion.energy

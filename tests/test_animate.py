@@ -707,3 +707,26 @@ SQUARE = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
 def test_api_refusals_name_the_argument(call, error, message):
     with pytest.raises(error, match=message):
         call()
+
+
+def test_few_frames_still_trace_smooth_curves():
+    """Two or three frames over a period: the traced polhode and herpolhode
+    keep at least 256 steps per period (8 a frame drew a polygon), and the
+    frames still sit exactly on the dense grid."""
+    from orbits.animation_scene import TRACE_SAMPLES_PER_PERIOD, PoinsotScene
+
+    motion = Motion.from_spin(FIG6, dtheta=-8.332e-3)
+    for frames in (2, 3, 48):
+        times = np.linspace(0.0, motion.period, frames)
+        scene = PoinsotScene(motion, times)
+        steps = len(scene.dense_times) - 1
+        assert steps >= TRACE_SAMPLES_PER_PERIOD and scene.subsamples >= 8
+        assert np.array_equal(scene.dense_times[:: scene.subsamples], scene.times)
+        last = scene.frame(frames - 1)
+        assert len(last.herpolhode) == steps + 1
+        # consecutive traced points at most 1/16 of the herpolhode's size
+        # apart (1/18 at 256 steps a period for this 3-lobed SAM curve; 16
+        # steps, 3 frames at 8 a frame, were about the size itself)
+        gaps = np.linalg.norm(np.diff(last.herpolhode, axis=0), axis=1)
+        size = np.ptp(last.herpolhode[:, :2], axis=0).max()
+        assert gaps.max() < size / 16
