@@ -406,6 +406,19 @@ CLI_CASES = [
     # ------------------------------------------------------- catalog: targets
     ("out-no-directory", CAT + ["{d}/none/c.csv"], {}, "does not exist"),
     ("out-parent-is-file", CAT + ["{d}/f/c.csv"], {"f": "x"}, "f is not a directory"),
+    (
+        "animate-out-directory",
+        [A, *FIG6, "--theta", "0.5", "--out", "{d}/sub"],
+        {"sub": DIRECTORY},
+        "it is a directory",
+    ),
+    (
+        "figures-out-under-a-file",
+        [F, *FIG6, "--n-max", "2", "--out", "{d}/f/sub"],
+        {"f": "x"},
+        "f is not a directory",
+    ),
+    ("figures-no-body", [F, "--n-max", "2", "--out", "{d}/x"], {}, "--rotational-constants"),
     ("out-trailing-slash", CAT + ["{d}/newname/"], {}, "directory"),
     ("out-existing-directory", CAT + ["{d}/sub"], {"sub": DIRECTORY}, "directory"),
     ("out-existing-directory-slash", CAT + ["{d}/sub/"], {"sub": DIRECTORY}, "directory"),

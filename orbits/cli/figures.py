@@ -40,6 +40,11 @@ def _output_directory(path, names, made):
     try:
         make_directories(directory, made)
     except OSError as error:
+        blocking = next((p for p in directory.parents if p.exists() and not p.is_dir()), None)
+        if blocking is not None:
+            raise InputError(
+                f"cannot create output directory {directory}: {blocking} is not a directory"
+            ) from None
         raise InputError(f"cannot create output directory {directory}: {error.strerror}") from None
     if not directory.is_dir():
         raise InputError(f"output path {directory} is not a directory")
@@ -90,9 +95,9 @@ def _figures(args, made):
         any(getattr(args, name) is not None for name in BODY_SELECTORS),
     ]
     if sum(selectors) != 1:
+        options = ", ".join("--" + name.replace("_", "-") for name in BODY_SELECTORS)
         raise InputError(
-            "orbits figures: give exactly one of a body (--moments, "
-            "--t-handle, --ellipsoid, --preset), --paper or --survey DIR"
+            f"orbits figures: give exactly one of a body ({options}), --paper or --survey DIR"
         )
     # every input is checked before the output directory is created
     path_argument("--out", args.out)
