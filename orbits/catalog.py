@@ -135,8 +135,12 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
     branch every level ``2 pi m`` above ``Delta alpha_spin`` has an orbit
     (the phase grows without bound towards the separatrix), so a search up
     to ``n_max = ceil(Delta alpha_spin / 2 pi) + k`` holds the ``k``
-    nearest.  Each orbit is started at ``phi = 0`` (its catalog spin) and
-    scaled so that its ``|L| = |I omega0|`` is the given spin's.
+    nearest.  Each orbit's ``omega_*`` start where its polhode meets the
+    given spin's azimuth about I3 (a LAM polhode that does not reach it:
+    its crossing of ``omega3 = 0`` nearest it), with the spin's signs, so
+    that it starts close to the throw; it is scaled so that its
+    ``|L| = |I omega0|`` is the given spin's.  (The catalog columns, as in
+    every catalog, are those of the orbit's ``phi = 0`` spin.)
 
     Parameters
     ----------

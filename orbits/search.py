@@ -20,7 +20,7 @@ from .cells import numbers_label
 from .core import search as _kernels
 from .device import check_device, cuda_kernels, run_cuda
 from .errors import InputError
-from .limits import check_search_bounds, plural
+from .limits import check_search_bounds, format_bytes, memory_budget, plural
 from .phases import phases_of_unit_moments
 from .threads import threads_for
 
@@ -251,7 +251,9 @@ def search_bodies(moments, levels, *, capacity=None, device="cpu"):
     Raises
     ------
     InputError
-        Shapes, order or values not as above.
+        Shapes, order or values not as above (levels positive, each once, in
+        ascending order), or a ``capacity`` whose rows would exceed half of
+        this machine's memory.
     NonPhysicalBodyError
         A row with ``I3 > I1 + I2`` beyond rounding (no rigid body).
     DeviceError
@@ -262,8 +264,16 @@ def search_bodies(moments, levels, *, capacity=None, device="cpu"):
     levels = np.ascontiguousarray(levels, dtype=float)
     if moments.ndim != 2 or moments.shape[1] != 3:
         raise InputError(f"moments must have shape (n, 3), got {moments.shape}")
-    if levels.ndim != 1 or not np.all(np.isfinite(levels)) or np.any(np.diff(levels) < 0):
-        raise InputError("levels must be a 1-d array of finite values in ascending order")
+    if (
+        levels.ndim != 1
+        or not np.all(np.isfinite(levels))
+        or np.any(levels <= 0.0)
+        or np.any(np.diff(levels) <= 0)
+    ):
+        raise InputError(
+            "levels must be a 1-d array of finite positive values in strictly ascending "
+            "order (each target phase once)"
+        )
     if not (
         np.all(np.isfinite(moments))
         and np.all(moments > 0)
@@ -278,6 +288,14 @@ def search_bodies(moments, levels, *, capacity=None, device="cpu"):
         capacity = 2 * levels.size + 8
     capacity = integer("capacity", capacity, minimum=1)
     count = moments.shape[0]
+    # branch (1 byte), level and offset (8 each) per root slot
+    need = count * capacity * 17
+    if need > memory_budget():
+        raise InputError(
+            f"search_bodies with capacity={capacity} for {count} bodies would need about "
+            f"{format_bytes(need)} of memory, more than the {format_bytes(memory_budget())} "
+            "allowed (half of this machine's); give a smaller capacity or fewer bodies"
+        )
     rows = SearchRows(
         np.empty((count, capacity), dtype=np.int8),
         np.empty((count, capacity), dtype=np.int64),

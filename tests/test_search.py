@@ -230,3 +230,16 @@ def test_an_unnamed_body_is_labelled_by_its_moments_as_given():
     assert near == "I=(1, 1.00000001, 1.5)"
     tiny = closed_orbits(np.array([1.0, 2.0, 2.5]) * 1e-200, 3)["body"].iloc[0]
     assert tiny == "I=(1e-200, 2e-200, 2.5e-200)"
+
+
+def test_search_bodies_refuses_repeated_or_non_positive_levels_and_huge_capacity():
+    """A level given twice returned every root twice; a capacity beyond the
+    machine's memory let NumPy's MemoryError through."""
+    body = np.array([[0.26, 0.55, 0.793662]])
+    for levels in ([20.0, 20.0], [-1.0, 20.0], [0.0, 20.0], [20.0, 19.0]):
+        with pytest.raises(orbits.InputError, match="strictly ascending"):
+            orbits.search_bodies(body, levels)
+    with pytest.raises(orbits.InputError, match="capacity=1000000000000 .* memory"):
+        orbits.search_bodies(body, [20.0], capacity=10**12)
+    rows = orbits.search_bodies(body, [20.0, 25.0])
+    assert rows.counts.tolist() == [4]  # two roots a level (SAM and LAM)

@@ -672,3 +672,11 @@ def test_an_out_that_is_a_link_is_refused(tmp_path, capsys, trailing):
     assert (real / "manifest.json").read_bytes() == manifest
     assert (real / "report.json").read_bytes() == report
     assert sorted(p.name for p in tmp_path.iterdir()) == ["dangling", "link", "real"]
+
+
+def test_a_scheduler_of_the_wrong_type_is_said_so_at_once(tmp_path):
+    """Not 'cannot reach the dask scheduler at 123 within 10 s'."""
+    survey = Survey.grid(tmp_path / "s", 5, 3)
+    with pytest.raises(orbits.ArgumentTypeError, match="got int"):
+        survey.run(scheduler=123)
+    assert not (tmp_path / "s").exists()

@@ -216,9 +216,10 @@ class Survey:
 
         Parameters
         ----------
-        scheduler : str or distributed.Client, optional
-            ``"tcp://host:port"`` of a running ``dask scheduler`` (or a
-            Client): chunks run on its workers.  Default: in-process.
+        scheduler : str, distributed.Client or a dask cluster, optional
+            ``"tcp://host:port"`` of a running ``dask scheduler``, a Client,
+            or a cluster object (``distributed.LocalCluster``): chunks run
+            on its workers.  Default: in-process.
         progress : callable, optional
             Called with the number of bodies of each finished chunk.
         notify : callable, optional
@@ -510,6 +511,18 @@ def _check_scheduler(scheduler):
     import re
 
     if not isinstance(scheduler, str):
+        try:
+            from distributed import Client
+            from distributed.deploy import Cluster
+
+            kinds = (Client, Cluster)
+        except ImportError:
+            kinds = ()
+        if not isinstance(scheduler, kinds):
+            raise ArgumentTypeError(
+                "scheduler must be a dask scheduler's address ('tcp://HOST:PORT'), a "
+                f"distributed.Client or a cluster, got {type(scheduler).__name__}"
+            )
         return
     match = re.fullmatch(
         r"(?:(?:tcp|tls|ucx|inproc|ws|wss)://)?[\w.\-\[\]:]+:(\d{1,5})", scheduler
