@@ -581,19 +581,9 @@ def read_bodies_csv(path, skip_invalid=False):
         ``skip_invalid``) the first bad row, named by its row number, with
         the count of further bad rows.
     """
-    from .atomic import read_limited
-    from .limits import input_limit
+    from .limits import read_input_text
 
-    try:
-        text = read_limited(path, input_limit()).decode("utf-8")
-    except FileNotFoundError:
-        raise InputError(f"no bodies file at {path}") from None
-    except IsADirectoryError:
-        raise InputError(f"{path} is a directory, not a bodies file") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{path} is not a CSV of bodies (not UTF-8 text)") from None
-    except OSError as error:
-        raise InputError(f"cannot read {path}: {error.strerror}") from None
+    text = read_input_text(path, "bodies file")
     lines = text.split("\n")
     start = 0
     while start < len(lines) and (lines[start].startswith("#") or not lines[start].strip("\r")):
@@ -636,24 +626,33 @@ def _check_quotes_close(path, rest, start):
         ) from None
 
 
+def header_problems(header, required, allowed):
+    """What is wrong with a CSV header, in words, or '' when nothing is.
+
+    ``header``: the stripped column names; every name of ``required`` must
+    be there, no name outside ``allowed``, none twice.
+    """
+    missing = [name for name in required if name not in header]
+    unknown = [name for name in header if name not in allowed]
+    repeated = sorted({name for name in header if header.count(name) > 1})
+    return "; ".join(
+        filter(
+            None,
+            [
+                missing and f"missing column(s) {', '.join(missing)}",
+                unknown and f"unknown column(s) {', '.join(map(repr, unknown))}",
+                repeated and f"repeated column(s) {', '.join(repeated)}",
+            ],
+        )
+    )
+
+
 def _check_header(path, raw_header):
     if not raw_header:
         raise InputError(f"{path}: no header line (need I1, I2, I3 and optionally name)")
     header = [cell.strip() for cell in raw_header]
-    unknown = [c for c in header if c not in BODY_FILE_COLUMNS]
-    duplicate = sorted({c for c in header if header.count(c) > 1})
-    missing = [c for c in ("I1", "I2", "I3") if c not in header]
-    if missing or unknown or duplicate:
-        what = "; ".join(
-            filter(
-                None,
-                [
-                    missing and f"missing column(s) {', '.join(missing)}",
-                    unknown and f"unknown column(s) {', '.join(map(repr, unknown))}",
-                    duplicate and f"repeated column(s) {', '.join(duplicate)}",
-                ],
-            )
-        )
+    what = header_problems(header, ("I1", "I2", "I3"), BODY_FILE_COLUMNS)
+    if what:
         raise InputError(f"{path}: {what} (the header must name I1, I2, I3 and optionally name)")
     return header
 

@@ -281,7 +281,7 @@ CLI_CASES = [
         "point-masses-columns",
         [P, "--point-masses", "{d}/m.csv", "--theta", "0.3"],
         {"m.csv": "mass,x,y\n1,0,0\n"},
-        "missing z",
+        "missing column(s) z",
     ),
     (
         "point-masses-text",

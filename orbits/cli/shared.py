@@ -367,20 +367,10 @@ def _point_masses_from_csv(path):
 
     import numpy as np
 
-    from ..atomic import read_limited
     from ..catalog import NUMBER
-    from ..limits import input_limit
+    from ..limits import read_input_text
 
-    try:
-        text = read_limited(path, input_limit()).decode("utf-8")
-    except FileNotFoundError:
-        raise InputError(f"no point-mass file at {path}") from None
-    except IsADirectoryError:
-        raise InputError(f"{path} is a directory, not a point-mass CSV") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{path} is not a CSV of point masses (not UTF-8 text)") from None
-    except OSError as error:
-        raise InputError(f"cannot read point masses from {path}: {error.strerror}") from None
+    text = read_input_text(path, "point-mass file")
     header, order, rows = None, None, []
     lines = [line.split("#", 1)[0] for line in text.splitlines()]
     reader = csv.reader(lines, strict=True)
@@ -418,20 +408,10 @@ def _point_masses_from_csv(path):
 
 
 def _check_point_mass_header(path, header):
-    missing = [name for name in POINT_MASS_COLUMNS if name not in header]
-    unknown = [name for name in header if name not in POINT_MASS_COLUMNS]
-    repeated = sorted({name for name in header if header.count(name) > 1})
-    if missing or unknown or repeated:
-        what = "; ".join(
-            filter(
-                None,
-                [
-                    missing and f"missing {', '.join(missing)}",
-                    unknown and f"unknown column(s) {', '.join(map(repr, unknown))}",
-                    repeated and f"repeated column(s) {', '.join(repeated)}",
-                ],
-            )
-        )
+    from ..catalog import header_problems
+
+    what = header_problems(header, POINT_MASS_COLUMNS, POINT_MASS_COLUMNS)
+    if what:
         raise InputError(f"{path}: point-mass CSV needs columns mass, x, y, z; {what}")
 
 
