@@ -218,8 +218,8 @@ def check_output(out, name="out", fmt=None):
             "give a file name without control characters"
         )
     path = Path(text)
-    if path.is_dir():
-        raise InputError(f"cannot write {path}: it is a directory (give a .gif or .mp4 file)")
+    if path.is_dir() or text.endswith(("/", os.sep)):
+        raise InputError(f"cannot write {text}: it names a directory (give a .gif or .mp4 file)")
     if fmt is None:
         fmt = path.suffix.lstrip(".").lower()
         if fmt not in FORMATS:

@@ -410,7 +410,13 @@ CLI_CASES = [
         "animate-out-directory",
         [A, *FIG6, "--theta", "0.5", "--out", "{d}/sub"],
         {"sub": DIRECTORY},
-        "it is a directory",
+        "it names a directory",
+    ),
+    (
+        "animate-out-trailing-slash",
+        [A, *FIG6, "--theta", "0.5", "--out", "{d}/new/"],
+        {},
+        "it names a directory",
     ),
     (
         "figures-out-under-a-file",
