@@ -398,7 +398,9 @@ def closure_errors(moments, dtheta, periods, rtol=1e-13):
         period comes from a quarter period integrated from the orbit's
         closest approach to the I2 axis (exact reversibility of Euler's
         equations makes the four quarters equal); the angle is then
-        ``|q Delta alpha|`` reduced to [0, pi].
+        ``|q Delta alpha|`` reduced to [0, pi].  That path's own error is
+        about ``rtol * (I3/I1) * q`` (:func:`closure_error_budget`): for a
+        thin rod it, not the orbit, can exceed a tolerance of 1e-8.
 
     Examples
     --------
@@ -464,6 +466,31 @@ def closure_errors(moments, dtheta, periods, rtol=1e-13):
             f"body {moments[k].tolist()} (unit scale)"
         )
     return out
+
+
+# closure_errors' quarter path (|dtheta| < 1e-3) is accurate to about
+# rtol * I3/I1 a period: phi turns at up to M/I1 where w2 = 0, which
+# magnifies the integration's relative error by I3/I1 (measured at rtol
+# 1e-13: 0.4-0.8 of that on 1e-6 and 1e-9 rods, 1.6 at rtol 1e-9)
+QUARTER_ERROR_FACTOR = 10.0
+
+
+def closure_error_budget(moments, dtheta, periods, rtol=1e-13):
+    """What :func:`closure_errors` itself may be off by, radians, per orbit.
+
+    On the quarter path (``|dtheta| < 1e-3``), ``QUARTER_ERROR_FACTOR *
+    rtol * (I3/I1) * q``: negligible for most bodies (3e-12 at I3/I1 = 3),
+    but 1e-6 for a rod with I1 = 1e-6 I3, where an orbit that closes
+    exactly reads as open by up to that much.  0 on the direct path (its
+    error is the integrator's, ~1e-12).  Arguments as for
+    :func:`closure_errors` (moments broadcast against ``dtheta``).
+    """
+    moments, _ = unit_moments(moments)
+    dtheta = np.atleast_1d(np.asarray(dtheta, dtype=float))
+    periods = np.atleast_1d(np.asarray(periods, dtype=float))
+    ratio = moments[..., 2] / moments[..., 0]
+    quarter = np.abs(dtheta) < _checks.FULL_INTEGRATION_FROM
+    return np.where(quarter, QUARTER_ERROR_FACTOR * rtol * ratio * periods, 0.0)
 
 
 # the integration and quadrature tolerances of verify's checks (the ODE's

@@ -1056,3 +1056,32 @@ def test_relative_gap_and_gap_slope_against_mpmath(moments, angle):
     # and this one (M^2 moved) differ by O(1), which is not used there
     rel = 1e-4 if column["relative_gap"] < 1e-5 else 1.0
     assert column["gap_slope"] == pytest.approx(slope, rel=rel)
+
+
+@pytest.mark.parametrize("rod", [1e-6, 1e-9])
+def test_closure_errors_on_thin_rods_within_their_own_budget(rod):
+    """Near the separatrix of a thin rod the quarter path's error is about
+    rtol * I3/I1 a period (phi turns at up to M/I1 at w2 = 0); forced short
+    steps all along the quarter drifted it further (6.4e-7 rad at a 1e-6
+    rod, 3-7 s a row) and did not finish at dtheta = 1e-300 (reported as
+    'outside [0, pi/2]').  Reference: the closed form, |Delta alpha| reduced
+    to [0, pi] (orbits.total_phase, 1e-15 against mpmath)."""
+    moments = np.array([rod, 1.0, 1.0 + rod])
+    dtheta = np.array([-0.000999, -1e-5, 1e-5, 1e-9, -1e-12, 1e-300])
+    periods = np.array([1, 1, 2, 1, 3, 1])
+    got = orbits.closure_errors(moments, dtheta, periods)
+    phase = np.asarray(orbits.total_phase(moments, dtheta=dtheta)) * periods
+    expected = np.abs(phase - 2 * np.pi * np.floor(phase / (2 * np.pi) + 0.5))
+    budget = orbits.checks.closure_error_budget(moments, dtheta, periods)
+    # I3/I1 of the canonical moments (1 + rod rounds, and the flat edge moves it)
+    np.testing.assert_allclose(budget, 10.0 * 1e-13 * (1.0 + rod) / rod * periods, rtol=1e-6)
+    assert np.all(np.abs(got - expected) <= budget / 4), np.abs(got - expected) / budget
+
+
+def test_catalog_verify_of_a_thin_rod_passes_with_a_note(tmp_path, capsys):
+    from orbits.cli import main
+
+    argv = ["catalog", "--moments", "1e-6", "1", "1.000001", "--n-max", "3", "--verify"]
+    assert main([*argv, "--out", str(tmp_path / "rod.csv")]) == 0
+    err = capsys.readouterr().err
+    assert "within the check's own error" in err and "error:" not in err

@@ -433,7 +433,6 @@ def phase_by_quarter(i1, i2, i3, gap_m1, gap_3m, scale, offset, closing, rtol):
     m1 = i1 * w1
     m2 = i2 * w2
     m3 = i3 * w3
-    momentum = math.sqrt(m1 * m1 + m2 * m2 + m3 * m3)
     # orientation with space z along M and phi = 0: R = Rx(theta) Rz(psi)
     half_theta = 0.5 * math.atan2(math.sqrt(m1 * m1 + m2 * m2), m3)
     half_psi = 0.5 * math.atan2(m1, m2)
@@ -454,10 +453,10 @@ def phase_by_quarter(i1, i2, i3, gap_m1, gap_3m, scale, offset, closing, rtol):
     # well below the small components' own scale
     small = max(abs(w1), abs(w3))
     atol = rtol * 1e-3 * small if small > 0.0 else rtol * 1e-3
-    # phi turns at most at M/I1; a quarter turn per step at most
-    max_step = 0.25 * math.pi * i1 / momentum
+    # steps as short as phi's turn needs where it turns fast (near w2 = 0,
+    # at up to M/I1), not everywhere (integrate_to_event's track_phi)
     t_quarter, phi_quarter = integrate_to_event(
-        inertia, y0, 1, 0.0, -1.0, 1, rtol, atol, 1e15, y_end, 100_000_000, max_step, True
+        inertia, y0, 1, 0.0, -1.0, 1, rtol, atol, 1e15, y_end, 100_000_000, np.inf, True
     )
     if t_quarter < 0.0:
         return np.nan, np.nan
