@@ -399,3 +399,21 @@ def test_usage_errors_name_the_program_once(capsys):
     assert (
         code == 2 and err == "orbits: error: orbits phase: argument --theta: not a number: 'x'\n"
     )
+
+
+@pytest.mark.parametrize("exponent", [-1000, -530, 520, 1000])
+def test_d_normalised_at_any_scale_of_the_moments(exponent, capsys):
+    """|I| over- or underflowed beyond 1e+-154: D_normalised printed 0.0, a
+    2.8 % error, or a ZeroDivisionError traceback.  Moments scaled by an
+    exact power of two give the same bits as (1, 2, 3)."""
+
+    def d_normalised(moments):
+        argv = ["phase", "--moments", *map(repr, moments), "--omega", "1", "1", "1", "--csv"]
+        assert main(argv) == 0
+        table = pd.read_csv(io.StringIO(capsys.readouterr().out), comment="#")
+        return float(table["D_normalised"].iloc[0])
+
+    reference = d_normalised([1.0, 2.0, 3.0])
+    assert reference == pytest.approx(0.62360956446232363, rel=1e-15)
+    scaled = [math.ldexp(v, exponent) for v in (1.0, 2.0, 3.0)]
+    assert d_normalised(scaled) == reference

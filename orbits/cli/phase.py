@@ -212,7 +212,11 @@ def _omega_table(body, args):
             "branch": [motion.branch],
             "D": [motion.D],
             # the catalog's D (|I| = 1): the row of this orbit in a catalog
-            "D_normalised": [motion.D / float(np.linalg.norm(body.moments))],
+            # D / |I| at the unit scale (exact powers of two): |I| itself
+            # over- or underflows for moments beyond 1e+-154
+            "D_normalised": [
+                math.ldexp(motion.D, -body.exponent) / float(np.linalg.norm(body.unit_moments))
+            ],
             "energy": [motion.energy],
             "momentum": [motion.momentum],
             "m": [motion.m],
