@@ -417,3 +417,15 @@ def test_d_normalised_at_any_scale_of_the_moments(exponent, capsys):
     assert reference == pytest.approx(0.62360956446232363, rel=1e-15)
     scaled = [math.ldexp(v, exponent) for v in (1.0, 2.0, 3.0)]
     assert d_normalised(scaled) == reference
+
+
+def test_a_name_stays_one_table_line_and_a_safe_csv_cell(capsys):
+    """--name with a newline split the text table; '=1+2' went into the CSV
+    as a formula (catalogs neutralise such cells: orbits.cells.neutralize)."""
+    assert main(["phase", "--preset", "fig6", "--name", "a\nb", "--theta", "0.3"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].split() == ["name", "[-]", "a\\nb"]
+    assert out[1].startswith("I1 ")
+    assert main(["phase", "--preset", "fig6", "--name", "=1+2", "--theta", "0.3", "--csv"]) == 0
+    table = pd.read_csv(io.StringIO(capsys.readouterr().out), comment="#")
+    assert table["name"].iloc[0] == "'=1+2"

@@ -262,6 +262,12 @@ def _print_table(table, csv, units=None, notes=(), label=None):
     floats = table.select_dtypes("float").columns
     table[floats] = table[floats] + 0.0  # -0.0 (e.g. Omega of a steady spin) prints as 0.0
     if label is not None:
+        if csv:  # as in a catalog: a cell a spreadsheet would run gets a '
+            from ..cells import neutralize
+
+            label = neutralize(label)
+        else:  # one line of the table: control characters as escapes
+            label = "".join(c if c.isprintable() else repr(c)[1:-1] for c in label)
         table.insert(0, "name", label)
     if csv:
         table.to_csv(sys.stdout, index=False, float_format="%.17g")
