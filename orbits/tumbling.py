@@ -281,7 +281,13 @@ def spins_with_periods(body_or_moments, p_psi, p_phi):
     body = as_body(body_or_moments)
     p_psi = positive_finite("P_psi", p_psi)
     p_phi = positive_finite("P_phi", p_phi)
-    table = spins_with_period_ratio(body, p_psi / p_phi)
+    ratio = p_psi / p_phi
+    if not 0.0 < ratio < math.inf:
+        raise InputError(
+            f"P_psi / P_phi = {p_psi!r} / {p_phi!r} does not fit a double: give the "
+            "periods in one time unit (their ratio is what fixes the orbit)"
+        )
+    table = spins_with_period_ratio(body, ratio)
     rows = []
     i3 = float(body.moments[2])
     for dtheta, theta in zip(table["dtheta"].to_numpy(), table["theta"].to_numpy()):

@@ -225,3 +225,8 @@ def test_periods_beyond_a_double_name_the_period_not_a_speed(periods):
     argument the caller never gave."""
     with pytest.raises(orbits.InputError, match=r"P_psi = .* give the periods"):
         orbits.spins_with_periods(orbits.Body.preset("fig6"), *periods)
+
+
+def test_a_period_ratio_beyond_a_double_names_the_periods():
+    with pytest.raises(orbits.InputError, match=r"P_psi / P_phi = 1e\+308 / 1e-308"):
+        orbits.spins_with_periods(orbits.Body.preset("fig6"), 1e308, 1e-308)
