@@ -96,10 +96,11 @@ def probe_directory(directory, path=None):
 
     ``os.access`` answers from the permission bits, and for root almost
     always yes: a read-only mount, ``/sys`` or ``/proc`` are found only by
-    trying.  The probe is an unnamed temporary file (``O_TMPFILE`` where
-    the file system has it, else a named one removed at once), so nothing
-    is left in the directory, even if the process is killed.  ``path``
-    names the target in the message (default: the directory).
+    trying.  The probe is an unnamed temporary file where the file system
+    has ``O_TMPFILE`` (Linux: nothing is left in the directory, even if the
+    process is killed); elsewhere a named temporary (``tmp...``) removed
+    at once, which only a kill in that instant would leave.  ``path`` names
+    the target in the message (default: the directory).
     """
     import tempfile
 
@@ -188,7 +189,9 @@ def _pid_alive(pid):
     except ProcessLookupError:
         return False
     except PermissionError:
-        pass  # exists, owned by someone else
+        # exists, owned by someone else: alive (with hidepid its /proc
+        # entry is hidden from us, which must not read as ended)
+        return True
     return not _zombie(pid)
 
 
@@ -198,7 +201,7 @@ def _zombie(pid):
         with open(f"/proc/{int(pid)}/stat", "rb") as handle:
             text = handle.read()
     except FileNotFoundError:
-        return os.path.isdir("/proc/self")  # gone since os.kill, where /proc works
+        return False  # gone since os.kill, or hidden: taken as alive (a rerun cleans it)
     except OSError:
         return False  # no /proc here (macOS) or not readable: taken as alive
     # "pid (comm) state ...": comm may hold spaces and parentheses

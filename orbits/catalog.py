@@ -367,8 +367,7 @@ def read_catalog(path, *, check=True):
         non-finite numbers; a row that is no closed orbit as the search
         writes it (``n/q`` not above 1 or not in lowest terms, ``dtheta``
         on the wrong side for its branch, ``total_phase`` or ``residual``
-        beyond ``1e-10 * 2 pi n/q``, a repeated row), with or without
-        ``check``.
+        beyond ``1e-10 * 2 pi n/q``), with or without ``check``.
     """
     path = path_argument("path", path)
     try:
@@ -462,7 +461,8 @@ def _check_orbit_rows(path, frame):
     ``dtheta`` on the wrong side of the separatrix for its branch (SAM
     below it, LAM above), a total phase (or residual) more than
     :data:`orbits.search.RESIDUAL_TOLERANCE` of its level away from
-    ``2 pi n/q``, and a row given twice.
+    ``2 pi n/q``.  (A row given twice is not refused: a bodies file may
+    list one body twice under one name, and its catalog repeats its rows.)
     """
     import math
 
@@ -488,10 +488,6 @@ def _check_orbit_rows(path, frame):
         (
             ~(np.abs(frame["residual"].to_numpy(dtype=float)) <= allowed),
             "its residual is too large",
-        ),
-        (
-            frame.duplicated(["body", "branch", "n", "q", "dtheta"]).to_numpy(),
-            "it repeats an earlier row",
         ),
     ]
     for bad, why in reasons:

@@ -42,8 +42,9 @@ def input_limit():
 def read_input_text(path, what):
     """The UTF-8 text of an input file, at most :func:`input_limit` bytes.
 
-    Links, pipes and devices are read as files (``/dev/stdin``); ``what``
-    names the file in the one-line errors (``"bodies file"``,
+    Links, pipes and devices are read as files (``/dev/stdin``); a leading
+    UTF-8 byte-order mark is dropped; ``what`` names the file in the
+    one-line errors (``"bodies file"``,
     ``"point-mass file"``).
 
     Raises
@@ -55,7 +56,8 @@ def read_input_text(path, what):
     from .atomic import read_limited
 
     try:
-        return read_limited(path, input_limit()).decode("utf-8")
+        # utf-8-sig: a leading byte-order mark (Excel's "CSV UTF-8") is dropped
+        return read_limited(path, input_limit()).decode("utf-8-sig")
     except FileNotFoundError:
         raise InputError(f"no {what} at {path}") from None
     except IsADirectoryError:

@@ -297,6 +297,8 @@ def theta_text(theta, dtheta, precision=5):
 
 def orbit_label(row, body_name=None, precision=6):
     """A figure title for a catalog row: multiple, branch, theta, body, closure."""
+    from fractions import Fraction
+
     multiple = f"{row.n}" if row.q == 1 else f"{row.n}/{row.q}"
     name = f"{literal_text(body_name)}: " if body_name else ""
     text = (
@@ -307,7 +309,7 @@ def orbit_label(row, body_name=None, precision=6):
     )
     periods = drawn_periods(row)
     if periods != 1.0:  # T/2 for odd n; q/2 or q periods for p/q
-        closes = getattr(row, "closes_after", periods)
+        closes = Fraction(periods).limit_denominator(1000)
         text += f"; closes after {closes} T (drawn once)"
     return text
 

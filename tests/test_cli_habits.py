@@ -429,3 +429,15 @@ def test_a_name_stays_one_table_line_and_a_safe_csv_cell(capsys):
     assert main(["phase", "--preset", "fig6", "--name", "=1+2", "--theta", "0.3", "--csv"]) == 0
     table = pd.read_csv(io.StringIO(capsys.readouterr().out), comment="#")
     assert table["name"].iloc[0] == "'=1+2"
+
+
+def test_point_masses_file_with_a_byte_order_mark(capsys, tmp_path):
+    """Excel's 'CSV UTF-8' starts with a byte-order mark (and CRLF lines)."""
+    from orbits.cli.shared import _point_masses_from_csv
+
+    path = tmp_path / "masses.csv"
+    path.write_bytes(b"\xef\xbb\xbfmass,x,y,z\r\n1,1,0,0\r\n1,-1,0,0\r\n1,0,2,0\r\n1,0,-2,0.5\r\n")
+    masses, positions = _point_masses_from_csv(str(path))
+    assert masses.tolist() == [1.0, 1.0, 1.0, 1.0]
+    assert positions[3].tolist() == [0.0, -2.0, 0.5]
+    assert main(["phase", "--point-masses", str(path), "--theta", "0.3"]) == 0

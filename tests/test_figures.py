@@ -490,3 +490,21 @@ def test_unknown_paper_figures_and_bad_columns_are_refused(tmp_path):
         with pytest.raises(orbits.errors.InputError, match=message):
             figures.contact_sheet(FIG6, catalog, columns=columns)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_contact_sheet_of_rows_without_closes_after(tmp_path):
+    """p/q rows without closes_after (or NaN there) are drawn over q periods,
+    and their panels say so (an AttributeError before)."""
+    import numpy as np
+
+    import orbits
+    from orbits import figures, plotting
+
+    body = orbits.Body.preset("fig6")
+    rows = orbits.catalog(body, n_max=3, q_max=2)
+    for table in (rows.drop(columns="closes_after"), rows.assign(closes_after=np.nan)):
+        figure = figures.contact_sheet(body, table)
+        titles = [ax.get_title() for ax in figure.axes if ax.get_title()]
+        assert any("(2T)" in title for title in titles)
+        row = next(table[table.q == 2].itertuples())
+        assert plotting.orbit_label(row, "fig6").endswith("closes after 2 T (drawn once)")

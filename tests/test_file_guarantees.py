@@ -590,3 +590,18 @@ def test_a_file_where_the_directory_should_be_is_named_so(tmp_path):
     (tmp_path / "afile").write_text("x")
     with pytest.raises(orbits.InputError, match="afile is not a directory"):
         ensure_writable(tmp_path / "afile" / "a.csv")
+
+
+def test_another_users_process_is_alive_even_where_proc_hides_it(monkeypatch):
+    """kill(pid, 0) -> PermissionError: the process exists (someone else's);
+    with /proc mounted hidepid=2 its /proc entry is missing, which must not
+    read as ended (its live temporaries were removed)."""
+    import orbits.atomic as atomic
+
+    def refused(pid, signal):
+        raise PermissionError(1, "Operation not permitted")
+
+    monkeypatch.setattr(atomic.os, "kill", refused)
+    assert atomic._pid_alive(424242)
+    monkeypatch.setattr(atomic.os, "kill", lambda pid, signal: None)
+    assert atomic._pid_alive(2**22 + 12345)  # no /proc entry: taken as alive
