@@ -557,6 +557,11 @@ class Body:
         """A named body: ``"t-handle"`` (8, 4, 1) or ``"fig6"``.
 
         ``fig6`` is the paper's Fig. 6 body, I = (0.26, 0.55, 0.793662).
+
+        Parameters
+        ----------
+        name : str
+            A key of :data:`orbits.PRESETS`.
         """
         try:
             if not isinstance(name, str):
@@ -1576,8 +1581,17 @@ def region_moments(i1, i2):
 def region_grid(resolution):
     """Bodies on an N x N grid (cell centres) over the region's bounding box.
 
-    Returns an (n, 3) array of unit-norm moments, the grid points inside
-    the region, in row-major order of (I1, I2).
+    Parameters
+    ----------
+    resolution : int
+        N, the cells along each side of the box (``>= 2``); about 0.39 N^2
+        of the cell centres lie inside the region.
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+        Unit-norm moments (``|I| = 1``, the paper's I1-I2 plane), the grid
+        points inside the region, in row-major order of (I1, I2).
 
     Raises
     ------
@@ -1610,6 +1624,16 @@ def region_sample(count):
 
     A Halton sequence (bases 2 and 3) over the bounding box, keeping the
     points inside the region until there are ``count`` of them.
+
+    Parameters
+    ----------
+    count : int
+        Bodies wanted, ``>= 1``.
+
+    Returns
+    -------
+    ndarray, shape (count, 3)
+        Unit-norm moments (``|I| = 1``), in the order drawn.
 
     Raises
     ------

@@ -291,6 +291,18 @@ def write_catalog(frame, path, command=None, notes=()):
     so each stays one ``#`` line; :func:`read_catalog` unescapes them.
     ``path`` ``"-"`` writes to standard output.
 
+    Parameters
+    ----------
+    frame : pandas.DataFrame
+        Catalog rows (:data:`orbits.CATALOG_COLUMNS`, optionally
+        ``closure_error`` and the nearest-orbit columns).
+    path : str or Path
+        The file, replaced atomically, or ``"-"``.
+    command : str, optional
+        The command that made it, for the header.
+    notes : sequence of str
+        Extra header lines.
+
     Raises
     ------
     ArgumentTypeError

@@ -689,6 +689,20 @@ def verify_body(body, n_angles=22, *, tolerance=TOLERANCE, progress=None, chunk=
     given).  The phases do not depend on the scale; the tolerances of the
     integrators are absolute for ``|omega0| = 1`` and moments near 1.
 
+    Parameters
+    ----------
+    body : Body or array_like, shape (3,)
+        The body, or its principal moments (any order, any scale).
+    n_angles : int
+        Angles ``theta_j`` checked (default 22, as the paper's check).
+    tolerance : float
+        Radians each discrepancy may reach (or 16 spacings of doubles at
+        the phase, where that is larger), as :func:`verify`.
+    progress : callable, optional
+        Called with the number of initial conditions of each finished chunk.
+    chunk : int
+        Initial conditions per chunk of work.
+
     Returns
     -------
     VerifyReport

@@ -310,6 +310,19 @@ class Motion:
         spin as given, and its period, E, M and total phase equal those of
         the spin folded by :func:`orbits.phases.fold_angle`.
 
+        Parameters
+        ----------
+        body : Body or array_like, shape (3,)
+        theta : float, optional
+            Polar angle of omega0 from the I3 axis, radians.
+        dtheta : float, optional
+            ``theta - theta_crit`` instead of ``theta`` (exactly one of the two).
+        phi : float
+            Azimuth of omega0 from the I1 axis, radians (default 0).
+        speed : float
+            ``|omega0|``, positive, rad per unit of the motion's time
+            (default 1: times in units of ``1/|omega0|``).
+
         Raises
         ------
         AngleError, SeparatrixError

@@ -113,6 +113,14 @@ def phase_levels(n_max, q_max=1):
     All fractions ``p/q`` in lowest terms with ``1 <= q <= q_max`` and
     ``0 < p/q <= n_max``.
 
+    Parameters
+    ----------
+    n_max : int
+        Largest multiple of 2 pi, ``>= 1``.
+    q_max : int
+        Largest denominator (periods after which an orbit closes), ``>= 1``;
+        1 gives the whole multiples ``2 pi n`` only.
+
     Returns
     -------
     p, q : ndarray of int
@@ -500,6 +508,11 @@ def catalog_rows(body, moments, level, offset, p, q, levels):
 
 def minimum_phase(body):
     """The smallest total phase over all spins of a body (phi = 0).
+
+    Parameters
+    ----------
+    body : Body or array_like, shape (3,)
+        The body, or its principal moments (any order, any scale).
 
     Returns
     -------

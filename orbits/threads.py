@@ -34,6 +34,11 @@ def _numba():
 def set_num_threads(count):
     """Use ``count`` threads for large inputs (1 <= count <= NUMBA_NUM_THREADS).
 
+    Parameters
+    ----------
+    count : int
+        Threads for the parallel kernels from now on, in this process.
+
     Raises
     ------
     ArgumentTypeError
