@@ -205,8 +205,8 @@ def _zombie(pid):
     except OSError:
         return False  # no /proc here (macOS) or not readable: taken as alive
     # "pid (comm) state ...": comm may hold spaces and parentheses
-    state = text[text.rfind(b")") + 2 : text.rfind(b")") + 3]
-    return state in (b"Z", b"X")
+    after = text.rfind(b")") + 2
+    return text[after : after + 1] in (b"Z", b"X")
 
 
 def remove_stale_temporaries(directory, name, regex=False):

@@ -36,7 +36,7 @@ from .atomic import atomic_path, csv_float_options
 from .bodies import FLAT_SLACK, Body, flat_excess, validate_moments
 from .cells import escape_header, neutralize, unescape_header, unneutralize
 from .errors import ArgumentTypeError, InputError, OrbitsError
-from .limits import check_search_bounds, plural
+from .limits import check_search_bounds, plural, read_input_bytes, read_input_text
 from .search import CATALOG_COLUMNS, closed_orbits
 
 VERIFIED_COLUMN = "closure_error"
@@ -382,15 +382,7 @@ def read_catalog(path, *, check=True):
         beyond ``1e-10 * 2 pi n/q``), with or without ``check``.
     """
     path = path_argument("path", path)
-    try:
-        with open(path, "rb") as handle:
-            raw = handle.read()
-    except FileNotFoundError:
-        raise InputError(f"no catalog at {path}") from None
-    except IsADirectoryError:
-        raise InputError(f"{path} is a directory, not a catalog") from None
-    except OSError as error:
-        raise InputError(f"cannot read {path}: {error.strerror}") from None
+    raw = read_input_bytes(path, "catalog")  # no limit: the file orbits wrote
     try:
         header, data = _split_header(raw)
     except UnicodeDecodeError:
@@ -589,8 +581,6 @@ def read_bodies_csv(path, skip_invalid=False):
         ``skip_invalid``) the first bad row, named by its row number, with
         the count of further bad rows.
     """
-    from .limits import read_input_text
-
     text = read_input_text(path, "bodies file")
     lines = text.split("\n")
     start = 0

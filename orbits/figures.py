@@ -232,10 +232,8 @@ def closed_herpolhode_figure(body, row, name=None, *, limit=None, radii=None):
 
 def _periods_text(row):
     """``T/2``, ``3T/2``...: the time a row's herpolhode closes in
-    (:func:`orbits.plotting.drawn_periods`: ``closes_after``, else q)."""
-    from fractions import Fraction
-
-    periods = Fraction(plotting.drawn_periods(row)).limit_denominator(1000)
+    (:func:`orbits.plotting.closing_periods`: ``closes_after``, else q)."""
+    periods = plotting.closing_periods(row)
     head = "" if periods.numerator == 1 else f"{periods.numerator}"
     return f"{head}T/{periods.denominator}" if periods.denominator > 1 else f"{head}T"
 

@@ -39,6 +39,32 @@ def input_limit():
     return memory_budget() // 16
 
 
+def read_input_bytes(path, what, limit=None):
+    """The bytes of an input file (at most ``limit`` when given).
+
+    Links, pipes and devices are read as files (``/dev/stdin``); ``what``
+    names the file in the one-line errors (``"catalog"``, ``"bodies file"``).
+
+    Raises
+    ------
+    InputError
+        No such file, a directory, unreadable, or larger than ``limit``.
+    """
+    from .atomic import read_limited
+
+    try:
+        if limit is None:
+            with open(path, "rb") as handle:
+                return handle.read()
+        return read_limited(path, limit)
+    except FileNotFoundError:
+        raise InputError(f"no {what} at {path}") from None
+    except IsADirectoryError:
+        raise InputError(f"{path} is a directory, not a {what}") from None
+    except OSError as error:
+        raise InputError(f"cannot read {path}: {error.strerror}") from None
+
+
 def read_input_text(path, what):
     """The UTF-8 text of an input file, at most :func:`input_limit` bytes.
 
@@ -53,19 +79,12 @@ def read_input_text(path, what):
         No such file, a directory, not UTF-8 text, unreadable, or larger
         than the limit.
     """
-    from .atomic import read_limited
-
+    data = read_input_bytes(path, what, input_limit())
     try:
         # utf-8-sig: a leading byte-order mark (Excel's "CSV UTF-8") is dropped
-        return read_limited(path, input_limit()).decode("utf-8-sig")
-    except FileNotFoundError:
-        raise InputError(f"no {what} at {path}") from None
-    except IsADirectoryError:
-        raise InputError(f"{path} is a directory, not a {what}") from None
+        return data.decode("utf-8-sig")
     except UnicodeDecodeError:
         raise InputError(f"{path} is not a {what} (not UTF-8 text)") from None
-    except OSError as error:
-        raise InputError(f"cannot read {path}: {error.strerror}") from None
 
 
 # measured here (phase_levels(1000, 30): 465,000 candidate fractions in 1.9 s)

@@ -276,14 +276,21 @@ def mark_herpolhode(ax, curve, radii, *, arrow_length=0.18, color=None, centre_l
     return {"start": start, "arrow": arrow, "centre": centre, "circles": circles}
 
 
-def drawn_periods(row):
-    """Periods over which a catalog row's herpolhode closes (``closes_after``, else q)."""
+def closing_periods(row):
+    """Periods after which a catalog row's herpolhode closes, a Fraction
+    (``closes_after``; q where the row has none or NaN)."""
     from fractions import Fraction
 
     value = getattr(row, "closes_after", None)
     if value is None or (isinstance(value, float) and math.isnan(value)):
-        return float(row.q)
-    return float(Fraction(str(value)))
+        return Fraction(int(row.q))
+    return Fraction(str(value))
+
+
+def drawn_periods(row):
+    """Periods over which a catalog row's herpolhode closes, a float
+    (:func:`closing_periods`)."""
+    return float(closing_periods(row))
 
 
 def theta_text(theta, dtheta, precision=5):
@@ -297,8 +304,6 @@ def theta_text(theta, dtheta, precision=5):
 
 def orbit_label(row, body_name=None, precision=6):
     """A figure title for a catalog row: multiple, branch, theta, body, closure."""
-    from fractions import Fraction
-
     multiple = f"{row.n}" if row.q == 1 else f"{row.n}/{row.q}"
     name = f"{literal_text(body_name)}: " if body_name else ""
     text = (
@@ -307,9 +312,8 @@ def orbit_label(row, body_name=None, precision=6):
         + "\n"
         + rf"$\theta-\theta_c$ = {row.dtheta:.3e} rad"
     )
-    periods = drawn_periods(row)
-    if periods != 1.0:  # T/2 for odd n; q/2 or q periods for p/q
-        closes = Fraction(periods).limit_denominator(1000)
+    closes = closing_periods(row)
+    if closes != 1:  # T/2 for odd n; q/2 or q periods for p/q
         text += f"; closes after {closes} T (drawn once)"
     return text
 
