@@ -511,7 +511,9 @@ def test_a_stopped_figure_set_leaves_no_directory_it_made(tmp_path):
     """`timeout -s TERM 3 orbits figures ... --out nd/sub/dir` left the empty
     chain nd/sub/dir behind."""
     out = tmp_path / "nd" / "sub" / "dir"
-    argv = [sys.executable, "-m", "orbits", "figures", "--preset", "fig6", "--n-max", "10"]
+    # n <= 24: about 10 s of drawing after the directory is made, so that a
+    # busy machine still stops the run while it draws
+    argv = [sys.executable, "-m", "orbits", "figures", "--preset", "fig6", "--n-max", "24"]
     argv += ["--formats", "png", "--out", str(out)]
     proc = subprocess.Popen(argv, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 120

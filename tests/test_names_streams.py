@@ -277,6 +277,37 @@ def test_a_second_signal_during_clean_up_is_ignored(monkeypatch, capsys):
     assert {n: signal.getsignal(n) for n in before} == before
 
 
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT])
+def test_a_stop_put_off_until_the_run_ends_is_not_dropped(signum, monkeypatch, capsys):
+    """A stop signal that comes while the last files are moved into place is
+    put off; a run that ended before its retry timer fired exited 0 (the
+    flaky end of test_a_stopped_figure_set_leaves_no_directory_it_made)."""
+    import orbits.atomic
+    import orbits.cli.phase
+
+    def run(args):
+        orbits.atomic._COMMITTING.append(True)  # as file_set does while it moves files
+        try:
+            os.kill(os.getpid(), signum)
+            sum(range(1000))  # the handler runs here and puts the stop off
+        finally:
+            orbits.atomic._COMMITTING.clear()
+        return 0  # at once: well within the retry interval
+
+    monkeypatch.setattr(orbits.cli.phase, "_cmd_phase", run)
+    before = {n: signal.getsignal(n) for n in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}
+    alarm = signal.getsignal(signal.SIGALRM)
+    code = main(["phase", "--preset", "fig6", "--theta", "0.3"])
+    err = capsys.readouterr().err.strip().splitlines()
+    if signum == signal.SIGINT:
+        assert (code, err) == (130, ["orbits: interrupted; no partial output was written"])
+    else:
+        assert (code, err) == (143, ["orbits: stopped by SIGTERM; no partial output was written"])
+    assert {n: signal.getsignal(n) for n in before} == before
+    assert signal.getsignal(signal.SIGALRM) == alarm
+    assert signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)
+
+
 def test_using_threads_restores_the_count_before():
     """The bench rows' switch: the block runs on ``count`` threads, then the old count
     is back, also when the block raises."""

@@ -201,6 +201,26 @@ def _end_deferral():
         signal.signal(signal.SIGALRM, _DEFERRED.pop()[1])
 
 
+def _raise_pending_stop():
+    """Raise a stop that was put off (:func:`_defer`) and not yet raised again.
+
+    A stop signal that came while the last files were moved into place
+    waits for its retry timer; a run that ends before the timer fires
+    would otherwise drop it in :func:`main`'s clean-up and exit 0.  The
+    output is whole then (the move finished), and the run still ends as
+    stopped: one line, 128 + N.
+    """
+    if _DEFERRED:
+        signum = _DEFERRED[0][0]
+        _end_deferral()
+        _hold_signals()
+        if signum == signal.SIGINT:
+            raise KeyboardInterrupt
+        from ..atomic import Terminated
+
+        raise Terminated(signum)
+
+
 def _raise_terminated(signum, frame):
     from ..atomic import Terminated
 
@@ -341,6 +361,7 @@ def main(argv=None):
             # after its first chunk, once pyarrow and its table kernels are loaded
             release_collector()
         code = args.run(args)
+        _raise_pending_stop()
         for note in getattr(args, "notes", ()):
             print(f"orbits: note: {note}", file=sys.stderr)
         return code
