@@ -360,6 +360,25 @@ def motion_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0):
     Eq. A12, with Carlson's :math:`R_J`) after one period, per Eq. (19);
     radians.
 
+    Parameters
+    ----------
+    body_or_moments : Body or array_like, shape (3,)
+        One body (moments in any order and scale).
+    theta : float, optional
+        Polar angle of omega0 from the I3 axis, radians (folded as
+        :func:`orbits.total_phase` folds it).  Give ``theta`` or ``dtheta``.
+    dtheta : float, optional
+        The offset ``theta - theta_c`` from the separatrix instead, radians,
+        nonzero (negative on SAM, positive on LAM).
+    phi : float
+        Azimuth of omega0 from the I1 axis, radians; default 0.
+
+    Returns
+    -------
+    float
+        Radians; equal to :func:`orbits.total_phase` of the same spin
+        (an independent evaluation: the motion's Euler angle).
+
     Examples
     --------
     >>> import numpy as np, orbits

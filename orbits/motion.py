@@ -413,6 +413,12 @@ class Motion:
         Every method that takes times (``omega``, ``euler_angles``,
         ``rotation``, ``quaternion``, ...) takes them here.
 
+        Parameters
+        ----------
+        t : float or array_like
+            Times since the start, in the time unit of ``omega0`` (s for
+            rad/s); any shape, negative times included.
+
         Raises
         ------
         InputError

@@ -565,6 +565,11 @@ def phase_limits(body_or_moments):
     equations gives eqn:alphamin1 and eqn:alphamin2 (the paper labels both
     ``alpha_min,z``; the second is the limit at the I1, i.e. x, axis).
 
+    Parameters
+    ----------
+    body_or_moments : Body or array_like, shape (..., 3)
+        Bodies (moments in any order and scale).
+
     Returns
     -------
     PhaseLimits

@@ -189,6 +189,13 @@ def spins_with_period_ratio(body_or_moments, ratio):
     scale (``|omega0|``) then follows from either period:
     ``|omega0| = T(|omega0| = 1) / P_psi``.
 
+    Parameters
+    ----------
+    body_or_moments : Body or array_like, shape (3,)
+        One body (moments in any order and scale).
+    ratio : float
+        ``P_psi / P_phi``, positive and finite (dimensionless).
+
     Returns
     -------
     pandas.DataFrame
