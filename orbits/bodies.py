@@ -36,6 +36,12 @@ def _two_sum(a, b):
     return s, (a - (s - bb)) + (b - bb)
 
 
+def _sum_of_three(a, b, c):
+    """``a + b + c`` from the exact ``a + b`` (TwoSum): accurate where ``c`` cancels it."""
+    s, e = _two_sum(a, b)
+    return (s + c) + e
+
+
 def flat_excess(unit):
     """``I3 - I1 - I2`` of sorted moments, with its sign decided exactly.
 
@@ -637,10 +643,24 @@ class Body:
         ``a >= b >= c``.  A flat body gives ``c = 0``.  The moments are
         used as given (not normalised), e.g. the unit-mass T-handle
         (8, 4, 1) gives (4.23281, 3.07318, 0.645497) (Fig. 1 caption).
+
+        Computed on the scale-free moments (``unit_moments * 2**exponent``,
+        as every other routine), so moments near the top or the bottom of
+        the double range give finite semi-axes; each sum of three moments
+        keeps its relative accuracy where it cancels (TwoSum), and ``c`` is
+        0 exactly when :attr:`is_flat`.
         """
-        i1, i2, i3 = self._moments
-        squares = 2.5 * np.array([i2 + i3 - i1, i1 + i3 - i2, i1 + i2 - i3])
-        return tuple(float(v) for v in np.sqrt(np.clip(squares, 0.0, None)))
+        i1, i2, i3 = (float(v) for v in self._unit)
+        squares = [
+            _sum_of_three(i2, i3, -i1),
+            _sum_of_three(i1, i3, -i2),
+            max(-float(flat_excess(self._unit.reshape(1, 3))[0]), 0.0),
+        ]
+        # sqrt(x 2**e) = sqrt(x 2**(e mod 2)) 2**(e // 2), exactly scaled
+        half, odd = divmod(self._exponent, 2)
+        return tuple(
+            math.ldexp(math.sqrt(2.5 * square * (2.0 if odd else 1.0)), half) for square in squares
+        )
 
     def critical_angle(self, phi=0.0):
         """Polar angle of the separatrix spin, radians; see :func:`orbits.critical_angle`."""

@@ -80,6 +80,35 @@ class TestEllipsoids:
         body = Body.from_semi_axes(3.0, 2.0, 0.5)
         np.testing.assert_allclose(body.equivalent_ellipsoid(), (3.0, 2.0, 0.5), rtol=1e-14)
 
+    @pytest.mark.parametrize(
+        "moments",
+        [
+            (1e308, 1.5e308, 1.7e308),  # the sums overflowed: (inf, inf, inf)
+            (1e-310, 1.5e-310, 1.7e-310),  # subnormal moments
+            (0.1, 0.2, 0.2999999999),  # I1 + I2 - I3 cancels
+            (3e-5, 1.0, 1.00001),  # I1 + I3 - I2 cancels
+        ],
+    )
+    def test_equivalent_ellipsoid_at_any_scale_against_mpmath(self, moments):
+        """eqn:ellipsoid on the double moments, in mpmath at 50 digits: each
+        semi-axis within 4 ulp, also where the sums overflow or cancel."""
+        import mpmath
+
+        body = Body(moments)
+        with mpmath.workdps(50):
+            i1, i2, i3 = (mpmath.mpf(float(v)) for v in body.moments)
+            exact = [mpmath.sqrt(2.5 * s) for s in (i2 + i3 - i1, i1 + i3 - i2, i1 + i2 - i3)]
+        for got, want in zip(body.equivalent_ellipsoid(), exact):
+            assert math.isfinite(got)
+            assert abs(got - float(want)) <= 4 * math.ulp(float(want)), (got, float(want))
+
+    def test_equivalent_ellipsoid_scales_exactly(self):
+        """Moments 4**k times as large give semi-axes 2**k times as large, bit for bit."""
+        base = Body((0.26, 0.55, 0.793662)).equivalent_ellipsoid()
+        for k in (-500, -3, 1, 480):
+            scaled = Body([math.ldexp(v, 2 * k) for v in (0.26, 0.55, 0.793662)])
+            assert scaled.equivalent_ellipsoid() == tuple(math.ldexp(v, k) for v in base)
+
     def test_semi_axes_in_caller_order(self):
         body = Body.from_semi_axes(0.5, 3.0, 2.0)
         # largest semi-axis (caller's y) carries the smallest moment
