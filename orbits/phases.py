@@ -426,10 +426,15 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0, device="cp
 def at_least_two_pi(total):
     """``max(Delta alpha, 2 pi)``, in place.
 
-    ``Delta alpha > 2 pi`` for every spin of every physical body, with
-    ``2 pi`` only the limit theta -> 0 on the flat edge ``I3 = I1 + I2``
+    ``Delta alpha >= 2 pi`` at both ends of every branch of every physical
+    body (eqns alphamin1/2 with the triangle inequalities), with ``2 pi``
+    only the limit theta -> 0 on the flat edge ``I3 = I1 + I2``
     (eqn:alphamin1 with ``I3 - I2 = I1``); there rounding can land a few
-    ulp below, which would read as an orbit closing after one turn.
+    ulp below, which would read as an orbit closing after one turn.  In
+    between it rests on the paper's conjecture that the minimum lies at an
+    end, which the surveys test on every body and
+    :func:`orbits.minimum_phase` checks by a full scan (the search kernels
+    themselves evaluate the phase unclamped).
     """
     return np.maximum(total, 2.0 * np.pi, out=total)
 

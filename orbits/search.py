@@ -337,6 +337,12 @@ def closed_orbits(body, n_max=10, q_max=1):
         One row per closed orbit, sorted by ``theta`` (i.e. by ``dtheta``),
         with the columns of :data:`CATALOG_COLUMNS` (see :data:`CATALOG_SCHEMA`
         and the documentation's catalog schema).  ``n`` is ``p``; ``q`` is 1 for integer orbits.
+        ``attrs["unresolved"]`` counts the orbits left out (below);
+        ``attrs["minimum_phase"]`` maps ``"SAM"`` and ``"LAM"`` to each
+        branch's smallest phase and its ``dtheta``, as the search found
+        them: the end of the branch wherever the phase decreased at every
+        point tested (:func:`orbits.core.search.monotone_at_probes`), else
+        the minimum of a full scan (:func:`minimum_phase` always scans).
 
     Raises
     ------
@@ -383,14 +389,14 @@ def closed_orbits(body, n_max=10, q_max=1):
     )
     frame.attrs["unresolved"] = unreached
     frame.attrs["minimum_phase"] = {
-        "SAM": (
-            _at_least_two_pi(info[_kernels.INFO_MIN_SAM]),
-            float(info[_kernels.INFO_MIN_AT_SAM]),
-        ),
-        "LAM": (
-            _at_least_two_pi(info[_kernels.INFO_MIN_LAM]),
-            float(info[_kernels.INFO_MIN_AT_LAM]),
-        ),
+        name: (
+            _at_least_two_pi(info[low], info[at], info),
+            float(info[at]),
+        )
+        for name, low, at in (
+            ("SAM", _kernels.INFO_MIN_SAM, _kernels.INFO_MIN_AT_SAM),
+            ("LAM", _kernels.INFO_MIN_LAM, _kernels.INFO_MIN_AT_LAM),
+        )
     }
     return frame
 
@@ -521,21 +527,39 @@ def minimum_phase(body):
         where it lies (``-theta_crit`` is theta = 0, ``pi/2 - theta_crit`` is
         theta = pi/2: the paper's conjecture is that it is always one of
         these ends).
+
+    Notes
+    -----
+    Each branch is scanned (:func:`orbits.core.search.search_body_bracketing`:
+    about 330 points in ``dtheta``, log-spaced towards the separatrix, and
+    every interior extremum of the scan refined), so the minimum is found
+    wherever it lies; the search for orbits assumes it at an end and only
+    probes that (:func:`orbits.core.search.monotone_at_probes`).
     """
     moments, _ = unit_moments(body)
     if moments.shape != (3,):
         raise InputError("minimum_phase takes one body")
-    _, _, _, info = find_roots(moments, np.empty(0))
+    levels = np.empty(0)
+    info = np.empty(_kernels.INFO_SIZE)
+    _kernels.search_body_bracketing(
+        *moments, levels, np.empty(0, np.int8), np.empty(0, np.int64), np.empty(0), info
+    )
     sam = (info[_kernels.INFO_MIN_SAM], info[_kernels.INFO_MIN_AT_SAM])
     lam = (info[_kernels.INFO_MIN_LAM], info[_kernels.INFO_MIN_AT_LAM])
     best = min(sam, lam)
-    return _at_least_two_pi(best[0]), float(best[1])
+    return _at_least_two_pi(best[0], best[1], info), float(best[1])
 
 
-def _at_least_two_pi(value):
-    """``max(value, 2 pi)``: the minimum is >= 2 pi for every physical body.
+def _at_least_two_pi(value, dtheta, info):
+    """``max(value, 2 pi)`` for a minimum at an end of its branch, else ``value``.
 
-    On the flat edge it is 2 pi (at theta -> 0), which rounding can miss by
-    a few ulp from below; the true value is never below.
+    At the ends the phase is >= 2 pi for every physical body (eqns
+    alphamin1/2 with the triangle inequalities); on the flat edge it is
+    2 pi at theta -> 0, which rounding can miss by a few ulp from below.
+    A minimum inside a branch (a counterexample to the paper's conjecture)
+    is returned as found.
     """
+    width = info[_kernels.INFO_WIDTH_SAM] if dtheta < 0.0 else info[_kernels.INFO_WIDTH_LAM]
+    if abs(dtheta) != width:
+        return float(value)
     return float(max(float(value), TWO_PI))

@@ -102,11 +102,48 @@ def test_same_roots_as_the_bracketing_search(compared):
 
 
 def test_five_times_fewer_evaluations_and_no_fallback(compared):
+    """At most 5 evaluations per root beside the monotonicity probe (at most
+    PROBE_POINTS per branch), and 5 times fewer than the bracketing scan in all."""
     _, rows, evaluations, fallbacks = compared
     roots = sum(new[2].size for _, new, _ in rows)
-    assert evaluations[0] / roots <= 5.0
+    probes = 2 * kernels.PROBE_POINTS * len(rows)
+    assert (evaluations[0] - probes) / roots <= 5.0
     assert evaluations[1] >= 5 * evaluations[0]
     assert fallbacks == 0
+
+
+@pytest.mark.parametrize(
+    "wiggle, waves, depth, rising",
+    [
+        (0.0, 3.0, 0.0, False),
+        (0.0, 3.0, 3.0, False),
+        (2.0, 3.0, 0.0, True),
+        (1.0, 2.0, 0.0, True),
+        (0.5, 3.0, 3.0, True),
+    ],
+)
+def test_the_probe_sends_a_rising_branch_to_the_bracketing_scan(wiggle, waves, depth, rising):
+    """The probe tests the search's assumption on every branch, also where no
+    level lies in the branch's range: a profile with a bump across the
+    branch rises between probe points and is refused; a decreasing one (a
+    dip that deepens into the far end still decreases) passes.  (A sample
+    of 14 points per branch: a wiggle finer than their spacing can pass it,
+    and is then caught by Newton's slope checks only where it evaluates.)"""
+    width = 0.7
+    params = np.array([1.0, 10.0, wiggle, waves, depth, 0.05, width])
+    top = kernels.synthetic_profile(kernels.SMALLEST_OFFSET, params)
+    end = kernels.synthetic_profile(width, params)
+    monotone = kernels.monotone_at_probes(kernels.KIND_SYNTHETIC, params, width, top, end)
+    assert monotone is not rising
+
+
+def test_probe_points_ascend_within_the_branch():
+    width = 0.3
+    points = [kernels.probe_offset(k, width) for k in range(kernels.PROBE_POINTS)]
+    assert points == sorted(points) and len(set(points)) == len(points)
+    assert points[0] == pytest.approx(width * 1e-256, rel=1e-13)
+    assert points[kernels.PROBE_DECADES - 1] == pytest.approx(width / 10, rel=1e-15)
+    assert 0.0 < points[0] and points[-1] < width
 
 
 def test_deep_levels_near_the_smallest_double():

@@ -49,7 +49,9 @@ def test_body_counts_match_a_group_by():
 
 def _body_columns_numpy(moments, info, end_slack, end_tolerance):
     """The bodies table's columns as the survey made them with NumPy before
-    rows.body_columns (orbits.survey.compute._body_rows, 2026-11-28)."""
+    rows.body_columns (orbits.survey.compute._body_rows, 2026-11-28), with
+    one later change: the minimum is raised to 2 pi only where it lies at an
+    end (a minimum inside a branch is kept as found)."""
     from orbits.core import search as kernels
     from orbits.phases import phase_limits
 
@@ -59,13 +61,14 @@ def _body_columns_numpy(moments, info, end_slack, end_tolerance):
     sam_min = info[:, kernels.INFO_MIN_SAM]
     lam_min = info[:, kernels.INFO_MIN_LAM]
     use_sam = sam_min <= lam_min
-    minimum = np.maximum(np.where(use_sam, sam_min, lam_min), 2.0 * np.pi)
+    chosen = np.where(use_sam, sam_min, lam_min)
     where = np.where(use_sam, info[:, kernels.INFO_MIN_AT_SAM], info[:, kernels.INFO_MIN_AT_LAM])
     end_value = np.minimum(limits.theta_zero, limits.theta_half_pi)
     at_end = (
         np.abs(np.abs(where) - np.where(use_sam, theta_c, info[:, kernels.INFO_WIDTH_LAM]))
         <= end_slack
-    ) & (minimum >= end_value * (1.0 - end_tolerance))
+    ) & (chosen >= end_value * (1.0 - end_tolerance))
+    minimum = np.where(at_end, np.maximum(chosen, 2.0 * np.pi), chosen)
     floats = np.stack(
         [
             moments[:, 0] / norm,
@@ -132,3 +135,19 @@ def test_body_columns_are_numpys_bits():
     # the searched bodies all have their minimum at an end; the altered info not
     assert ends[0].all() and ends[1].any() and not ends[1].all()
     assert np.isnan(rows.body_columns(*cases[1], slack, 1e-12)[0]).any()
+
+
+def test_a_minimum_inside_a_branch_is_kept_below_2_pi():
+    """A counterexample's minimum (inside a branch) is reported as found, not
+    raised to 2 pi as an end value is (the ends are >= 2 pi, rounding aside)."""
+    from orbits.core import search as kernels
+    from orbits.survey import compute
+
+    found = compute.search_chunk(np.array([[0.3, 0.6, 0.9], [0.26, 0.55, 0.793662]]), 6)
+    info = found.info.copy()
+    width = info[:, kernels.INFO_WIDTH_SAM]
+    info[:, kernels.INFO_MIN_SAM] = [2 * np.pi - 1e-15, 5.0]  # flat edge's end; a dip
+    info[:, kernels.INFO_MIN_AT_SAM] = [-width[0], -0.5 * width[1]]
+    floats, at_end, _ = rows.body_columns(found.moments, info, 1e-9 * np.pi, 1e-12)
+    assert at_end.tolist() == [True, False]
+    assert floats[6].tolist() == [2 * np.pi, 5.0]

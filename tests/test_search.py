@@ -158,6 +158,30 @@ def test_minimum_phase_at_the_ends():
     assert where == pytest.approx(-orbits.critical_angle(FIG6))  # theta = 0
 
 
+def test_minimum_phase_scans_and_keeps_a_minimum_inside_a_branch(monkeypatch):
+    """minimum_phase takes the minimum of the full scan of each branch (the
+    bracketing search), wherever it lies; one inside a branch is reported as
+    found, also below 2 pi (only an end value is raised to 2 pi)."""
+    import orbits.search as search_module
+
+    kernels = search_module._kernels
+    scan = kernels.search_body_bracketing
+    calls = []
+
+    def dipping_scan(i1, i2, i3, levels, branch, level, offset, info):
+        count = scan(i1, i2, i3, levels, branch, level, offset, info)
+        calls.append(levels.size)
+        info[kernels.INFO_MIN_LAM] = 6.0  # below 2 pi, inside the LAM branch
+        info[kernels.INFO_MIN_AT_LAM] = 0.25 * info[kernels.INFO_WIDTH_LAM]
+        return count
+
+    monkeypatch.setattr(kernels, "search_body_bracketing", dipping_scan)
+    value, where = minimum_phase(FIG6)
+    assert calls == [0]
+    width = np.pi / 2 - orbits.critical_angle(FIG6)
+    assert value == 6.0 and where == pytest.approx(0.25 * width, rel=1e-15)
+
+
 def test_body_with_no_two_pi_orbit():
     # every physical body: minimum phase > 2 pi, so n = 1 never occurs
     table = closed_orbits(Body((0.3, 0.5, 0.7)), n_max=1)

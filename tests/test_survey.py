@@ -540,7 +540,8 @@ def test_chunk_summaries_combine_as_the_whole_table():
     # counterexamples in two chunks, a 2 pi orbit and unresolved bodies,
     # so that every figure of the summary is exercised
     bodies.loc[[3, 40, 41], "min_at_end"] = False
-    bodies.loc[[5, 50], "n_smallest"] = 1
+    # a minimum below 2 pi (inside a branch): a spin with Delta alpha = 2 pi
+    bodies.loc[[5, 50], "min_total_phase"] = [6.0, 2 * np.pi * (1 - 1e-15)]
     bodies.loc[[2, 33, 59], "unresolved"] = [1, 2, 1]
     bodies.loc[12, "min_total_phase"] = np.nan  # skipped, as on the whole column
     whole = bodies_summary(bodies)

@@ -123,7 +123,13 @@ def _cmd_survey(args):
             f"{report['bodies_with_a_two_pi_orbit']}"
         )
         if conjecture["held_on_every_body"]:
-            print("conjecture (the minimum lies at theta -> 0 or pi/2): held on every body")
+            from ..core.search import PROBE_POINTS
+
+            print(
+                "conjecture (the minimum lies at theta -> 0 or pi/2): held on every body "
+                f"(the phase fell at every point tested: {PROBE_POINTS} per branch and "
+                "each search step)"
+            )
         else:
             print(
                 f"conjecture (the minimum lies at theta -> 0 or pi/2): FAILED on "

@@ -163,7 +163,8 @@ def body_columns(moments, info, end_slack, end_tolerance):
     floats : ndarray (9, n)
         :data:`BODY_FLOAT_COLUMNS`, one row each: the unit moments ``I/|I|``, theta_c, the
         two end limits of the total phase, the minimum total phase (at least
-        2 pi), its ``dtheta`` and its ``theta`` (rad).
+        2 pi where it lies at an end, as found inside a branch), its
+        ``dtheta`` and its ``theta`` (rad).
     at_end : ndarray of bool (n,)
         The minimum lies at an end of its branch and equals the end value.
     unresolved : ndarray of int64 (n,)
@@ -186,8 +187,6 @@ def body_columns(moments, info, end_slack, end_tolerance):
         lam_min = info[k, INFO_MIN_LAM]
         use_sam = sam_min <= lam_min
         chosen = sam_min if use_sam else lam_min
-        # np.maximum(chosen, 2 pi): NaN stays NaN
-        minimum = chosen if (chosen != chosen or chosen >= two_pi) else two_pi
         where = info[k, INFO_MIN_AT_SAM] if use_sam else info[k, INFO_MIN_AT_LAM]
         # np.minimum: NaN from either side
         if at_zero != at_zero or at_half_pi != at_half_pi:
@@ -196,8 +195,13 @@ def body_columns(moments, info, end_slack, end_tolerance):
             end_value = min(at_zero, at_half_pi)
         width = theta_c if use_sam else info[k, INFO_WIDTH_LAM]
         at_end[k] = (abs(abs(where) - width) <= end_slack) and (
-            minimum >= end_value * (1.0 - end_tolerance)
+            chosen >= end_value * (1.0 - end_tolerance)
         )
+        # np.maximum(chosen, 2 pi) at an end (>= 2 pi there, rounding aside;
+        # NaN stays NaN); a minimum inside a branch is kept as found
+        minimum = chosen
+        if at_end[k] and chosen < two_pi:
+            minimum = two_pi
         floats[0, k] = i1 / norm
         floats[1, k] = i2 / norm
         floats[2, k] = i3 / norm

@@ -67,6 +67,12 @@ _GOLDEN = 0.3819660112501051
 # relative size of rounding noise in the scanned phase
 _NOISE = 16.0 * 2.220446049250313e-16
 
+# newton_branch's monotonicity probe: the phase at d = width 10**-(2**k)
+# (k = 0 .. PROBE_DECADES - 1: from 1e-256 of the branch to a tenth) and
+# at 0.2, 0.4, 0.6, 0.8 and 0.95 of the width, on every branch
+PROBE_DECADES = 9
+PROBE_POINTS = PROBE_DECADES + 5
+
 # search_body_newton: a branch needs the bracketing search (call search_body)
 NEEDS_BRACKETING = -2
 INFO_SIZE = 12
@@ -588,6 +594,41 @@ def separatrix_expansion(params):
     ) - shift
 
 
+@njit(cache=True, nogil=True)
+def probe_offset(k, width):
+    """The ``k``-th point of the monotonicity probe, ascending in ``k``
+    (``0 <= k < PROBE_POINTS``); see :func:`monotone_at_probes`."""
+    if k < PROBE_DECADES:
+        return width * math.pow(10.0, -math.pow(2.0, PROBE_DECADES - 1 - k))
+    j = k - PROBE_DECADES  # no tuple indexed at run time: the same code on CUDA
+    return width * (0.95 if j == 4 else 0.2 * (j + 1))
+
+
+@njit(cache=True, nogil=True)
+def monotone_at_probes(kind, params, width, top, f_end):
+    """Whether ``f`` decreases (within rounding) through the probe points.
+
+    ``f`` is :func:`phase_of_offset` (``kind = KIND_PHASE``) or
+    :func:`synthetic_profile`; ``top`` and ``f_end`` are its values at
+    ``SMALLEST_OFFSET`` and at ``width``.  The probe evaluates ``f`` at
+    :data:`PROBE_POINTS` fixed offsets spread over the whole branch (every
+    branch, whatever levels are asked for), so that the search's
+    assumption -- one root per level, the minimum at the end -- is tested
+    on every body; a rise beyond rounding sends the branch to the
+    bracketing scan, which finds every root and the true minimum.
+    """
+    previous = top
+    for k in range(PROBE_POINTS):
+        d = probe_offset(k, width)
+        if not (d > SMALLEST_OFFSET and d < width):
+            continue  # a branch narrower than 1e-52 rad: the decades below it
+        value = _evaluate(kind, d, params)
+        if not (value <= previous + _NOISE * abs(previous)):
+            return False
+        previous = value
+    return f_end <= previous + _NOISE * abs(previous)
+
+
 # Newton in ln d: stop once a step is below this (the next would be ~its
 # square); give up (and fall back to the bracketing search) after _NEWTON_MAX
 _STEP_DONE = 1.0e-9
@@ -603,7 +644,9 @@ def newton_branch(params, width, levels, root_level, root_offset, found, branch_
 
     Assumes ``Delta alpha`` decreases in ``d`` on ``(0, width]`` and checks it
     at every point it evaluates (the slope must be negative, beyond
-    rounding).  Levels in ``(Delta alpha(width), Delta alpha(2.2e-308))``
+    rounding), and first at fixed points over the whole branch
+    (:func:`monotone_at_probes`), so that a branch with no level in its
+    range is tested too.  Levels in ``(Delta alpha(width), Delta alpha(2.2e-308))``
     each have one root, placed by the separatrix expansion
     (:func:`separatrix_expansion`, ``ln d = (b - L)/a``), then Newton steps
     ``d <- d exp(-(f - L)/f')`` with the slope ``f'`` of
@@ -622,6 +665,8 @@ def newton_branch(params, width, levels, root_level, root_offset, found, branch_
     f_end = phase_of_offset(width, params)
     top = phase_of_offset(SMALLEST_OFFSET, params)
     if not (math.isfinite(f_end) and math.isfinite(top)) or not (top > f_end):
+        return -2
+    if not monotone_at_probes(KIND_PHASE, params, width, top, f_end):
         return -2
     unreached = 0
     for j in range(levels.shape[0]):

@@ -10,6 +10,8 @@ from ..errors import InputError
 from .ledger import REPORT, check_parts, load_manifest
 from .tables import read_table
 
+TWO_PI = 2.0 * np.pi
+
 # the columns of each counterexample to the minimum-at-the-ends conjecture
 COUNTEREXAMPLE_COLUMNS = ("body", "I1", "I2", "I3", "min_total_phase", "min_theta")
 
@@ -31,7 +33,9 @@ def bodies_summary(bodies):
     Returns
     -------
     dict
-        ``bodies``, ``orbits``, ``two_pi``, ``unresolved`` (counts),
+        ``bodies``, ``orbits``, ``two_pi`` (bodies whose minimum phase is
+        below 2 pi, so that a spin with ``Delta alpha = 2 pi`` exists: the
+        level 2 pi is not searched), ``unresolved`` (counts),
         ``min``, ``max`` (of ``min_total_phase``, rad; NaN skipped, NaN
         when none) and ``counterexamples`` (records of the bodies whose
         minimum is not at an end, in the table's order).
@@ -47,7 +51,9 @@ def bodies_summary(bodies):
         "bodies": int(at_end.size),
         "orbits": int(np.asarray(bodies["orbits"]).sum()),
         "counterexamples": counterexamples,
-        "two_pi": int((np.asarray(bodies["n_smallest"]) == 1).sum()),
+        # a minimum below 2 pi (only possible inside a branch: the ends are
+        # >= 2 pi) means some spin has Delta alpha = 2 pi exactly
+        "two_pi": int((minimum < TWO_PI).sum()),
         "min": _skipping_nan(np.min, minimum),
         "max": _skipping_nan(np.max, minimum),
         "unresolved": int((np.asarray(bodies["unresolved"]) > 0).sum()),
