@@ -379,7 +379,8 @@ def read_catalog(path, *, check=True):
         non-finite numbers; a row that is no closed orbit as the search
         writes it (``n/q`` not above 1 or not in lowest terms, ``dtheta``
         on the wrong side for its branch, ``total_phase`` or ``residual``
-        beyond ``1e-10 * 2 pi n/q``), with or without ``check``.
+        beyond ``1e-10 * 2 pi n/q``, ``theta`` not ``theta_crit + dtheta``),
+        with or without ``check``.
     """
     path = path_argument("path", path)
     raw = read_input_bytes(path, "catalog")  # no limit: the file orbits wrote
@@ -465,7 +466,11 @@ def _check_orbit_rows(path, frame):
     ``dtheta`` on the wrong side of the separatrix for its branch (SAM
     below it, LAM above), a total phase (or residual) more than
     :data:`orbits.search.RESIDUAL_TOLERANCE` of its level away from
-    ``2 pi n/q``.  (A row given twice is not refused: a bodies file may
+    ``2 pi n/q``, a ``theta`` that is not ``theta_crit + dtheta`` (to an
+    ulp: so an edited ``dtheta``, ``theta`` or ``theta_crit`` shows; the
+    phases are not evaluated again, since the moments columns are
+    ``I/|I|`` rounded and a nearly symmetric body's phase depends on that
+    rounding beyond the tolerance).  (A row given twice is not refused: a bodies file may
     list one body twice under one name, and its catalog repeats its rows.)
     """
     import math
@@ -476,6 +481,7 @@ def _check_orbit_rows(path, frame):
         return
     n, q = frame["n"].to_numpy(), frame["q"].to_numpy()
     dtheta = frame["dtheta"].to_numpy(dtype=float)
+    theta = frame["theta"].to_numpy(dtype=float)
     sam = frame["branch"].to_numpy() == "SAM"
     target = 2.0 * math.pi * n / q
     # a little over the search's own bound: 2 pi n/q rounds differently here
@@ -492,6 +498,14 @@ def _check_orbit_rows(path, frame):
         (
             ~(np.abs(frame["residual"].to_numpy(dtype=float)) <= allowed),
             "its residual is too large",
+        ),
+        (
+            # theta is theta_crit + dtheta, rounded once (eqn:thetacrit's offset)
+            ~(
+                np.abs(theta - (frame["theta_crit"].to_numpy(dtype=float) + dtheta))
+                <= np.spacing(np.abs(theta))
+            ),
+            "its theta is not theta_crit + dtheta",
         ),
     ]
     for bad, why in reasons:

@@ -99,6 +99,10 @@ def test_csv_round_trip_is_bit_exact(tmp_path):
         (lambda f: f.assign(residual=1e-3), "residual is too large"),
         (lambda f: f.assign(n=2 * f["n"], q=2), "not in lowest terms"),
         (lambda f: f.assign(n=1), "not above 1"),
+        # a dtheta moved by 1e-3 of itself still has the right sign, phase and
+        # residual columns: the theta it no longer matches shows it
+        (lambda f: f.assign(dtheta=f["dtheta"] * 1.001), "theta is not theta_crit \\+ dtheta"),
+        (lambda f: f.assign(theta=f["theta"] + 1e-9), "theta is not theta_crit \\+ dtheta"),
     ],
 )
 def test_read_catalog_checks_schema(tmp_path, mutate, message):
