@@ -2,6 +2,7 @@
 literally, warnings as one line, closed stdout, typed errors, size estimates
 of figures and animations, signals at start-up."""
 
+import math
 import io
 import os
 import signal
@@ -238,6 +239,24 @@ def test_a_signal_at_start_up_is_one_line(signum, monkeypatch, capsys):
     assert err == [
         f"orbits: stopped by {signal.Signals(signum).name}; no partial output was written"
     ]
+
+
+def test_figures_of_a_body_with_no_orbit_name_its_smallest_phase(tmp_path, capsys):
+    """No closed orbit with n <= 3: one line with the body's smallest total
+    phase (the search's minimum, the end value: 1 / sqrt((I2-I1)(I3-I1)/(I2 I3))
+    turns at theta -> pi/2 for this nearly spherical body)."""
+    out = tmp_path / "o"
+    assert (
+        main(["figures", "--moments", "1", "1.0001", "1.0002", "--n-max", "3", "--out", str(out)])
+        == 2
+    )
+    err = capsys.readouterr().err.strip().splitlines()
+    turns = min(orbits.phase_limits(orbits.Body((1, 1.0001, 1.0002)))) / (2 * math.pi)
+    assert err == [
+        "orbits: error: orbits figures: this body has no closed orbit with n <= 3, nothing "
+        f"to draw: its smallest total phase is {turns:.4g} turns; raise --n-max"
+    ]
+    assert not out.exists()
 
 
 def test_figures_of_too_many_orbits_are_refused_before_drawing(tmp_path, capsys):

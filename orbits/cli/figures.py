@@ -118,14 +118,15 @@ def _figures(args, made):
         if args.n_max is None:
             raise InputError("orbits figures: --n-max is required with a body")
         body = body_from_args(args)
-        from ..search import closed_orbits, minimum_phase
+        from ..search import closed_orbits
 
         memory, seconds = check_search_bounds(args.n_max, args.q_max, 1, "the figures' search")
         _refuse_long_curves(body, args.n_max)
         announce("figures", seconds, memory)
         orbits_table = closed_orbits(body, n_max=args.n_max, q_max=args.q_max)
         if len(orbits_table) == 0:
-            low, _ = minimum_phase(body)
+            # the search's minimum (an end, where every probe fell: no full scan)
+            low = min(value for value, _ in orbits_table.attrs["minimum_phase"].values())
             raise InputError(
                 f"orbits figures: this body has no closed orbit with n <= {args.n_max}"
                 + (f" (q <= {args.q_max})" if args.q_max > 1 else "")
