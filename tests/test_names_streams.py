@@ -2,8 +2,8 @@
 literally, warnings as one line, closed stdout, typed errors, size estimates
 of figures and animations, signals at start-up."""
 
-import math
 import io
+import math
 import os
 import signal
 import sys
