@@ -6,6 +6,7 @@ import io
 import math
 import os
 import signal
+import subprocess
 import sys
 import time
 import unicodedata
@@ -158,6 +159,46 @@ def test_closed_stdout_is_refused_before_any_work(capsys, monkeypatch, tmp_path)
     monkeypatch.setattr(sys, "stdout", closed)
     with pytest.raises(InputError, match="standard output is closed"):
         write_catalog(frame, "-")
+
+
+class _FullStream(io.StringIO):
+    """A stream every write of which fails as on ``/dev/full``."""
+
+    def write(self, text):
+        raise OSError(28, "No space left on device")
+
+
+@pytest.mark.parametrize("stderr", [None, "full"])
+def test_a_closed_or_full_stderr_keeps_the_exit_code(stderr, monkeypatch, tmp_path, capsys):
+    """``2>&-`` and ``2>/dev/full``: the results and the exit code are the
+    same, the messages are lost (the run ended in a traceback, exit 1, after
+    writing its file; with stderr closed before anything was done)."""
+    monkeypatch.setattr(sys, "stderr", None if stderr is None else _FullStream())
+    assert main(["phase", "--preset", "fig6", "--theta", "0.5"]) == 0
+    assert "total_phase      [rad]               7.127280709149" in capsys.readouterr().out
+    assert main(["phase", "--preset", "fig6", "--theta", "nan"]) == 2
+    out = tmp_path / "c.csv"
+    assert main(["catalog", "--preset", "fig6", "--n-max", "3", "--out", str(out)]) == 0
+    assert len(read_catalog(out)) == 4
+    assert sys.stderr is None or isinstance(sys.stderr, _FullStream)  # given back
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+def test_a_closed_or_full_stderr_in_a_process(tmp_path):
+    """The real descriptors: fd 2 closed, and fd 2 on /dev/full."""
+    argv = [sys.executable, "-m", "orbits", "phase", "--preset", "fig6", "--theta"]
+    for preexec, stream in ((lambda: os.close(2), None), (None, "/dev/full")):
+        sink = open(stream, "w") if stream else None
+        try:
+            for theta, code in (("0.5", 0), ("nan", 2)):
+                done = subprocess.run(
+                    [*argv, theta], stdout=subprocess.PIPE, stderr=sink, preexec_fn=preexec
+                )
+                assert done.returncode == code, (stream, theta, done.returncode)
+                assert (b"total_phase" in done.stdout) == (code == 0)
+        finally:
+            if sink:
+                sink.close()
 
 
 @pytest.mark.parametrize("value", ["2", None, b"2", 2j])
@@ -318,10 +359,12 @@ def test_a_stop_put_off_until_the_run_ends_is_not_dropped(signum, monkeypatch, c
     alarm = signal.getsignal(signal.SIGALRM)
     code = main(["phase", "--preset", "fig6", "--theta", "0.3"])
     err = capsys.readouterr().err.strip().splitlines()
+    # the files were moved into place: the line says the output is whole
+    whole = "as the run ended; its output was written whole"
     if signum == signal.SIGINT:
-        assert (code, err) == (130, ["orbits: interrupted; no partial output was written"])
+        assert (code, err) == (130, [f"orbits: interrupted {whole}"])
     else:
-        assert (code, err) == (143, ["orbits: stopped by SIGTERM; no partial output was written"])
+        assert (code, err) == (143, [f"orbits: stopped by SIGTERM {whole}"])
     assert {n: signal.getsignal(n) for n in before} == before
     assert signal.getsignal(signal.SIGALRM) == alarm
     assert signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)

@@ -201,24 +201,35 @@ def _end_deferral():
         signal.signal(signal.SIGALRM, _DEFERRED.pop()[1])
 
 
+def _stop_outcome(stop):
+    """The end of a stop's line: what became of the output."""
+    if getattr(stop, "output_complete", False):
+        return " as the run ended; its output was written whole"
+    return "; no partial output was written"
+
+
 def _raise_pending_stop():
     """Raise a stop that was put off (:func:`_defer`) and not yet raised again.
 
     A stop signal that came while the last files were moved into place
     waits for its retry timer; a run that ends before the timer fires
     would otherwise drop it in :func:`main`'s clean-up and exit 0.  The
-    output is whole then (the move finished), and the run still ends as
-    stopped: one line, 128 + N.
+    output is whole then (the move finished: an existing target is
+    replaced), and the run still ends as stopped, 128 + N, with a line that
+    says the output is complete.
     """
     if _DEFERRED:
         signum = _DEFERRED[0][0]
         _end_deferral()
         _hold_signals()
         if signum == signal.SIGINT:
-            raise KeyboardInterrupt
-        from ..atomic import Terminated
+            stop = KeyboardInterrupt()
+        else:
+            from ..atomic import Terminated
 
-        raise Terminated(signum)
+            stop = Terminated(signum)
+        stop.output_complete = True  # main's line says so
+        raise stop
 
 
 def _raise_terminated(signum, frame):
@@ -328,18 +339,77 @@ def _show_warning(message, category, filename, lineno, file=None, line=None):
         pass  # stderr closed: nothing to tell
 
 
+class _TolerantStream:
+    """Standard error for a run: a write that fails is dropped.
+
+    With stderr closed (``2>&-``: ``sys.stderr`` is None) or full
+    (``2>/dev/full``) a progress or status line raised in the middle of a
+    run (or ``announce_compilation`` failed on None): the command ended in
+    a traceback, exit 1, after its output was written.  The run's messages
+    have nowhere to go then; its exit code still tells what happened.
+    """
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def write(self, text):
+        try:
+            return self._stream.write(text)
+        except (OSError, ValueError):
+            return len(text)
+
+    def flush(self):
+        try:
+            self._stream.flush()
+        except (OSError, ValueError):
+            pass
+
+    def isatty(self):
+        try:
+            return bool(self._stream.isatty())
+        except (OSError, ValueError):
+            return False
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
+def _tolerant_stderr():
+    """:class:`_TolerantStream` over ``sys.stderr`` (over ``os.devnull`` when it is closed)."""
+    import os
+
+    stream = sys.stderr
+    if stream is None or getattr(stream, "closed", False):
+        stream = open(os.devnull, "w", encoding="utf-8")  # noqa: SIM115 (closed in main)
+    return _TolerantStream(stream)
+
+
 def main(argv=None):
     """Entry point of the ``orbits`` console script; returns the exit code.
 
     Python warnings raised during the run are shown as one ``orbits:
     warning:`` line each (``warnings.showwarning`` is replaced for the run
-    and restored after).
+    and restored after).  Standard error is written best effort for the run
+    (:class:`_TolerantStream`): a closed or full stderr loses the messages,
+    never the exit code.
     """
     import signal
     import warnings
 
     from ..atomic import Terminated
 
+    given_stderr = sys.stderr
+    tolerant = sys.stderr = _tolerant_stderr()
+    try:
+        return _main(argv, signal, warnings, Terminated)
+    finally:
+        sys.stderr = given_stderr
+        if tolerant._stream is not given_stderr:  # the os.devnull opened for a closed one
+            tolerant._stream.close()
+
+
+def _main(argv, signal, warnings, Terminated):
+    """:func:`main` with standard error made tolerant."""
     previous = _install_signal_handlers()
     shown = warnings.showwarning
     warnings.showwarning = _show_warning
@@ -365,12 +435,12 @@ def main(argv=None):
         for note in getattr(args, "notes", ()):
             print(f"orbits: note: {note}", file=sys.stderr)
         return code
-    except KeyboardInterrupt:
-        print("orbits: interrupted; no partial output was written", file=sys.stderr)
+    except KeyboardInterrupt as stop:
+        print(f"orbits: interrupted{_stop_outcome(stop)}", file=sys.stderr)
         return EXIT_INTERRUPTED
     except Terminated as stop:
         name = signal.Signals(stop.signum).name
-        print(f"orbits: stopped by {name}; no partial output was written", file=sys.stderr)
+        print(f"orbits: stopped by {name}{_stop_outcome(stop)}", file=sys.stderr)
         return 128 + stop.signum
     except OrbitsError as error:
         print(f"orbits: error: {' '.join(str(error).split())}", file=sys.stderr)
