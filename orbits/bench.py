@@ -1128,12 +1128,32 @@ def _median_time(function, repeats):
     return float(np.median(times))
 
 
+# The busy child's loop: pure interpreter work on one core, with a look at
+# its parent process every million turns (~10-50 ms) so that it ends by
+# itself once the bench is gone (killed with SIGKILL, its ``finally`` never
+# runs): it would otherwise spin forever, adopted by init.
+_BUSY_LOOP = """\
+import os, sys
+parent = int(sys.argv[1])
+while os.getppid() == parent:
+    for _ in range(1_000_000):
+        pass
+"""
+
+
 def _busy_process():
-    """A CPU-bound child (a Python busy loop) standing for another user's job."""
+    """A CPU-bound child (a Python busy loop) standing for another user's job.
+
+    Returns
+    -------
+    subprocess.Popen
+        The child, spinning on one core until killed or until this process
+        is gone (it watches its parent's pid, see :data:`_BUSY_LOOP`).
+    """
     import subprocess
 
     return subprocess.Popen(
-        [sys.executable, "-c", "while True:\n    pass"],
+        [sys.executable, "-c", _BUSY_LOOP, str(os.getpid())],
         stdin=subprocess.DEVNULL,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,

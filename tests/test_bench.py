@@ -6,6 +6,11 @@ that the table prints the check.
 """
 
 import math
+import os
+import signal
+import subprocess
+import sys
+import time
 
 import pytest
 
@@ -79,6 +84,52 @@ def test_load_check_stops_the_busy_process_on_error(monkeypatch):
     except KeyboardInterrupt:
         pass
     assert len(started) == 1 and started[0].poll() is not None
+
+
+def _running(pid):
+    """Whether process ``pid`` exists and is not a zombie (Linux /proc)."""
+    try:
+        with open(f"/proc/{pid}/stat") as stat:
+            state = stat.read().rpartition(")")[2].split()[0]
+    except (FileNotFoundError, ProcessLookupError, IndexError):
+        return False
+    return state not in ("Z", "X")
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_the_busy_process_ends_when_the_bench_is_killed():
+    """A bench killed with SIGKILL during the under-load check left its busy
+    child spinning forever (parent pid 1, one core at 100%)."""
+    bench_process = subprocess.Popen(
+        [
+            sys.executable,
+            "-c",
+            "import sys, time\n"
+            "from orbits import bench\n"
+            "print(bench._busy_process().pid, flush=True)\n"
+            "time.sleep(600)\n",
+        ],
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    busy = None
+    try:
+        busy = int(bench_process.stdout.readline())
+        time.sleep(0.5)
+        assert _running(busy), "the busy child ended while its parent lived"
+        bench_process.send_signal(signal.SIGKILL)
+        bench_process.wait(timeout=30)
+        deadline = time.monotonic() + 10
+        while _running(busy) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert not _running(busy), "the busy child outlived its parent"
+    finally:
+        bench_process.kill()
+        bench_process.wait(timeout=30)
+        bench_process.stdout.close()
+        if busy is not None and _running(busy):
+            os.kill(busy, signal.SIGKILL)
 
 
 def test_bench_device_cuda_without_a_gpu_is_one_line(capsys):
