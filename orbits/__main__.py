@@ -46,23 +46,34 @@ def _numba_environment():
     """Why ``NUMBA_NUM_THREADS`` is unusable, or '' when it is unset or a positive count.
 
     numba raises inside its import for a count <= 0 (a traceback) and
-    warns and ignores any other value it cannot read as an integer.
+    warns and ignores any other value it cannot read as an integer.  It
+    reads the value with ``int()``, which also takes ``1_0`` (as 10) and
+    non-ASCII digits (an Arabic-Indic three as 3); here, as on the command
+    line, a count is ASCII digits only, with an optional sign and
+    surrounding ASCII whitespace.
     """
     import os
 
     text = os.environ.get("NUMBA_NUM_THREADS")
     if text is None:
         return ""
-    try:
-        count = int(text)  # as numba reads it
-    except ValueError:
-        count = None
-    if count is not None and count > 0:
+    body = text.strip(" \t\n\r\f\v")
+    digits = body[1:] if body[:1] in ("+", "-") else body
+    if digits.isascii() and digits.isdigit() and int(body) > 0:
         return ""
     return (
         f"NUMBA_NUM_THREADS={text.strip()!r} is not a positive whole number of threads; "
         "unset it or give one (--threads N chooses fewer for one command)"
     )
+
+
+def _say(line):
+    """One line on stderr, if it can take it (closed: ``2>&-``; full: ``2>/dev/full``)."""
+    try:
+        if sys.stderr is not None:
+            print(line, file=sys.stderr, flush=True)
+    except (OSError, ValueError):
+        pass
 
 
 def entry():
@@ -75,7 +86,7 @@ def entry():
     try:
         refusal = _numba_environment()
         if refusal:  # numba would raise inside its import: a traceback
-            print(f"orbits: error: {refusal}", file=sys.stderr)
+            _say(f"orbits: error: {refusal}")
             return 2
         startup.hold_collector()
         startup.calm_blas_threads()  # before NumPy loads OpenBLAS
@@ -89,7 +100,7 @@ def entry():
             signal.signal(number, _ignore)
         number = getattr(stop, "signum", signal.SIGINT)
         name = signal.Signals(number).name
-        print(f"orbits: stopped by {name}; no partial output was written", file=sys.stderr)
+        _say(f"orbits: stopped by {name}; no partial output was written")
         return 128 + number
     finally:
         # the run is over: a signal during interpreter shutdown changes nothing

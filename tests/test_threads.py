@@ -1,6 +1,10 @@
 """Thread control (orbits.threads): the requested count reaches every
 parallel kernel, from whichever Python thread launches it."""
 
+import json
+import os
+import subprocess
+import sys
 import threading
 from fractions import Fraction
 
@@ -99,3 +103,44 @@ def test_the_count_reaches_kernels_launched_from_another_thread(
         raise errors[0]
     run()  # and from this thread
     assert seen and set(seen) == {count}
+
+
+def _bench_with_numba_threads(value):
+    """``orbits bench --quick --only phase --no-load-check --json`` with
+    ``NUMBA_NUM_THREADS=value`` in a fresh process (numba reads it at import)."""
+    return subprocess.run(
+        [sys.executable, "-m", "orbits", "bench", "--quick", "--only", "phase"]
+        + ["--no-load-check", "--json"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=dict(os.environ, NUMBA_NUM_THREADS=value),
+    )
+
+
+@pytest.mark.parametrize(
+    "value",
+    ["1_0", "+1_0", "\u0663", "\uff11\uff10", "0", "-1"],
+    ids=["1_0", "+1_0", "arabic-indic-3", "fullwidth-10", "0", "-1"],
+)
+def test_a_thread_count_that_is_not_plain_ascii_digits_is_refused(value):
+    """int() reads 1_0 as 10 and an Arabic-Indic three as 3, and so does numba:
+    ``NUMBA_NUM_THREADS=1_0 orbits bench`` ran on "10 numba threads".  Refused
+    in one line, exit 2, before numba is loaded (as 0 and -1 were)."""
+    result = _bench_with_numba_threads(value)
+    assert result.returncode == 2, result.stderr
+    assert result.stdout == ""
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in result.stderr
+    assert lines[0].startswith(
+        f"orbits: error: NUMBA_NUM_THREADS={value!r} is not a positive whole number"
+    )
+
+
+@pytest.mark.parametrize("value, count", [("2", 2), ("+3", 3), (" 2\n", 2)])
+def test_a_plain_ascii_thread_count_reaches_numba(value, count):
+    """ASCII digits with an optional sign and surrounding whitespace, as a
+    count is typed on the command line, are still read."""
+    result = _bench_with_numba_threads(value)
+    assert result.returncode == 0, result.stderr
+    assert json.loads(result.stdout)["machine"]["numba_threads"] == count
