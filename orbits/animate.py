@@ -44,6 +44,7 @@ import io
 import math
 import numbers
 import os
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -267,10 +268,13 @@ def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
     Raises
     ------
     InputError
-        Neither or both of ``n`` and ``p``; no such orbit; two orbits match
-        and no ``branch`` was given.
+        Neither or both of ``n`` and ``p``; no such orbit; an orbit that
+        exists but lies closer than ``|dtheta| = 2.2e-308`` to the
+        separatrix (a double cannot hold it: the message gives the largest
+        ``n`` drawable on the branch); two orbits match and no ``branch``
+        was given.
     """
-    from .search import closed_orbits
+    from .search import UnresolvedOrbitsWarning, closed_orbits
 
     if (n is None) == (p is None):
         raise InputError("give exactly one of n and p")
@@ -282,13 +286,21 @@ def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
         raise InputError(f"p/q = {p}/{q} is not in lowest terms")
     if branch is not None and branch not in ("SAM", "LAM"):
         raise InputError(f"branch must be SAM or LAM, got {branch!r}")
-    if orbits is None:
-        orbits = closed_orbits(as_body(body), n_max=max(1, math.ceil(p / q)), q_max=q)
+    # the search's warnings are held back: an error below is one line (an
+    # unresolved orbit is said there), a row found gets them as they came
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        if orbits is None:
+            orbits = closed_orbits(as_body(body), n_max=max(1, math.ceil(p / q)), q_max=q)
     match = orbits[(orbits["n"] == p) & (orbits["q"] == q)]
     if branch is not None:
         match = match[match["branch"] == branch]
     multiple = f"{p}" if q == 1 else f"{p}/{q}"
+    for warning in caught:
+        if len(match) > 0 or not issubclass(warning.category, UnresolvedOrbitsWarning):
+            warnings.warn(warning.message, warning.category, stacklevel=2)
     if len(match) == 0:
+        _refuse_unresolved(body, p, q, branch, multiple)
         where = f" on {branch}" if branch else ""
         raise InputError(f"the body has no closed orbit Delta alpha = 2 pi {multiple}{where}")
     if len(match) > 1:
@@ -298,6 +310,71 @@ def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
             f"({branches}); choose one with branch='SAM' or 'LAM' (--branch)"
         )
     return match.iloc[0]
+
+
+def _refuse_unresolved(body, p, q, branch, multiple):
+    """Refuse the orbit ``2 pi p/q`` where it exists but a double cannot hold it.
+
+    The search's own bound (:mod:`orbits.core.search`): a level above the
+    phase at ``|dtheta| = 2.2e-308`` (``INFO_TOP_*``) is reached only closer
+    to the separatrix than the smallest normal double, and is counted
+    unreached (``INFO_UNREACHED_*``; :func:`orbits.closed_orbits` warns of
+    it and leaves it out).  A level below the branch's minimum phase has no
+    orbit at all: nothing is raised here, and the caller says so.
+    """
+    from .bodies import unit_moments
+    from .core import search as kernels
+    from .search import TWO_PI, find_roots_at
+
+    moments, _ = unit_moments(as_body(body))
+    level = 2.0 * np.pi * np.array([p], dtype=np.int64) / np.array([q], dtype=np.int64)
+    _, _, _, info = find_roots_at(
+        moments, np.array([p], dtype=np.int64), np.array([q], dtype=np.int64), level
+    )
+    slots = {
+        "SAM": (kernels.INFO_UNREACHED_SAM, kernels.INFO_TOP_SAM),
+        "LAM": (kernels.INFO_UNREACHED_LAM, kernels.INFO_TOP_LAM),
+    }
+    names = [branch] if branch is not None else ["SAM", "LAM"]
+    unresolved = [name for name in names if info[slots[name][0]] > 0]
+    if not unresolved:
+        return
+    largest = []
+    for name in unresolved:
+        top = float(info[slots[name][1]])
+        # the largest whole n whose level 2 pi n (as phase_levels forms it)
+        # the search reaches: not above the phase at the smallest offset
+        count = math.floor(top / TWO_PI)
+        while 2.0 * np.pi * (count + 1) <= top:
+            count += 1
+        while count > 0 and 2.0 * np.pi * count > top:
+            count -= 1
+        largest.append(
+            f"the largest n drawable on {name} is {count}"
+            if count >= 2
+            else f"no closed orbit Delta alpha = 2 pi n is drawable on {name}"
+        )
+    where = " and ".join(unresolved)
+    raise InputError(
+        f"the closed orbit Delta alpha = 2 pi {multiple} on {where} lies closer than "
+        "|dtheta| = 2.2e-308 to the separatrix and cannot be held in double "
+        f"precision; {'; '.join(largest)}"
+    )
+
+
+def check_span(motion, span):
+    """Refuse an animation whose times ``[0, span]`` the motion cannot place.
+
+    :meth:`orbits.Motion.state`'s own check, before anything is drawn:
+    ``|t|`` beyond ``2**50`` periods (the orientation there is lost to
+    rounding), or ``t |omega0|`` beyond a double.
+
+    Raises
+    ------
+    InputError
+        With :class:`~orbits.Motion`'s message.
+    """
+    motion.check_times(np.array([0.0, float(span)]))
 
 
 def flip_motion(body=None, *, offset=0.05, speed=1.0):
@@ -853,6 +930,7 @@ def poinsot_animation(
     duration = periods * motion.period
     if not np.isfinite(duration):
         raise InputError(f"periods {periods:g} of T = {motion.period:g} s overflow a double")
+    check_span(motion, duration)
     # before any array of frames exists: the text draws, the frames fit memory and a day
     check_dpi(dpi)
     check_animation(frames, dpi, keep_frames=fmt == "gif")
@@ -929,6 +1007,7 @@ __all__ = [
     "check_fps",
     "check_output",
     "check_real_time",
+    "check_span",
     "flip_motion",
     "inertia_ellipsoid_lines",
     "min_dpi",

@@ -406,6 +406,21 @@ class Motion:
                 )
         return times, np.ascontiguousarray(scaled.reshape(-1))
 
+    def check_times(self, t):
+        """Raise :class:`~orbits.InputError` now for times ``t`` the motion cannot place.
+
+        The check of :meth:`state` (and of every method that takes times),
+        without computing anything: a time not finite, or ``|t|`` beyond
+        ``2**50`` periods.  An animation checks its frames' span with it
+        before it draws.
+
+        Parameters
+        ----------
+        t : float or array_like
+            Times, in the time unit of ``omega0``.
+        """
+        self._times(t)
+
     @size_aware
     def state(self, t):
         """Everything at the times ``t``: a :class:`MotionState`.

@@ -545,12 +545,109 @@ THROW = ["--preset", "fig6", "--omega"]
         ),
         (["--theta", "0.5", "--frames", "0"], "argument --frames: must be an integer >= 2, got 0"),
         (["--theta", "0.5", "--periods", "1e308"], "--periods 1e+308 of T = 7.742 s is beyond"),
+        # Motion's range of times (2^50 periods), before the estimate line
+        (
+            ["--theta", "0.5", "--periods", "1e300"],
+            "|t| = 1e+300 periods is beyond the 1.13e+15 periods (2^50)",
+        ),
+        (
+            ["--theta", "0.5", "--periods", "1.2e15"],
+            "|t| = 1.2e+15 periods is beyond the 1.13e+15 periods (2^50)",
+        ),
+        (
+            ["--theta", "0.5", "--speed", "1e100", "--seconds", "10"],
+            "|t| = 1.29e+100 periods is beyond the 1.13e+15 periods (2^50)",
+        ),
+        (
+            ["--n", "2", "--branch", "SAM", "--periods", "1e300"],
+            "|t| = 1e+300 periods is beyond the 1.13e+15 periods (2^50)",
+        ),
+        # an orbit too near the separatrix for a double: one line, no warning
+        (
+            ["--n", "1000", "--branch", "SAM", "--frames", "2", "--dpi", "20"],
+            "orbits: error: the closed orbit Delta alpha = 2 pi 1000 on SAM lies closer than "
+            "|dtheta| = 2.2e-308 to the separatrix and cannot be held in double precision; "
+            "the largest n drawable on SAM is 385",
+        ),
+        (
+            ["--p", "775", "--q", "2", "--branch", "LAM", "--frames", "2", "--dpi", "20"],
+            "the closed orbit Delta alpha = 2 pi 775/2 on LAM lies closer than "
+            "|dtheta| = 2.2e-308 to the separatrix and cannot be held in double precision; "
+            "the largest n drawable on LAM is 386",
+        ),
+        (
+            ["--n", "1000", "--frames", "2", "--dpi", "20"],
+            "2 pi 1000 on SAM and LAM lies closer than |dtheta| = 2.2e-308 to the separatrix",
+        ),
+        # none at all (below the branch's smallest phase): the message as before
+        (
+            ["--n", "1", "--branch", "SAM", "--frames", "2", "--dpi", "20"],
+            "orbits: error: the body has no closed orbit Delta alpha = 2 pi 1 on SAM",
+        ),
+        # a subnormal --dtheta, as orbits phase refuses it
+        (
+            ["--dtheta", "1e-320", "--frames", "2", "--dpi", "20"],
+            "--dtheta 1e-320 is a subnormal double with about 3 significant digits",
+        ),
     ],
 )
 def test_refused_before_the_estimate(tmp_path, capsys, monkeypatch, argv, message):
     monkeypatch.chdir(tmp_path)
     full = ["--preset", "fig6", *argv, "--out", "a.gif"]
     assert message in _one_line_refusal(capsys, tmp_path, full)
+
+
+@pytest.mark.parametrize("dtheta", ["1e-320", "-4e-312", "5e-324"])
+def test_subnormal_dtheta_refused_as_phase_refuses_it(tmp_path, capsys, monkeypatch, dtheta):
+    """The same value, the same one line as ``orbits phase --dtheta``."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["phase", "--preset", "fig6", "--dtheta", dtheta]) == 2
+    phase_error = capsys.readouterr().err.strip()
+    argv = [
+        "--preset",
+        "fig6",
+        "--dtheta",
+        dtheta,
+        "--frames",
+        "2",
+        "--dpi",
+        "20",
+        "--out",
+        "a.gif",
+    ]
+    assert _one_line_refusal(capsys, tmp_path, argv) == phase_error
+    assert "subnormal" in phase_error
+
+
+def test_smallest_normal_dtheta_offsets_are_drawn(tmp_path, capsys):
+    """Offsets from 4.9e-312 up keep 12 digits: drawn, as phase computes them."""
+    out = tmp_path / "a.gif"
+    argv = ["animate", "--preset", "fig6", "--dtheta", "1e-311", "--frames", "2", "--dpi", "20"]
+    assert main([*argv, "--out", str(out)]) == 0
+    with Image.open(out) as image:
+        assert image.n_frames == 2
+
+
+def test_unresolved_orbit_is_one_error_without_the_search_warning():
+    """An orbit beyond the phase at |dtheta| = 2.2e-308: refused with the largest
+    n drawable, which is itself drawn; the search's warning is not added."""
+    import warnings
+
+    from orbits.search import UnresolvedOrbitsWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(InputError) as refused:
+            animate.orbit_row(FIG6, n=1000, branch="SAM")
+        with pytest.raises(InputError, match="largest n drawable on SAM is 385$"):
+            animate.orbit_row(FIG6, n=386, branch="SAM")
+        row = animate.orbit_row(FIG6, n=385, branch="SAM")
+    assert "cannot be held in double precision" in str(refused.value)
+    assert str(refused.value).endswith("the largest n drawable on SAM is 385")
+    assert (row["n"], row["branch"]) == (385, "SAM") and -1e-300 < row["dtheta"] < 0
+    # a row that is found still reports the orbits the search left out
+    with pytest.warns(UnresolvedOrbitsWarning, match="2.2e-308"):
+        assert animate.orbit_row(FIG6, n=386, branch="LAM")["n"] == 386
 
 
 def test_throw_plays_its_periods_in_real_time(tmp_path, capsys):

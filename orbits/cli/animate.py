@@ -14,6 +14,7 @@ from .shared import (
     body_from_args,
     finite,
     integer_at_least,
+    offset_argument,
     positive_int,
 )
 
@@ -60,6 +61,9 @@ def _cmd_animate(args):
         )
     if args.q is not None and args.p is None:
         raise InputError("orbits animate: --q needs --p")
+    if args.dtheta is not None:
+        # as orbits phase: a subnormal offset keeping fewer than 12 digits is refused
+        offset_argument(args.dtheta, args)
     if "units" in getattr(args, "given", ()) and args.omega is None and args.speed is None:
         raise InputError("--units applies to --omega and --speed, and neither was given")
     if args.speed is not None and (args.omega is not None or args.n or args.p):
@@ -88,13 +92,13 @@ def _cmd_animate(args):
         source = Motion.from_omega(body, np.array(args.omega) * factor, axes="body")
     else:
         source = Motion.from_spin(body, args.theta, dtheta=args.dtheta, phi=args.phi, speed=speed)
+    # a catalog row is drawn as the body's motion at the row's dtheta
+    motion = (
+        source
+        if isinstance(source, Motion)
+        else Motion.from_spin(body, dtheta=float(source["dtheta"]))
+    )
     if args.periods is not None and args.omega is None:
-        # a catalog row is drawn as the body's motion at the row's dtheta
-        motion = (
-            source
-            if isinstance(source, Motion)
-            else Motion.from_spin(body, dtheta=float(source["dtheta"]))
-        )
         if not math.isfinite(args.periods * motion.period):
             raise InputError(
                 f"--periods {args.periods:g} of T = {motion.period:.4g} s is beyond a "
@@ -112,6 +116,15 @@ def _cmd_animate(args):
             frames_name="--seconds or --periods",
             dpi_name="--dpi",
         )
+    # the frames' last time as poinsot_animation forms it: within Motion's
+    # range of times (2**50 periods), checked here, not after the estimate
+    if seconds is not None:
+        periods = float(seconds) / motion.period
+    elif args.periods is not None:
+        periods = args.periods
+    else:
+        periods = 1.0 if isinstance(source, Motion) else float(source["q"])
+    animate.check_span(motion, periods * motion.period)
     animate.check_output(args.out, "--out")
     # every input checked: say how long the drawing will take
     announce("animate", seconds_estimate, memory)
@@ -235,7 +248,8 @@ def add_parser(subparsers):
         "--dtheta",
         type=finite,
         help="offset theta - theta_crit (rad, not folded: theta_crit + dtheta must lie "
-        "in [0, pi/2], i.e. dtheta in [-theta_crit, pi/2 - theta_crit], and not be 0)",
+        "in [0, pi/2], i.e. dtheta in [-theta_crit, pi/2 - theta_crit], and not be 0; "
+        "as in orbits phase, subnormal offsets below |dtheta| = 4.9e-312 are refused)",
     )
     spin.add_argument("--n", type=positive_int, help="the closed orbit Delta alpha = 2 pi n")
     spin.add_argument("--p", type=positive_int, help="the closed orbit 2 pi p/q (with --q)")

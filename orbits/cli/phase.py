@@ -11,7 +11,7 @@ import sys
 
 from ..errors import InputError
 from ..units import OMEGA_UNITS, TIME_UNITS
-from .shared import add_body_options, body_from_args, finite
+from .shared import add_body_options, angle_argument, body_from_args, finite, offset_argument
 
 
 def _cmd_phase(args):
@@ -44,15 +44,15 @@ def _phase_table(args):
         from .. import tumbling
 
         if args.total_phase is not None:
-            table = tumbling.spins_with_total_phase(body, _angle(args.total_phase, args))
+            table = tumbling.spins_with_total_phase(body, angle_argument(args.total_phase, args))
         else:
             table = tumbling.spins_with_period_ratio(body, args.period_ratio)
         return _print_table(table, args.csv, NORMALISED_UNITS, label=getattr(args, "label", None))
     from ..phases import phases
 
-    theta = None if args.theta is None else [_angle(v, args) for v in args.theta]
-    dtheta = None if args.dtheta is None else [_offset(v, args) for v in args.dtheta]
-    table = phases(body, theta, _angle(args.phi, args), dtheta=dtheta)
+    theta = None if args.theta is None else [angle_argument(v, args) for v in args.theta]
+    dtheta = None if args.dtheta is None else [offset_argument(v, args) for v in args.dtheta]
+    table = phases(body, theta, angle_argument(args.phi, args), dtheta=dtheta)
     return _print_table(table, args.csv, NORMALISED_UNITS, label=getattr(args, "label", None))
 
 
@@ -149,33 +149,6 @@ def _periods_table(body, args):
         "E_over_E0 = 2 E I3 / M^2; theta at phi = 0)"
     ]
     return _print_table(table, args.csv, units, notes, getattr(args, "label", None))
-
-
-def _angle(value, args):
-    """An angle of the command line in radians (``--degrees`` converts)."""
-    return math.radians(value) if getattr(args, "degrees", False) else value
-
-
-# Below the smallest normal double (2.2e-308) the spacing of doubles is a
-# fixed 2**-1074 = 4.9e-324: an offset keeps 12 significant digits down to
-# 2**-1074 * 1e12 = 4.9e-312; below that the phase of the offset as stored
-# differs visibly from that of the offset typed (1.5e-8 relative at 1e-320).
-_SUBNORMAL_STEP = 2.0**-1074
-_SMALLEST_OFFSET = _SUBNORMAL_STEP * 1e12
-
-
-def _offset(value, args):
-    """A ``--dtheta`` in radians, refused where a double keeps fewer than 12
-    significant digits of it (subnormal offsets below 4.9e-312)."""
-    offset = _angle(value, args)
-    if offset != 0.0 and abs(offset) < _SMALLEST_OFFSET:
-        digits = max(0, int(math.log10(abs(offset) / _SUBNORMAL_STEP)))
-        raise InputError(
-            f"--dtheta {value!r} is a subnormal double with about {digits} significant "
-            f"digits (computed as {offset:.6g} rad); offsets from {_SMALLEST_OFFSET:.2g} "
-            "up keep at least 12"
-        )
-    return offset
 
 
 def _omega_table(body, args):
