@@ -87,11 +87,19 @@ def read_input_text(path, what):
         raise InputError(f"{path} is not a {what} (not UTF-8 text)") from None
 
 
-# measured here (phase_levels(1000, 30): 465,000 candidate fractions in 1.9 s)
-_SECONDS_PER_CANDIDATE = 4e-6
+# measured on the 2-core AMD EPYC VM (2026-11-28): phase_levels(2, 1000),
+# 1,001,000 candidate fractions in 6.8 s; `orbits catalog --preset fig6
+# --n-max 2 --q-max 600`, 139,281 rows in 4.5 s and 500 MB at peak; `orbits
+# catalog --bodies` of 10,000 bodies at n <= 10, 27.4 s and 731 MB (one
+# closed_orbits table per body, then joined).  A catalog row is bounded by
+# two per level and body (the estimate's rows), about 0.3-0.6 of that are
+# found.
+_SECONDS_PER_CANDIDATE = 7e-6
 _BYTES_PER_LEVEL = 400  # Fraction set, sorted list and level arrays
-_BYTES_PER_ROW = 600  # catalog row: search arrays, DataFrame, CSV text
-_SECONDS_PER_BODY_LEVEL = 2e-7  # root search per body and level, one core
+_BYTES_PER_ROW = 600  # catalog row (of the bound): search arrays, DataFrame, CSV text
+_SECONDS_PER_ROW = 1e-5  # catalog row (of the bound): phases, DataFrame, CSV text
+_BYTES_PER_BODY = 40e3  # one body's table and its part of the join
+_SECONDS_PER_BODY = 3e-3  # one body's search and table, one core
 _BYTES_PER_GRID_POINT = 200  # region_grid: meshgrid, moments and masks
 MAX_SECONDS = 24 * 3600
 
@@ -121,13 +129,15 @@ def search_estimate(n_max, q_max, bodies=1):
     """Rough memory (bytes) and time (s) of a closed-orbit search.
 
     Levels as :func:`level_estimate`; each body gives at most two orbits
-    per level.
+    per level, and costs a table of its own (the constants above, measured).
     """
     candidates, levels = level_estimate(n_max, q_max)
     # bodies = 0 adds nothing (not inf * 0 = NaN when n_max overflows a double)
     rows = 2.0 * levels * bodies if bodies else 0.0
-    memory = levels * _BYTES_PER_LEVEL + rows * _BYTES_PER_ROW
-    seconds = candidates * _SECONDS_PER_CANDIDATE + 0.5 * rows * _SECONDS_PER_BODY_LEVEL
+    memory = levels * _BYTES_PER_LEVEL + rows * _BYTES_PER_ROW + bodies * _BYTES_PER_BODY
+    seconds = (
+        candidates * _SECONDS_PER_CANDIDATE + rows * _SECONDS_PER_ROW + bodies * _SECONDS_PER_BODY
+    )
     return memory, seconds
 
 
@@ -148,17 +158,20 @@ def check_search_bounds(n_max, q_max, bodies=1, what="this search"):
     memory, seconds = search_estimate(n_max, q_max, bodies)
     budget = memory_budget()
     n_max, q_max = short_number(n_max), short_number(q_max)
+    lower = "lower --n-max or --q-max"
+    if bodies > 1:
+        # a catalog holds every body's table at once; a survey writes chunks
+        lower += " or give fewer bodies (orbits survey --bodies takes many, in chunks)"
     if not memory <= budget:  # also a NaN estimate (inf * 0 for a huge n_max)
         raise InputError(
             f"{what} (n_max={n_max}, q_max={q_max}, {plural(bodies, 'body', 'bodies')}) "
             f"would need {about_bytes(memory)} of memory, more than the "
-            f"{format_bytes(budget)} allowed (half of this machine's); "
-            "lower --n-max or --q-max"
+            f"{format_bytes(budget)} allowed (half of this machine's); {lower}"
         )
     if not seconds <= MAX_SECONDS:
         raise InputError(
             f"{what} (n_max={n_max}, q_max={q_max}, {plural(bodies, 'body', 'bodies')}) "
-            f"would take {about_duration(seconds)}; lower --n-max or --q-max"
+            f"would take {about_duration(seconds)}; {lower}"
         )
     return memory, seconds
 
