@@ -319,6 +319,39 @@ def test_bodies_file_flags_exactly_the_unusable_rows(tmp_path):
     assert len(table.bodies()) == 4
 
 
+def test_a_survey_of_tiny_chunks_is_estimated_and_refused(tmp_path):
+    """Each chunk rewrites the manifest, whose ledger grows by a chunk: an
+    adversarial `--resolution 200 --n-max 30 --chunk 5` took 102.6 s with no
+    estimate line (the estimate ignored the chunks: under a second), and
+    `--resolution 1612 --chunk 1` was estimated at 24 s (it needs weeks)."""
+    from orbits.survey import check_survey_bounds, survey_estimate
+
+    _, small = survey_estimate(15_402, 30, 1, 5)
+    _, usual = survey_estimate(15_402, 30, 1, 20)
+    assert 102.6 / 2 <= small <= 102.6 * 2 and 8.6 / 2 <= usual <= 8.6 * 2
+    with pytest.raises(InputError, match=r"would take .*a larger --chunk \(now 1\)"):
+        check_survey_bounds(1_000_828, 10, 1, 1)
+    from orbits.cli import main
+
+    assert (
+        main(
+            [
+                "survey",
+                "--resolution",
+                "1612",
+                "--n-max",
+                "10",
+                "--chunk",
+                "1",
+                "--out",
+                str(tmp_path / "s"),
+            ]
+        )
+        == 2
+    )
+    assert not (tmp_path / "s").exists()
+
+
 @pytest.mark.parametrize("n_max", [1e308, 10**400, 2**63 - 1, 10**17])
 def test_huge_level_counts_are_refused_before_any_allocation(n_max, tmp_path):
     """A hypothesis draw (n_max = 1e308) got the CI runner OOM-killed.

@@ -338,6 +338,13 @@ def _body_columns(found, ids, n, q):
 # 232 s on 2 cores, i.e. 2.3e-5 s per body with about 16 levels
 _SECONDS_PER_BODY = 2e-5
 _SECONDS_PER_BODY_LEVEL = 2e-7
+# each chunk writes two parts (fsync'ed) and the whole manifest again, whose
+# ledger grows by one entry a chunk: `--resolution 200 --n-max 30` (15,402
+# bodies) took 8.6 s with --chunk 20 (771 chunks) and 102.6 s with --chunk 5
+# (3,081 chunks) on the 2-core VM (2026-11-28): about 2.2 ms a chunk plus
+# 20 us per ledger entry rewritten
+_SECONDS_PER_CHUNK = 2.2e-3
+_SECONDS_PER_LEDGER_ENTRY = 2e-5
 _BYTES_PER_ROW = 600  # an orbit row: kernel arrays, DataFrame, CSV text
 GRID_INSIDE = 0.39  # fraction of the bounding box inside the region
 
@@ -346,7 +353,9 @@ def survey_estimate(bodies, n_max, q_max, chunk):
     """Rough peak memory (bytes) and total time (s) of a survey.
 
     A chunk holds up to two orbits per level and body; the memory is two
-    chunks' rows (one being written while the next is computed).
+    chunks' rows (one being written while the next is computed).  The time
+    counts each chunk's files and its rewrite of the manifest, whose ledger
+    grows with the chunks (so a small ``chunk`` costs time quadratically).
     """
     level_memory, _ = search_estimate(n_max, q_max, bodies=0)
     _, levels = level_estimate(n_max, q_max)
@@ -355,6 +364,8 @@ def survey_estimate(bodies, n_max, q_max, chunk):
     rows = 2 * per_chunk * (2.0 * levels * _BYTES_PER_ROW + 34.0 * levels) if per_chunk else 0.0
     memory = level_memory + rows
     seconds = bodies * (_SECONDS_PER_BODY + levels * _SECONDS_PER_BODY_LEVEL) if bodies else 0.0
+    chunks = -(-bodies // chunk) if bodies else 0
+    seconds += chunks * _SECONDS_PER_CHUNK + 0.5 * chunks * chunks * _SECONDS_PER_LEDGER_ENTRY
     return memory, seconds
 
 
@@ -385,7 +396,7 @@ def check_survey_bounds(bodies, n_max, q_max, chunk):
         raise InputError(
             f"this survey ({bodies} bodies, n_max={short_number(n_max)}, "
             f"q_max={short_number(q_max)}) "
-            f"would take {about_duration(seconds)}; use fewer bodies or "
-            "a lower --n-max"
+            f"would take {about_duration(seconds)}; use fewer bodies, "
+            f"a lower --n-max or a larger --chunk (now {chunk})"
         )
     return memory, seconds
