@@ -538,6 +538,20 @@ def test_cli_verify_refuses_an_empty_table_name(capsys):
     assert len(err.strip().splitlines()) == 1 and "--table" in err
 
 
+@pytest.mark.parametrize("json_flag", [[], ["--json"]])
+def test_cli_verify_refuses_a_table_on_standard_output(capsys, json_flag):
+    """--table - wrote the CSV after the summary on stdout: with --json the
+    output was no longer JSON (exit 0).  Refused before any work."""
+    argv = ["verify", "--bodies", "2", "--angles", "1", "--table", "-", *json_flag]
+    assert main(argv) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err.strip().splitlines() == [
+        "orbits: error: orbits verify: --table - would mix the table into the summary on "
+        "standard output (and break --json): give --table a file"
+    ]
+
+
 def test_cli_help_quotes_the_allowances_checks_applies(capsys):
     """The help quotes the allowances before importing orbits.checks: one
     definition (orbits.limits) serves both."""

@@ -43,6 +43,12 @@ def _cmd_verify(args):
         from .._args import path_argument
         from ..atomic import ensure_writable
 
+        if args.table == "-":
+            # the summary (or its JSON) goes to standard output already
+            raise InputError(
+                "orbits verify: --table - would mix the table into the summary on "
+                "standard output (and break --json): give --table a file"
+            )
         ensure_writable(path_argument("--table", args.table))
     one = any(getattr(args, name, None) is not None for name in BODY_SELECTORS)
     body = body_from_args(args) if one else None
@@ -206,7 +212,8 @@ def add_parser(subparsers):
         "--table",
         metavar="FILE.csv",
         help="also write every initial condition and its discrepancies to this CSV "
-        "(branch 'separatrix' marks an angle with no closed form)",
+        "file (not '-': the summary is on standard output; branch 'separatrix' marks "
+        "an angle with no closed form)",
     )
     parser.add_argument(
         "--no-progress", action="store_true", help="no progress bar even on a terminal"
