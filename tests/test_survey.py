@@ -1,6 +1,7 @@
 """Survey: tables, the conjecture report, resume after a kill, Dask, Fig. 2."""
 
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -531,6 +532,23 @@ def test_run_report_equals_the_report_read_back(tmp_path, fmt, columns, monkeypa
     assert again == report
     assert (tmp_path / "s" / "report.json").read_bytes() == written
     assert report["bodies"] == len(orbits.region_grid(30))
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+def test_a_full_stdout_after_a_whole_survey_is_a_warning(tmp_path):
+    """`orbits survey ... >/dev/full` wrote the whole survey, then ended with
+    exit 2 ("no file created or changed"): its summary is report.json."""
+    out = tmp_path / "s"
+    argv = [sys.executable, "-m", "orbits", "survey", "--resolution", "12", "--n-max", "3"]
+    with open("/dev/full", "w") as full:
+        done = subprocess.run([*argv, "--out", str(out)], stdout=full, stderr=subprocess.PIPE)
+    err = done.stderr.decode().strip().splitlines()
+    assert done.returncode == 0, err
+    assert err[-1] == (
+        "orbits: warning: the summary could not be printed (No space left on device); "
+        f"the survey in {out} is complete and its report.json holds the summary"
+    )
+    assert main(["survey", "--check", str(out)]) == 0
 
 
 def test_chunk_summaries_combine_as_the_whole_table():

@@ -16,7 +16,6 @@ from .shared import (
 
 
 def _cmd_survey(args):
-    import json
     import time
 
     from ..survey import Survey, check_survey
@@ -106,6 +105,26 @@ def _cmd_survey(args):
         )
     pending = sum(len(survey.chunk_moments(k)) for k in survey.last_todo)
     elapsed = time.perf_counter() - start
+    try:
+        _print_report(args, report, total, pending, elapsed)
+        sys.stdout.flush()
+    except BrokenPipeError:
+        raise  # the reader left (`| head`): main ends quietly
+    except OSError as error:
+        # the survey is written whole: its summary is report.json
+        print(
+            f"orbits: warning: the summary could not be printed "
+            f"({error.strerror or error}); the survey in {args.out} is complete and "
+            "its report.json holds the summary",
+            file=sys.stderr,
+        )
+    return 0
+
+
+def _print_report(args, report, total, pending, elapsed):
+    """The survey's summary on standard output (``--json``: its report)."""
+    import json
+
     if args.json:
         print(json.dumps(report, indent=2))
     else:
@@ -141,7 +160,6 @@ def _cmd_survey(args):
                     f"{row['I3']:.6f}), minimum {row['min_total_phase']:.9f} at "
                     f"theta = {row['min_theta']:.9f}"
                 )
-    return 0
 
 
 def _check_survey_directory(args, check_survey):
