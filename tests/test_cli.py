@@ -43,7 +43,7 @@ class TestPhase:
             "--csv",
         )
         assert code == 0
-        row = pd.read_csv(io.StringIO(out), **csv_float_options()).iloc[0]
+        row = pd.read_csv(io.StringIO(out), comment="#", **csv_float_options()).iloc[0]
         assert row.total_phase == pytest.approx(21.5303, abs=5e-5)
         assert row.branch == "SAM"
 
@@ -52,7 +52,7 @@ class TestPhase:
             capsys, "phase", "--preset", "fig6", "--dtheta", "-1e-300", "1e-300", "--csv"
         )
         assert code == 0
-        table = pd.read_csv(io.StringIO(out), **csv_float_options())
+        table = pd.read_csv(io.StringIO(out), comment="#", **csv_float_options())
         assert table.branch.tolist() == ["SAM", "LAM"]
         assert table.dtheta.tolist() == [-1e-300, 1e-300]
 
@@ -111,7 +111,7 @@ class TestPhase:
         first = out.splitlines()[0].split()
         assert first[:2] == ["name", "[-]"] and " ".join(first[2:]) == "my top my top"
         code, out, _ = run(capsys, *base, "--csv")
-        table = pd.read_csv(io.StringIO(out), **csv_float_options())
+        table = pd.read_csv(io.StringIO(out), comment="#", **csv_float_options())
         assert table.columns[0] == "name" and table.name.tolist() == ["my top", "my top"]
         # without --name the table is as before
         code, out, _ = run(capsys, *base[:-2])
@@ -182,7 +182,7 @@ def test_phase_folds_theta_and_phi(capsys):
 
     code, out, _ = run(capsys, "phase", "--preset", "fig6", "--theta", "2", "--phi", "-3", "--csv")
     assert code == 0
-    row = pd.read_csv(io.StringIO(out), **csv_float_options()).iloc[0]
+    row = pd.read_csv(io.StringIO(out), comment="#", **csv_float_options()).iloc[0]
     assert row.theta == pytest.approx(math.pi - 2, abs=1e-15)
     want = orbits.phases(orbits.Body.preset("fig6"), math.pi - 2, math.pi - 3).iloc[0]
     assert row.phi == pytest.approx(math.pi - 3, abs=1e-15)

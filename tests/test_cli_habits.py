@@ -23,10 +23,27 @@ def run(capsys, *argv):
 def csv_rows(out):
     from orbits.atomic import csv_float_options
 
-    return pd.read_csv(io.StringIO(out), **csv_float_options())
+    return pd.read_csv(io.StringIO(out), comment="#", **csv_float_options())
 
 
 PHONE = ("--box", "0.146", "0.071", "0.008", "--mass", "0.17")
+
+
+def test_csv_states_units_and_frame_on_its_first_line(capsys):
+    """`phase --omega ... --csv` printed w1..w3, energy and periods with no
+    unit or frame (the table labels them): a '# units:' line comes first."""
+    code, out, _ = run(
+        capsys, "phase", *PHONE, "--omega", "0.3", "0.1", "3", "--units", "Hz", "--csv"
+    )
+    first = out.splitlines()[0]
+    assert code == 0 and first.startswith("# units: ")
+    stated = dict(item.rsplit(" [", 1) for item in first[len("# units: ") :].split("; "))
+    assert stated["w1"] == "rad/s, principal axes I1<I2<I3]"
+    assert stated["energy"] == "J]"  # a box in m and kg: SI
+    assert stated["period"] == "s]"
+    # every column but the text ones is stated
+    header = out.splitlines()[1].split(",")
+    assert set(stated) == set(header) - {"branch"}
 
 
 class TestOmega:

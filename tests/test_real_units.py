@@ -122,7 +122,7 @@ def test_apophis_from_its_periods(capsys):
 
     argv = ["phase", *APOPHIS, "--periods", "263", "27.38", "--time-unit", "h", "--csv"]
     assert main(argv) == 0
-    table = pd.read_csv(io.StringIO(capsys.readouterr().out))
+    table = pd.read_csv(io.StringIO(capsys.readouterr().out), comment="#")
     sam = table[table["branch"] == "SAM"].iloc[0]
     # Pravec et al. (2014): E/E0 = 1.024 for Apophis on SAM
     assert round(sam["E_over_E0"], 4) == 1.0236

@@ -56,7 +56,7 @@ def _phase_table(args):
     return _print_table(table, args.csv, NORMALISED_UNITS, label=getattr(args, "label", None))
 
 
-# units of the printed rows (text tables; CSV keeps the bare column names)
+# units of the printed rows (text tables; with --csv a first "# units:" line)
 PRINCIPAL = "principal axes I1<I2<I3"
 NORMALISED_UNITS = {
     **dict.fromkeys(["I1", "I2", "I3", "D"], "|I|=1"),
@@ -242,10 +242,15 @@ def _print_table(table, csv, units=None, notes=(), label=None):
         else:  # one line of the table: control characters as escapes
             label = "".join(c if c.isprintable() else repr(c)[1:-1] for c in label)
         table.insert(0, "name", label)
+    units = units or {}
     if csv:
+        # units and frames on one comment line first, as a catalog's header
+        # (read with pandas.read_csv(..., comment="#"))
+        stated = [f"{name} [{units[name]}]" for name in table.columns if name in units]
+        if stated:
+            print(f"# units: {'; '.join(stated)}")
         table.to_csv(sys.stdout, index=False, float_format="%.17g")
         return 0
-    units = units or {}
     rows = table.T
     width = max(len(str(name)) for name in rows.index)
     labels = {name: f"[{units.get(name, '-')}]" for name in rows.index}
