@@ -551,6 +551,23 @@ def test_a_full_stdout_after_a_whole_survey_is_a_warning(tmp_path):
     assert main(["survey", "--check", str(out)]) == 0
 
 
+def test_a_refused_rerun_is_one_line_without_the_skipped_rows(tmp_path, capsys):
+    """--skip-invalid into a directory of another survey's parameters: the
+    skipped row's warning came before the refusal (two lines)."""
+    bodies = tmp_path / "b.csv"
+    bodies.write_text("I1,I2,I3\n0.26,0.55,0.793662\n1,2,9\n")
+    argv = ["survey", "--bodies", str(bodies), "--skip-invalid", "--n-max", "3"]
+    assert main([*argv, "--out", str(tmp_path / "s")]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert sum("orbits: warning: skipped" in line for line in err) == 1  # reported on a run
+    assert main([*argv, "--format", "csv", "--out", str(tmp_path / "s")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        f"orbits: error: {tmp_path / 's'} holds a survey with different parameters "
+        "(format); use a new directory"
+    ]
+
+
 def test_chunk_summaries_combine_as_the_whole_table():
     from orbits.survey.report import bodies_summary, combined_summary
 

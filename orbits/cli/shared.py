@@ -507,8 +507,10 @@ def command_line(argv):
     return "orbits " + " ".join(shlex.quote(word) for word in words)
 
 
-def bodies_file_from_args(args):
-    """The strictly read ``--bodies`` file; skipped rows reported on stderr."""
+def bodies_file_from_args(args, report=True):
+    """The strictly read ``--bodies`` file; skipped rows reported on stderr
+    (later, by :func:`report_skipped`, with ``report=False``: after the
+    checks that could still refuse the run, so that a refusal is one line)."""
     from ..catalog import read_bodies_csv
 
     if getattr(args, "name", None) is not None:
@@ -526,6 +528,13 @@ def bodies_file_from_args(args):
             flush=True,
         )
     table = read_bodies_csv(args.bodies, skip_invalid=args.skip_invalid)
+    if report:
+        report_skipped(table)
+    return table
+
+
+def report_skipped(table):
+    """One warning line per skipped row of a bodies file (the first 20, then a count)."""
     for _, message in table.skipped[:20]:
         print(f"orbits: warning: skipped {message}", file=sys.stderr)
     if len(table.skipped) > 20:
@@ -533,7 +542,6 @@ def bodies_file_from_args(args):
             f"orbits: warning: skipped {len(table.skipped) - 20} more invalid rows",
             file=sys.stderr,
         )
-    return table
 
 
 def bodies_from_args(args):

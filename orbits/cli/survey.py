@@ -12,6 +12,7 @@ from .shared import (
     integer_at_least,
     positive_int,
     progress_bar,
+    report_skipped,
 )
 
 
@@ -74,7 +75,7 @@ def _cmd_survey(args):
         announced = True
         survey = Survey.grid(args.out, args.resolution, args.n_max, **options)
     else:
-        table = bodies_file_from_args(args)
+        table = bodies_file_from_args(args, report=False)
         survey = Survey(
             args.out,
             table.moments,
@@ -84,6 +85,11 @@ def _cmd_survey(args):
             skipped=[message for _, message in table.skipped],
             **options,
         )
+        # once the directory has accepted these parameters (a refusal is one
+        # line; the run checks them again, touching nothing)
+        survey.ledger.refuse_foreign_directory()
+        survey.ledger.refuse_other_parameters()
+        report_skipped(table)
     memory, seconds = survey_estimate(
         survey.moments.shape[0], survey.n_max, survey.q_max, survey.chunk
     )
