@@ -353,7 +353,7 @@ def file_set(directory, names):
             for name in names:
                 target = directory / name
                 refuse_link(target)
-                _refuse_special(target)
+                _refuse_special(target, stdout_hint=False)
                 os.replace(stage / name, target)
         finally:
             _COMMITTING.clear()
@@ -427,7 +427,8 @@ def check_targets(directory, names):
     :func:`file_set` checks before anything is made.
     """
     for name in names:
-        ensure_writable(Path(directory) / name)
+        # a file of a set has no standard-output form: no '--out -' hint
+        ensure_writable(Path(directory) / name, stdout_hint=False)
         refuse_link(Path(directory) / name)
 
 

@@ -2,6 +2,7 @@
 
 import json
 import math
+import os
 
 import mpmath as mp
 import numpy as np
@@ -550,6 +551,23 @@ def test_cli_verify_refuses_a_table_on_standard_output(capsys, json_flag):
         "orbits: error: orbits verify: --table - would mix the table into the summary on "
         "standard output (and break --json): give --table a file"
     ]
+
+
+def test_a_fifo_table_or_figure_is_refused_without_a_stdout_hint(tmp_path, capsys):
+    """verify --table and a figure set have no standard-output form: their
+    refusal of a FIFO said "(use '--out -' for standard output)"."""
+    os.mkfifo(tmp_path / "t.csv")
+    assert (
+        main(["verify", "--bodies", "1", "--angles", "1", "--table", str(tmp_path / "t.csv")]) == 2
+    )
+    (tmp_path / "f").mkdir()
+    os.mkfifo(tmp_path / "f" / "contact_sheet.png")
+    argv = ["figures", "--preset", "fig6", "--n-max", "3", "--formats", "png"]
+    assert main([*argv, "--out", str(tmp_path / "f")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2, err
+    for line in err:
+        assert "it is a FIFO (named pipe)" in line and "--out -" not in line, line
 
 
 def test_cli_help_quotes_the_allowances_checks_applies(capsys):

@@ -49,7 +49,7 @@ def _cmd_verify(args):
                 "orbits verify: --table - would mix the table into the summary on "
                 "standard output (and break --json): give --table a file"
             )
-        ensure_writable(path_argument("--table", args.table))
+        ensure_writable(path_argument("--table", args.table), stdout_hint=False)
     one = any(getattr(args, name, None) is not None for name in BODY_SELECTORS)
     body = body_from_args(args) if one else None
     n_bodies = 1 if one else args.bodies
