@@ -300,7 +300,7 @@ def test_cli_omega_nearly_spherical():
             ]
         )
     assert code == 0
-    row = pd.read_csv(io.StringIO(out.getvalue()), **csv_float_options()).iloc[0]
+    row = pd.read_csv(io.StringIO(out.getvalue()), comment="#", **csv_float_options()).iloc[0]
     want = mp_omega(NEAR_SPHERE, omega=(1.0, 0.2, 0.3))
     assert row["geometric_phase"] == pytest.approx(want, rel=BOUND)
     assert row["geometric_phase"] < 0 and row["branch"] == "LAM"
