@@ -921,9 +921,12 @@ def _add_routes(table, unit, moments, theta, n_angles, one_body):
 
 def _route_reference(table, name):
     """What route ``name`` is compared with: the scalar kernel's closed form
-    of the same orbit, at least 2 pi as the public functions give it."""
+    of the same orbit, raised to 2 pi where below it by rounding, as the
+    public functions give it."""
+    from .phases import at_least_two_pi
+
     column = "closed_form" if name == "spin_phases" else "closed_form_theta"
-    return np.maximum(table[column].to_numpy(), TWO_PI)
+    return at_least_two_pi(table[column].to_numpy(dtype=float, copy=True))
 
 
 def _summarize(table, tolerance, exhausted, route_failures=None, predicted=None):

@@ -424,7 +424,10 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0, device="cp
 
 
 def at_least_two_pi(total):
-    """``max(Delta alpha, 2 pi)``, in place.
+    """``Delta alpha`` raised to ``2 pi`` where below it by rounding alone, in place.
+
+    Within ``TWO_PI_ROUNDING`` (``2**-40``, relative) below ``2 pi``; a
+    value further below is kept (as :func:`orbits.core.phase.at_least_two_pi`).
 
     ``Delta alpha >= 2 pi`` at both ends of every branch of every physical
     body (eqns alphamin1/2 with the triangle inequalities), with ``2 pi``
@@ -436,7 +439,10 @@ def at_least_two_pi(total):
     :func:`orbits.minimum_phase` checks by a full scan (the search kernels
     themselves evaluate the phase unclamped).
     """
-    return np.maximum(total, 2.0 * np.pi, out=total)
+    two_pi = 2.0 * np.pi
+    rounding = (total < two_pi) & (total >= two_pi * (1.0 - _kernels.TWO_PI_ROUNDING))
+    total[rounding] = two_pi
+    return total
 
 
 @size_aware

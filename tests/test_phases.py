@@ -862,3 +862,23 @@ def test_folded_angles_away_from_the_separatrix_are_kept():
     # (it returned 134.726, 0.45 % off the value at that double)
     with pytest.raises(SeparatrixError):
         orbits.Motion.from_spin(FIG6, -FIG6.critical_angle())
+
+
+def test_only_rounding_is_raised_to_two_pi():
+    """The flat edge's theta -> 0 limit is 2 pi, and rounding can land a few
+    ulp below it: such values read 2 pi.  A value further below (only a
+    counterexample to the paper's conjecture could give one) is kept as
+    computed: the clamp was max(value, 2 pi) for every value."""
+    from orbits.core.phase import TWO_PI_ROUNDING
+    from orbits.core.phase import at_least_two_pi as kernel
+    from orbits.phases import at_least_two_pi
+
+    two_pi = 2 * np.pi
+    values = np.array([two_pi - 4e-15, two_pi * (1 - TWO_PI_ROUNDING), 6.0, 1.0, np.nan, 7.0])
+    want = [two_pi, two_pi, 6.0, 1.0, np.nan, 7.0]
+    np.testing.assert_array_equal([kernel(v) for v in values], want)
+    np.testing.assert_array_equal(at_least_two_pi(values.copy()), want)
+    # the flat edge: theta -> 0 is 2 pi, never below
+    body = orbits.Body((0.3, 0.6, 0.9))
+    assert body.is_flat
+    assert orbits.total_phase(body, 1e-9) >= two_pi

@@ -29,7 +29,14 @@ import warnings
 import numpy as np
 from numba import config, cuda, float64, int64
 
-from .phase import STATUS_OK, body_constants, given_angle, spin_from_angle, total_from_spin
+from .phase import (
+    STATUS_OK,
+    at_least_two_pi,
+    body_constants,
+    given_angle,
+    spin_from_angle,
+    total_from_spin,
+)
 from .phase_table import N_COLUMNS, phases_row
 from .search import SCRATCH_FLOATS, SCRATCH_INTS, search_body_with
 
@@ -67,7 +74,7 @@ def _total_one(i1, i2, i3, phi, angle, from_offset, fold_limit):
     if code != STATUS_OK:
         return math.inf, code
     total = total_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing)
-    return (TWO_PI if total < TWO_PI else total), code
+    return at_least_two_pi(total), code
 
 
 @cuda.jit

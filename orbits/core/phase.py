@@ -51,6 +51,12 @@ from .exact import separatrix_gap_exact
 from .trig import cos_small, sin_small
 
 TWO_PI = 2.0 * math.pi
+# Delta alpha >= 2 pi at both ends of every branch, 2 pi exactly only as the
+# flat edge's theta -> 0 limit, where rounding can land a few ulp below
+# (3.6e-15 rad measured); at_least_two_pi raises such values to 2 pi and
+# keeps any value further below as computed (only a counterexample to the
+# paper's conjecture, a minimum inside a branch, could give one)
+TWO_PI_ROUNDING = 2.0**-40
 HALF_PI = 0.5 * math.pi
 QUARTER_PI = 0.25 * math.pi
 # pi/2 - HALF_PI: the part of pi/2 that the double HALF_PI rounds away
@@ -75,6 +81,18 @@ STATUS_SEPARATRIX = 2
 STATUS_NOT_FINITE = 3
 # |theta| beyond the fold limit (orbits.phases.FOLD_LIMIT): not folded
 STATUS_TOO_LARGE = 4
+
+
+@njit(cache=True, nogil=True)
+def at_least_two_pi(total):
+    """``Delta alpha`` raised to ``2 pi`` where it lies below by rounding alone.
+
+    Within :data:`TWO_PI_ROUNDING` (relative) below ``2 pi``: ``2 pi``;
+    anything else (NaN included) as given.
+    """
+    if total < TWO_PI and total >= TWO_PI * (1.0 - TWO_PI_ROUNDING):
+        return TWO_PI
+    return total
 
 
 @njit(cache=True, nogil=True)
@@ -438,8 +456,8 @@ def _lane_finish(work, count, out, lo):
     )
     for j in range(count):
         total = work[4, j] * work[6, j] - work[5, j]
-        # >= 2 pi (orbits.phases.at_least_two_pi); NaN stays NaN, as np.maximum
-        out[lo + j] = TWO_PI if total < TWO_PI else total
+        # 2 pi where below it by rounding (at_least_two_pi); NaN stays NaN
+        out[lo + j] = at_least_two_pi(total)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")

@@ -13,6 +13,7 @@ from numba import njit, prange
 
 from .phase import (
     STATUS_OK,
+    at_least_two_pi,
     body_constants,
     given_angle,
     parts_from_spin,
@@ -50,7 +51,7 @@ def table_values(i1, i2, i3, phi, angle, from_offset):
         float(branch),
         period,
         dynamic,
-        TWO_PI if total < TWO_PI else total,  # NaN stays NaN, as np.maximum
+        at_least_two_pi(total),  # 2 pi where below it by rounding; NaN stays NaN
         solid_angle_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing),
     )
 
