@@ -36,7 +36,17 @@ from .atomic import atomic_path, csv_float_options
 from .bodies import FLAT_SLACK, Body, flat_excess, validate_moments
 from .cells import escape_header, neutralize, unescape_header, unneutralize
 from .errors import ArgumentTypeError, InputError, OrbitsError
-from .limits import check_search_bounds, plural, read_input_bytes, read_input_text
+from .limits import (
+    MAX_SECONDS,
+    about_bytes,
+    about_duration,
+    check_search_bounds,
+    memory_budget,
+    plural,
+    read_input_bytes,
+    read_input_text,
+    search_estimate,
+)
 from .search import CATALOG_COLUMNS, closed_orbits
 
 VERIFIED_COLUMN = "closure_error"
@@ -200,6 +210,15 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
     norm = float(np.linalg.norm(body.moments))
     d_spin = spin.D / norm
     n_max = int(math.ceil(alpha / (2.0 * math.pi))) + k
+    # the search's own refusal would name --n-max, which is no option here
+    memory, seconds = search_estimate(n_max, q_max, 1)
+    if not (memory <= memory_budget() and seconds <= MAX_SECONDS):
+        raise InputError(
+            f"the {k} closed orbits nearest this spin need a search up to n = {n_max} "
+            f"({about_bytes(memory)} of memory, {about_duration(seconds)}), beyond this "
+            "machine; lower k (--nearest) or --q-max, or take a spin farther from the "
+            "separatrix"
+        )
     frame = closed_orbits(body, n_max=n_max, q_max=q_max)
     distance = np.abs(frame["total_phase"].to_numpy() - alpha)
     other = (frame["branch"].astype(str) != spin.branch).to_numpy()

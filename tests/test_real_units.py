@@ -372,3 +372,20 @@ def test_molecules_and_point_masses_show_si_units_in_notebooks():
         assert "kg m^2" in " ".join(re.sub("<[^>]+>", " ", body._repr_html_()).split())
     plain = text(Motion.from_spin(Body((1.0, 2.0, 2.5)), 0.3))
     assert "I rad^2/s^2" in plain and " J " not in plain
+
+
+def test_too_many_nearest_orbits_name_the_options_that_apply(capsys):
+    """--nearest 1000000000 was refused with "lower --n-max or --q-max",
+    and --n-max does not apply with --nearest."""
+    argv = ["catalog", "--preset", "fig6", "--omega", "1", "2", "3", "--nearest", "1000000000"]
+    assert main([*argv, "--out", "-"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--n-max" not in err[0], err
+    assert err[0].startswith(
+        "orbits: error: the 1000000000 closed orbits nearest this spin need a search up to "
+        "n = 1000000002 ("
+    )
+    assert err[0].endswith(
+        "beyond this machine; lower k (--nearest) or --q-max, or take a spin farther from "
+        "the separatrix"
+    )
