@@ -180,8 +180,15 @@ def check_real_time(seconds, fps, seconds_name="seconds", fps_name="fps"):
     if not (math.isfinite(seconds) and seconds > 0):
         raise InputError(f"{seconds_name} must be positive, got {seconds!r}")
     frames = real_time_frames(seconds, fps)
+    # the count itself where real_time_frames caps it (beyond 2**62), also
+    # beyond a double (--seconds 1e308)
+    count = short_number(frames)
+    if frames >= 2**62:
+        exponent = math.log10(seconds) + math.log10(fps)
+        power = math.floor(exponent)
+        count = f"~{10.0 ** (exponent - power):.1f}e+{power}"
     what = (
-        f"{seconds_name} {seconds:g} at {fps_name} {fps} is {short_number(frames)} "
+        f"{seconds_name} {seconds:g} at {fps_name} {fps} is {count} "
         f"{'frame' if frames == 1 else 'frames'} (round(seconds x fps) + 1)"
     )
     if frames > MAX_FRAMES:

@@ -521,6 +521,12 @@ THROW = ["--preset", "fig6", "--omega"]
             "2000: lower --seconds (at most 99.95) or --fps",
         ),
         (
+            # the count beyond 2**62 frames and beyond a double (it said ~4.6e+18)
+            ["--theta", "0.5", "--seconds", "1e308"],
+            "--seconds 1e+308 at --fps 20 is ~2.0e+309 frames (round(seconds x fps) + 1), "
+            "more than 2000: lower --seconds (at most 99.95)",
+        ),
+        (
             ["--theta", "0.5", "--seconds", "0.01"],
             "--seconds 0.01 at --fps 20 is 1 frame (round(seconds x fps) + 1), and an "
             "animation needs at least 2: give --seconds of at least 0.05 (one frame at --fps 20)",
