@@ -186,7 +186,10 @@ def check_real_time(seconds, fps, seconds_name="seconds", fps_name="fps"):
     if frames >= 2**62:
         exponent = math.log10(seconds) + math.log10(fps)
         power = math.floor(exponent)
-        count = f"~{10.0 ** (exponent - power):.1f}e+{power}"
+        mantissa = round(10.0 ** (exponent - power), 1)
+        if mantissa >= 10.0:  # 9.96 rounds up to the next power
+            mantissa, power = mantissa / 10.0, power + 1
+        count = f"~{mantissa:.1f}e+{power}"
     what = (
         f"{seconds_name} {seconds:g} at {fps_name} {fps} is {count} "
         f"{'frame' if frames == 1 else 'frames'} (round(seconds x fps) + 1)"

@@ -654,7 +654,7 @@ class Body:
         squares = [
             _sum_of_three(i2, i3, -i1),
             _sum_of_three(i1, i3, -i2),
-            max(-float(flat_excess(self._unit.reshape(1, 3))[0]), 0.0),
+            max(0.0, 0.0 - float(flat_excess(self._unit.reshape(1, 3))[0])),  # +0.0 when flat
         ]
         # sqrt(x 2**e) = sqrt(x 2**(e mod 2)) 2**(e // 2), exactly scaled
         half, odd = divmod(self._exponent, 2)

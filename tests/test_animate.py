@@ -527,6 +527,12 @@ THROW = ["--preset", "fig6", "--omega"]
             "more than 2000: lower --seconds (at most 99.95)",
         ),
         (
+            # a mantissa that rounds up to 10 moves to the next power
+            ["--theta", "0.5", "--seconds", "4.99e17"],
+            "--seconds 4.99e+17 at --fps 20 is ~1.0e+19 frames (round(seconds x fps) + 1), "
+            "more than 2000: lower --seconds (at most 99.95)",
+        ),
+        (
             ["--theta", "0.5", "--seconds", "0.01"],
             "--seconds 0.01 at --fps 20 is 1 frame (round(seconds x fps) + 1), and an "
             "animation needs at least 2: give --seconds of at least 0.05 (one frame at --fps 20)",

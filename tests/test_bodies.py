@@ -102,6 +102,12 @@ class TestEllipsoids:
             assert math.isfinite(got)
             assert abs(got - float(want)) <= 4 * math.ulp(float(want)), (got, float(want))
 
+    def test_a_flat_body_has_a_zero_thin_axis(self):
+        """c is +0.0 exactly on the flat edge (it came out -0.0)."""
+        for moments in ((1, 2, 3), (0.3, 0.6, 0.9), (2, 3, 5)):
+            c = Body(moments).equivalent_ellipsoid()[2]
+            assert c == 0.0 and math.copysign(1.0, c) == 1.0, moments
+
     def test_equivalent_ellipsoid_scales_exactly(self):
         """Moments 4**k times as large give semi-axes 2**k times as large, bit for bit."""
         base = Body((0.26, 0.55, 0.793662)).equivalent_ellipsoid()

@@ -148,13 +148,7 @@ def _print_report(args, report, total, pending, elapsed):
             f"{report['bodies_with_a_two_pi_orbit']}"
         )
         if conjecture["held_on_every_body"]:
-            from ..core.search import PROBE_POINTS
-
-            print(
-                "conjecture (the minimum lies at theta -> 0 or pi/2): held on every body "
-                f"(the phase fell at every point tested: {PROBE_POINTS} per branch and "
-                "each search step)"
-            )
+            print("conjecture (the minimum lies at theta -> 0 or pi/2): held on every body")
         else:
             print(
                 f"conjecture (the minimum lies at theta -> 0 or pi/2): FAILED on "
