@@ -927,7 +927,9 @@ def poinsot_animation(
     if out is not None:
         path, fmt = check_output(out)
     fps = check_fps(fps, fmt)
-    motion, default_periods, label = _motion_from(source, theta, dtheta, phi, speed, body)
+    motion, default_periods, label = animation_motion(
+        source, theta, dtheta=dtheta, phi=phi, speed=speed, body=body
+    )
     if seconds is not None:
         if periods is not None or frames is not None:
             raise InputError("give seconds (real time) or periods and frames, not both")
@@ -957,8 +959,15 @@ def poinsot_animation(
 MAX_FRAMES = 2000
 
 
-def _motion_from(source, theta, dtheta, phi, speed, row_body=None):
-    """(Motion, default periods, title) from a body, a Motion or a catalog row."""
+def animation_motion(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0, body=None):
+    """What :func:`poinsot_animation` draws: ``(motion, default periods, title)``.
+
+    ``source`` is a body (with ``theta`` or ``dtheta``, ``phi``, ``speed``),
+    a :class:`~orbits.Motion` (1 period by default) or a catalog row (its
+    spin at ``|omega0| = 1``, drawn over its ``q`` periods by default, with
+    a title; ``body``, when given, must be the row's).
+    """
+    row_body = body
     if isinstance(source, Motion):
         return source, 1.0, None
     row = _as_row(source)
@@ -1013,6 +1022,7 @@ __all__ = [
     "GIF_FPS",
     "FrameData",
     "PoinsotAnimation",
+    "animation_motion",
     "check_dpi",
     "check_fps",
     "check_output",

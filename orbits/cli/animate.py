@@ -92,12 +92,8 @@ def _cmd_animate(args):
         source = Motion.from_omega(body, np.array(args.omega) * factor, axes="body")
     else:
         source = Motion.from_spin(body, args.theta, dtheta=args.dtheta, phi=args.phi, speed=speed)
-    # a catalog row is drawn as the body's motion at the row's dtheta
-    motion = (
-        source
-        if isinstance(source, Motion)
-        else Motion.from_spin(body, dtheta=float(source["dtheta"]))
-    )
+    # what will be drawn: a catalog row is the body's motion at the row's dtheta
+    motion, default_periods, _ = animate.animation_motion(source, body=body)
     if args.periods is not None and args.omega is None:
         if not math.isfinite(args.periods * motion.period):
             raise InputError(
@@ -123,7 +119,7 @@ def _cmd_animate(args):
     elif args.periods is not None:
         periods = args.periods
     else:
-        periods = 1.0 if isinstance(source, Motion) else float(source["q"])
+        periods = default_periods
     animate.check_span(motion, periods * motion.period)
     animate.check_output(args.out, "--out")
     # every input checked: say how long the drawing will take
