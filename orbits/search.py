@@ -388,16 +388,7 @@ def closed_orbits(body, n_max=10, q_max=1):
         _label(body, moments, exponent), moments, level[order], offset[order], p, q, values
     )
     frame.attrs["unresolved"] = unreached
-    frame.attrs["minimum_phase"] = {
-        name: (
-            _at_least_two_pi(info[low], info[at], info),
-            float(info[at]),
-        )
-        for name, low, at in (
-            ("SAM", _kernels.INFO_MIN_SAM, _kernels.INFO_MIN_AT_SAM),
-            ("LAM", _kernels.INFO_MIN_LAM, _kernels.INFO_MIN_AT_LAM),
-        )
-    }
+    frame.attrs["minimum_phase"] = branch_minima(info)
     return frame
 
 
@@ -544,10 +535,32 @@ def minimum_phase(body):
     _kernels.search_body_bracketing(
         *moments, levels, np.empty(0, np.int8), np.empty(0, np.int64), np.empty(0), info
     )
-    sam = (info[_kernels.INFO_MIN_SAM], info[_kernels.INFO_MIN_AT_SAM])
-    lam = (info[_kernels.INFO_MIN_LAM], info[_kernels.INFO_MIN_AT_LAM])
-    best = min(sam, lam)
-    return _at_least_two_pi(best[0], best[1], info), float(best[1])
+    return min(branch_minima(info).values())
+
+
+def branch_minima(info):
+    """Each branch's smallest total phase, from a search's ``info``.
+
+    Parameters
+    ----------
+    info : ndarray (INFO_SIZE,)
+        As :func:`find_roots` (or :func:`orbits.core.search.search_body`)
+        fills it.
+
+    Returns
+    -------
+    dict
+        ``{"SAM": (value, dtheta), "LAM": (value, dtheta)}``: the minimum
+        (rad; raised to 2 pi at a branch's end, where only rounding puts it
+        below) and the offset where it lies.
+    """
+    return {
+        name: (_at_least_two_pi(info[low], info[at], info), float(info[at]))
+        for name, low, at in (
+            ("SAM", _kernels.INFO_MIN_SAM, _kernels.INFO_MIN_AT_SAM),
+            ("LAM", _kernels.INFO_MIN_LAM, _kernels.INFO_MIN_AT_LAM),
+        )
+    }
 
 
 def _at_least_two_pi(value, dtheta, info):

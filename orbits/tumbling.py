@@ -92,19 +92,14 @@ def _total_phase_at_least(branch, low):
 def _no_spin(moments, what, reachable=None):
     """InputError: no spin has ``what``; each branch's smallest total phase, stated
     through ``reachable`` (see :func:`_solve`)."""
-    from .core import search as _kernels
-    from .search import find_roots
+    from .search import branch_minima, find_roots
 
     reachable = reachable or _total_phase_at_least
     _, _, _, info = find_roots(moments, np.empty(0))
-    parts = []
-    for branch, slot, at in (
-        ("SAM", _kernels.INFO_MIN_SAM, _kernels.INFO_MIN_AT_SAM),
-        ("LAM", _kernels.INFO_MIN_LAM, _kernels.INFO_MIN_AT_LAM),
-    ):
-        # Delta alpha > 2 pi on every spin (the flat edge reaches 2 pi in the limit)
-        low = max(float(info[slot]), TWO_PI)
-        parts.append(f"on {branch} {reachable(branch, low)}, at dtheta = {info[at]:.6g}")
+    parts = [
+        f"on {branch} {reachable(branch, low)}, at dtheta = {at:.6g}"
+        for branch, (low, at) in branch_minima(info).items()
+    ]
     return InputError(
         f"no spin of this body has {what}: {parts[0]}; {parts[1]}; each grows "
         "without bound towards the separatrix"
