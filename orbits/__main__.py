@@ -132,12 +132,22 @@ def run():
     import os
     import threading
 
-    code = entry()
+    try:
+        code = entry()
+    except SystemExit as done:  # argparse: --help, --version (0) or a usage error (2)
+        code = done.code if isinstance(done.code, int) else 2
     for stream in (sys.stdout, sys.stderr):
         try:
             if stream is not None:
                 stream.flush()
-        except (OSError, ValueError):  # a closed pipe or stream: nothing to tell
+        except BrokenPipeError:  # the reader (e.g. `head`) closed the pipe: not ours
+            pass
+        except OSError as error:
+            if stream is sys.stdout and code == 0:
+                # `orbits --help >/dev/full`: what was asked for is not written
+                _say(f"orbits: error: standard output: {error.strerror or error}")
+                code = 2
+        except ValueError:  # a closed stream: nothing to tell
             pass
     others = [
         thread

@@ -201,6 +201,25 @@ def test_a_closed_or_full_stderr_in_a_process(tmp_path):
                 sink.close()
 
 
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+@pytest.mark.parametrize("argv", [["--help"], ["--version"], ["catalog", "--help"]])
+def test_help_that_cannot_be_written_is_an_error(argv):
+    """argparse drops a failed write: `orbits --help >/dev/full` printed
+    nothing and exited 0.  Into a pipe that is closed (`| head`) it is 0."""
+    with open("/dev/full", "w") as full:
+        done = subprocess.run(
+            [sys.executable, "-m", "orbits", *argv], stdout=full, stderr=subprocess.PIPE
+        )
+    assert done.returncode == 2, done
+    assert done.stderr.decode().splitlines() == ["orbits: error: No space left on device"]
+    reader = subprocess.Popen(
+        [sys.executable, "-m", "orbits", *argv], stdout=subprocess.PIPE, stderr=subprocess.PIPE
+    )
+    reader.stdout.close()  # the reader is gone before anything is written
+    assert reader.wait() == 0 and reader.stderr.read() == b""
+    reader.stderr.close()
+
+
 @pytest.mark.parametrize("value", ["2", None, b"2", 2j])
 def test_set_num_threads_of_a_non_number(value):
     before = orbits.get_num_threads()

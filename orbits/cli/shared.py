@@ -39,6 +39,15 @@ class Parser(argparse.ArgumentParser):
             r"^-((\d+\.?\d*|\.\d+)([eE][-+]?\d+)?|inf|infinity|nan)$", re.IGNORECASE
         )
 
+    def _print_message(self, message, file=None):
+        # argparse drops a write that fails, so `orbits --help >/dev/full`
+        # printed nothing and exited 0; written and flushed here, the error
+        # reaches orbits.cli.main (exit 2; a closed pipe, as with `| head`, 0)
+        if message:
+            file = file or sys.stderr
+            file.write(message)
+            file.flush()
+
     def error(self, message):
         # the top-level parser's name is the "orbits: error:" prefix already;
         # a subcommand's ("orbits phase") says where the fault is
