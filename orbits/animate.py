@@ -307,7 +307,11 @@ def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
         match = match[match["branch"] == branch]
     multiple = f"{p}" if q == 1 else f"{p}/{q}"
     for warning in caught:
-        if len(match) > 0 or not issubclass(warning.category, UnresolvedOrbitsWarning):
+        # orbits left out are told when the row is missing (below) or when
+        # the branch was not chosen (the other branch's may be among them);
+        # with the chosen branch's row found they are other orbits than the one drawn
+        unresolved = issubclass(warning.category, UnresolvedOrbitsWarning)
+        if not unresolved or (len(match) > 0 and branch is None):
             warnings.warn(warning.message, warning.category, stacklevel=2)
     if len(match) == 0:
         _refuse_unresolved(body, p, q, branch, multiple)

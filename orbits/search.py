@@ -373,10 +373,20 @@ def closed_orbits(body, n_max=10, q_max=1):
         raise InputError("closed_orbits takes one body; use orbits.catalog.catalog for many")
     p, q, values = phase_levels(n_max, q_max)
     _, level, offset, info = find_roots_at(moments, p, q, values)
-    unreached = int(info[_kernels.INFO_UNREACHED_SAM] + info[_kernels.INFO_UNREACHED_LAM])
+    per_branch = {
+        "SAM": int(info[_kernels.INFO_UNREACHED_SAM]),
+        "LAM": int(info[_kernels.INFO_UNREACHED_LAM]),
+    }
+    unreached = sum(per_branch.values())
     if unreached:
+        where = [(name, count) for name, count in per_branch.items() if count]
+        where = (
+            f"on {where[0][0]}"
+            if len(where) == 1
+            else " and ".join(f"{count} on {name}" for name, count in where)
+        )
         warnings.warn(
-            f"{plural(unreached, 'closed orbit')} with 2 pi p/q <= 2 pi {n_max} "
+            f"{plural(unreached, 'closed orbit')} ({where}) with 2 pi p/q <= 2 pi {n_max} "
             f"{'lies' if unreached == 1 else 'lie'} "
             "closer than |dtheta| = 2.2e-308 to the separatrix and cannot be "
             "stored in double precision; they are left out",

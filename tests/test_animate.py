@@ -654,12 +654,14 @@ def test_unresolved_orbit_is_one_error_without_the_search_warning():
         with pytest.raises(InputError, match="largest n drawable on SAM is 385$"):
             animate.orbit_row(FIG6, n=386, branch="SAM")
         row = animate.orbit_row(FIG6, n=385, branch="SAM")
+        # the chosen branch's row found: the orbit left out (SAM's n = 386) is another
+        assert animate.orbit_row(FIG6, n=386, branch="LAM")["branch"] == "LAM"
     assert "cannot be held in double precision" in str(refused.value)
     assert str(refused.value).endswith("the largest n drawable on SAM is 385")
     assert (row["n"], row["branch"]) == (385, "SAM") and -1e-300 < row["dtheta"] < 0
-    # a row that is found still reports the orbits the search left out
-    with pytest.warns(UnresolvedOrbitsWarning, match="2.2e-308"):
-        assert animate.orbit_row(FIG6, n=386, branch="LAM")["n"] == 386
+    # no branch chosen: the one row found is told with the other branch's left out
+    with pytest.warns(UnresolvedOrbitsWarning, match=r"1 closed orbit \(on SAM\) .* 2.2e-308"):
+        assert animate.orbit_row(FIG6, n=386)["branch"] == "LAM"
 
 
 def test_throw_plays_its_periods_in_real_time(tmp_path, capsys):

@@ -1,6 +1,7 @@
 """Closed-orbit search: the paper's Fig. 6 roots, completeness, range, rationals."""
 
 import math
+import re
 import warnings
 
 import numpy as np
@@ -142,9 +143,15 @@ def test_search_is_complete_on_non_monotone_profiles(seed):
 
 def test_unrepresentable_roots_are_reported():
     body = Body((0.05, 1.0, 1.049))  # ~23x closer per n: n = 300 is past 1e-308
-    with pytest.warns(UnresolvedOrbitsWarning, match="2.2e-308"):
+    with pytest.warns(UnresolvedOrbitsWarning, match="2.2e-308") as told:
         table = closed_orbits(body, n_max=300)
     assert table.attrs["unresolved"] > 0
+    # the warning says how many each branch left out: with those found, every
+    # level n above the branch's minimum phase (one root each: monotone here)
+    left = re.search(r"\((\d+) on SAM and (\d+) on LAM\)", str(told[0].message))
+    for name, count in zip(("SAM", "LAM"), map(int, left.groups())):
+        levels = 300 - math.floor(table.attrs["minimum_phase"][name][0] / (2 * math.pi))
+        assert count > 0 and int((table["branch"] == name).sum()) + count == levels
     assert table["dtheta"].abs().min() >= kernels.SMALLEST_OFFSET
     with warnings.catch_warnings():
         warnings.simplefilter("error")
