@@ -294,7 +294,7 @@ def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
     p, q = integer(label_p, p), integer("q", q)
     if math.gcd(p, q) != 1:
         raise InputError(f"p/q = {p}/{q} is not in lowest terms")
-    if branch is not None and branch not in ("SAM", "LAM"):
+    if branch is not None and (not isinstance(branch, str) or branch not in ("SAM", "LAM")):
         raise InputError(f"branch must be SAM or LAM, got {branch!r}")
     # the search's warnings are held back: an error below is one line (an
     # unresolved orbit is said there), a row found gets them as they came

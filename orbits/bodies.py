@@ -371,21 +371,20 @@ class Body:
         shape = ("t-handle", float(l1), float(l2), float(w))
         k = _binary_exponent(max(l1, l2, w))
         l1, l2, w = (math.ldexp(float(v), -k) for v in (l1, l2, w))
+        # eqn:IsforT term by term: the bars' mass fractions a and b, each
+        # bar about its own centre, and the parallel-axis term a b d**2 of
+        # centres d = (w + l2)/2 apart.  Every term is positive and no
+        # product of lengths is formed before the division by l1 + l2
+        # (the expanded polynomials over (l1 + l2)**2 lost their digits,
+        # then divided by zero, for l1, l2 below 1e-160 of w)
         total = l1 + l2
-        ix = (
-            6 * l1 * l2 * w**2
-            + 2 * l1**2 * w**2
-            + l2**2 * w * (6 * l1 + w)
-            + l2**4
-            + 4 * l1 * l2**3
-        ) / (12 * total**2)
-        iy = ((l1 + 2 * l2) * w**2 + l1**3) / (12 * total)
-        iz = (
-            l1 * l2 * (l1**2 + 5 * w**2 + 4 * l2**2)
-            + l1**2 * (l1**2 + w**2)
-            + l2**2 * w * (6 * l1 + w)
-            + l2**4
-        ) / (12 * total**2)
+        a, b = l1 / total, l2 / total
+        apart = a * b * (0.5 * (w + l2)) ** 2
+        cross_piece = a * (l1 * l1 + w * w) / 12
+        shaft = b * (l2 * l2 + w * w) / 12
+        ix = a * (w * w) / 6 + shaft + apart
+        iy = cross_piece + b * (w * w) / 6
+        iz = cross_piece + shaft + apart
         what = "T-handle ({:.6g}, {:.6g}, {:.6g})".format(*shape[1:])
         labels = ("I_x", "I_y", "I_z")
         small = "give the lengths in smaller units (larger numbers)"
@@ -795,7 +794,10 @@ class Body:
                 "body"
             )
         body = cls(moments, name=name)
-        body.shape = ("cylinder", float(radius), float(length), float(radius_y))
+        # the checked floats (a 1-element array or list is one number, as in box)
+        radius, length = _positive_lengths("cylinder", radius=radius, length=length)
+        (radius_y,) = _positive_lengths("cylinder", radius_y=radius_y)
+        body.shape = ("cylinder", radius, length, radius_y)
         body._moment_unit = SI_FROM_INPUTS
         return body
 
@@ -1053,6 +1055,7 @@ class Body:
             )
         _check_defect(defect)
         values = _positive_lengths("rotational constant", normal=True, A=a, B=b, C=c)
+        a, b, c = values  # floats for the labels (a Fraction or a 1-element array has no :g)
         # I = h / (8 pi^2 f X) with X = x 2**e (x in [1/2, 1)) computed as
         # (h / (8 pi^2 f x)) 2**-e: exact scaling, free of overflow/underflow
         scaled, exponents = [], []

@@ -281,7 +281,7 @@ class Motion:
             # the same motion: Motion.from_omega(phone, phone.frame @ spin, axes="principal")
         """
         body = as_body(body)
-        if axes not in (None, "principal", "body"):
+        if axes is not None and (not isinstance(axes, str) or axes not in ("principal", "body")):
             raise InputError(f"axes must be 'principal' or 'body', got {axes!r}")
         if axes == "body":
             omega = real_array("omega0", omega, AngleError)

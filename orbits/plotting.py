@@ -655,7 +655,7 @@ def plot_t_handle(ax3d, l1=8.0, l2=4.0, w=1.0, *, shrink=0.25, bars="solid", ell
     """
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-    if bars not in ("solid", "outline"):
+    if not isinstance(bars, str) or bars not in ("solid", "outline"):
         raise InputError(f"bars must be 'solid' or 'outline', got {bars!r}")
     shrink = positive_finite("shrink", shrink)
     # checks l1, l2, w (positive, finite) before they are used

@@ -412,6 +412,52 @@ def test_t_handle_at_a_decimal_small_scale_keeps_its_unit_moments():
     np.testing.assert_allclose(small.moments, base.moments * 1e-300, rtol=1e-14)
 
 
+def _t_handle_exact(l1, l2, w):
+    """Principal moments of the unit-mass T by parts, in exact rationals."""
+    from fractions import Fraction
+
+    l1, l2, w = (Fraction(v) for v in (l1, l2, w))
+    a, b = l1 / (l1 + l2), l2 / (l1 + l2)
+    apart = a * b * ((w + l2) / 2) ** 2
+    return sorted(
+        (
+            a * w * w / 6 + b * (l2 * l2 + w * w) / 12 + apart,
+            a * (l1 * l1 + w * w) / 12 + b * w * w / 6,
+            a * (l1 * l1 + w * w) / 12 + b * (l2 * l2 + w * w) / 12 + apart,
+        )
+    )
+
+
+@pytest.mark.parametrize(
+    "dims",
+    [(1e-150, 1e-150, 1.0), (1e-160, 1e-160, 1.0), (1e-161, 1e-161, 1.0), (1e-300, 1e-300, 1.0),
+     (1e-200, 1e-200, 3.0), (1.0, 2.0, 1e-120), (8.0, 4.0, 1.0), (2.0, 9.0, 1.5)],
+)  # fmt: skip
+def test_t_handle_of_very_unequal_lengths(dims):
+    """Bars 1e-160 of the width: the expanded eqn:IsforT over (l1 + l2)**2
+    was 8.6% off at 1e-161 (no error), then divided by zero."""
+    exact = _t_handle_exact(*dims)
+    moments = Body.t_handle(*dims).moments
+    assert all(abs(got / float(want) - 1) < 4 * EPS for got, want in zip(moments, exact))
+
+
+@pytest.mark.filterwarnings("ignore::orbits.InertialDefectWarning")
+def test_constructors_take_fractions_and_one_element_arrays():
+    """Numbers as box takes them: the labels and the shape were formatted
+    from the raw arguments (TypeError: a Fraction has no :g format, a
+    1-element array none either)."""
+    from fractions import Fraction
+
+    plain = Body.from_rotational_constants(27.877, 14.512, 9.285, defect="flatten")
+    given = Body.from_rotational_constants(
+        Fraction(27877, 1000), np.array([14.512]), [9.285], defect="flatten"
+    )
+    assert np.array_equal(given.moments, plain.moments)
+    cylinder = Body.cylinder(np.array([0.1]), [0.3], 1.0, radius_y=Fraction(1, 20))
+    assert cylinder.shape == ("cylinder", 0.1, 0.3, 0.05)
+    assert np.array_equal(cylinder.moments, Body.cylinder(0.1, 0.3, 1.0, radius_y=0.05).moments)
+
+
 def test_t_handle_underflow_and_overflow_are_named():
     # moments ~5e-401: underflow (it used to be reported as an overflow)
     with pytest.raises(NonPhysicalBodyError, match="underflows below the smallest normal") as e:

@@ -527,8 +527,9 @@ def test_from_omega_without_axes_warns_only_where_it_matters():
         warnings.simplefilter("error")
         Motion.from_omega(FIG6, [0.1, 1.0, 0.2])
         Motion.from_omega(Body((0.9, 0.4, 0.7)), [0.1, 1.0, 0.2], axes="body")
-    with pytest.raises(InputError, match="axes must be"):
-        Motion.from_omega(FIG6, [0.1, 1.0, 0.2], axes="space")
+    for axes in ("space", np.array(["body"]), ["body"]):  # an array: ValueError (truth value)
+        with pytest.raises(InputError, match="axes must be"):
+            Motion.from_omega(FIG6, [0.1, 1.0, 0.2], axes=axes)
 
 
 def test_from_omega_body_axes_of_unsorted_moments():

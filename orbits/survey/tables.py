@@ -61,7 +61,7 @@ def write_part(table, path, fmt, engine=None):
 
     if engine is None:
         engine = "arrow" if have_pyarrow() else "pandas"
-    if engine not in ("arrow", "pandas"):
+    if not isinstance(engine, str) or engine not in ("arrow", "pandas"):
         raise InputError(f"engine must be 'arrow' or 'pandas', got {engine!r}")
     if fmt == "csv" and "name" in table:  # a key, or a DataFrame's column
         names = [neutralize(str(v)) for v in table["name"]]
@@ -253,7 +253,7 @@ def read_table(out_dir, table, verify=True):
     """
     import pandas as pd
 
-    if table not in ("bodies", "orbits"):
+    if not isinstance(table, str) or table not in ("bodies", "orbits"):
         raise InputError(f"table must be 'bodies' or 'orbits', got {table!r}")
     document = load_manifest(out_dir)
     status = check_parts(out_dir) if verify else None
