@@ -207,8 +207,9 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
     # the constructor takes omega along the principal axes (as from_omega)
     spin = Motion(body, body.frame @ own)
     alpha = spin.total_phase()
-    norm = float(np.linalg.norm(body.moments))
-    d_spin = spin.D / norm
+    # D / |I| on the unit moments (exact power-of-two scaling: |I| of moments
+    # beyond 1e+-154 squared to inf or 0 in numpy's norm)
+    d_spin = math.ldexp(spin.D, -body.exponent) / float(np.linalg.norm(body.unit_moments))
     n_max = int(math.ceil(alpha / (2.0 * math.pi))) + k
     # the search's own refusal would name --n-max, which is no option here
     memory, seconds = search_estimate(n_max, q_max, 1)
@@ -227,9 +228,17 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
     frame = frame.iloc[order].reset_index(drop=True)
     columns = {name: [] for name in NEAREST_COLUMNS}
     for dtheta in frame["dtheta"].to_numpy():
-        unit = Motion.from_spin(body, dtheta=float(dtheta))
-        orbit = Motion.from_spin(body, dtheta=float(dtheta), speed=spin.momentum / unit.momentum)
-        start = body.frame.T @ _start_near(body.moments, orbit, spin.omega0) / factor
+        unit = Motion.from_spin(body, dtheta=float(dtheta))  # |omega0| = 1
+        speed = spin.momentum / unit.momentum  # the throw's |L|
+        orbit = Motion.from_spin(body, dtheta=float(dtheta), speed=speed)
+        # the unit-speed polhode on the unit moments (2E and M scale by the
+        # same exact power of two), then scaled to the throw: no square of
+        # the moments or of |L| at the caller's scale (they overflowed or
+        # went subnormal beyond 1e+-154)
+        two_e = math.ldexp(2.0 * unit.energy, -body.exponent)
+        momentum = math.ldexp(unit.momentum, -body.exponent)
+        start = _start_near(body.unit_moments, two_e, momentum * momentum, spin.omega0)
+        start = body.frame.T @ (start * speed) / factor
         for name, value in zip(NEAREST_COLUMNS, [*start, orbit.period]):
             columns[name].append(float(value))
     for name in NEAREST_COLUMNS:
@@ -243,8 +252,8 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
     return frame
 
 
-def _start_near(moments, orbit, spin):
-    """The point of ``orbit``'s polhode at the azimuth of ``spin`` about I3.
+def _start_near(moments, two_e, m_sq, spin):
+    """The point of the polhode (``2E``, ``M^2`` given) at the azimuth of ``spin`` about I3.
 
     On the orbit ``omega = (r c, r s, z)`` (principal axes, ``c, s`` the
     cosine and sine of the spin's azimuth) keeps ``2E = omega.I.omega`` and
@@ -256,8 +265,8 @@ def _start_near(moments, orbit, spin):
     starts close to the throw.
     """
     i1, i2, i3 = (float(v) for v in moments)
-    two_e, m_sq = 2.0 * orbit.energy, orbit.momentum**2
-    w1, w2, w3 = (float(v) for v in spin)
+    largest = max(abs(float(v)) for v in spin)  # only its direction counts
+    w1, w2, w3 = (math.ldexp(float(v), -math.frexp(largest)[1]) for v in spin)
     norm = math.hypot(w1, w2)
     c, s = (abs(w1) / norm, abs(w2) / norm) if norm > 0.0 else (1.0, 0.0)
     r_sq = (m_sq - two_e * i3) / (i1 * (i1 - i3) * c * c + i2 * (i2 - i3) * s * s)

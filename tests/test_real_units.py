@@ -12,6 +12,7 @@ from orbits import Body, Motion
 from orbits.cli import main
 
 RPM = 2.0 * math.pi / 60.0
+EPS = np.finfo(float).eps
 PHONE_THROW_RPM = (120.0, 2.0, 1.0)
 
 
@@ -97,6 +98,32 @@ def test_nearest_orbits_python_rational_ranked():
     full = full[full["branch"] == spin.branch]
     others = np.abs(full["total_phase"].to_numpy() - spin.total_phase())
     assert np.sort(others)[:4] == pytest.approx(distance, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    "scale, speed",
+    [(2.0**-600, 1.0), (2.0**600, 2.0**-500), (1e-200, 1e100), (1e160, 1e-100), (1e-160, 1.0)],
+)
+def test_nearest_orbits_at_any_scale_of_doubles(scale, speed):
+    """Moments beyond 1e+-154 (docs/conventions.md: any scale of doubles):
+    the start spins were squared at the caller's scale (1e-160: 1e-4 off,
+    not a closed orbit; 1e-200: ZeroDivisionError; 1e160: OverflowError)."""
+    moments, omega = np.array([1.0, 2.0, 2.5]), np.array([1.0, 2.0, 3.0])
+    base = orbits.nearest_orbits(Body(moments), omega, k=3)
+    frame = orbits.nearest_orbits(Body(moments * scale), omega * speed, k=3)
+    exact = math.frexp(scale)[0] == 0.5 and math.frexp(speed)[0] == 0.5  # powers of two
+    starts = ["omega_x", "omega_y", "omega_z"]
+    ratio = frame[starts].to_numpy() / speed / base[starts].to_numpy()
+    assert np.abs(ratio - 1).max() <= (0 if exact else 32 * EPS)
+    assert np.abs(frame["period_s"] * speed / base["period_s"] - 1).max() <= 4 * EPS
+    assert frame["n"].tolist() == base["n"].tolist()
+    # the unit moments are the same to rounding (exactly, for powers of two)
+    gap = np.abs(frame["dtheta"].to_numpy() / base["dtheta"].to_numpy() - 1).max()
+    assert gap <= (0 if exact else 1e-14)
+    # each start is on its orbit: the motion from it has the row's total phase
+    for row in frame.itertuples():
+        spin = Motion.from_omega(Body(moments * scale), [row.omega_x, row.omega_y, row.omega_z])
+        assert spin.total_phase() == pytest.approx(row.total_phase, rel=1e-13)
 
 
 def test_nearest_orbits_refuses_bad_input():
@@ -189,6 +216,30 @@ def test_phase_omega_prints_units_frame_and_flip(capsys):
     # exactly along z (the phone's I3): a steady spin, said so
     assert main([*argv, "--omega", "0", "0", "100", "--units", "rpm"]) == 0
     assert "steady spin about I3" in capsys.readouterr().out
+
+
+def test_phase_omega_of_moments_near_the_largest_double(capsys):
+    """2 E T / M was formed as it reads: 2 E T overflowed for moments near
+    1e307 (exit 2, "not finite"), where spin_phases gives the phases."""
+
+    def phases(scale):
+        argv = ["phase", "--moments", *(str(v * scale) for v in (1.0, 1.5, 2.0))]
+        assert main([*argv, "--omega", "1", "1", "1"]) == 0
+        lines = capsys.readouterr().out.splitlines()
+        return {
+            name: float(line.split()[-1])
+            for line in lines
+            for name in ("dynamic_phase", "total_phase", "geometric_phase")
+            if line.startswith(name + " ")
+        }
+
+    base, huge = phases(1.0), phases(1e307)
+    assert set(huge) == {"dynamic_phase", "total_phase", "geometric_phase"}
+    for name, value in base.items():
+        assert huge[name] == pytest.approx(value, rel=8 * EPS)
+    assert base["dynamic_phase"] - base["geometric_phase"] == pytest.approx(
+        base["total_phase"], rel=4 * EPS
+    )
 
 
 def test_singular_and_plural(capsys, tmp_path):
