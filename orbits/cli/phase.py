@@ -170,9 +170,10 @@ def _omega_table(body, args):
     principal = motion.omega0
     periods = motion.tumbling_periods()
     total = motion.total_phase()
-    dynamic = 2.0 * motion.energy * motion.period / motion.momentum
+    # 2ET/M on the unit scale (2 E T overflowed for moments near 1e308), and
     # Omega in its closed form: dynamic - total cancels near the sphere
-    geometric = float(spin_phases(body, principal)["geometric_phase"].iloc[0])
+    row = spin_phases(body, principal).iloc[0]
+    dynamic, geometric = float(row["dynamic_phase"]), float(row["geometric_phase"])
     i1, i2, i3 = body.moments
     return pd.DataFrame(
         {
@@ -228,8 +229,8 @@ def _print_table(table, csv, units=None, notes=(), label=None):
     if bad:
         raise InputError(
             f"the result is not finite ({', '.join(bad[:4])}): the inputs "
-            "are beyond the range of double precision (e.g. moments below "
-            "1e-150 or above 1e150, or a huge --omega); rescale them"
+            "are beyond the range of double precision; rescale the moments "
+            "or the spin"
         )
     table = table.copy()
     floats = table.select_dtypes("float").columns
@@ -275,9 +276,12 @@ def add_parser(subparsers):
         "phase",
         help="closed-form phases of one body at given spins",
         description="Energy, momentum, period and the dynamic, geometric and "
-        "total phase (eqn:GeometricPhase) for |I| = 1 and a unit "
-        "initial spin omega0 = (sin t cos p, sin t sin p, cos t) in "
-        "the principal frame.  Angles in radians.",
+        "total phase (eqn:GeometricPhase) of one body.  With --theta or "
+        "--dtheta: for |I| = 1 and a unit initial spin omega0 = (sin t cos p, "
+        "sin t sin p, cos t) in the principal frame, angles in radians.  With "
+        "--omega: the body's own moments and that spin, in physical units.  "
+        "With --total-phase, --period-ratio or --periods: every spin that has "
+        "them.",
     )
     add_body_options(parser)
     angle = parser.add_mutually_exclusive_group(required=True)

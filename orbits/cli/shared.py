@@ -25,6 +25,19 @@ EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
 
 
+class _Formatter(argparse.HelpFormatter):
+    """argparse's help, with an option of 2 or 3 numbers shown as such.
+
+    ``nargs="+"`` (argparse has no "2 or 3") would read ``--cylinder R L
+    [RY] [R L [RY] ...]``, as if groups repeated; an action with ``shown``
+    set is printed with that text instead.
+    """
+
+    def _format_args(self, action, default_metavar):
+        shown = getattr(action, "shown", None)
+        return shown if shown is not None else super()._format_args(action, default_metavar)
+
+
 class Parser(argparse.ArgumentParser):
     """argparse with a one-line error message (no usage dump).
 
@@ -34,6 +47,7 @@ class Parser(argparse.ArgumentParser):
     """
 
     def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", _Formatter)
         super().__init__(*args, **kwargs)
         self._negative_number_matcher = re.compile(
             r"^-((\d+\.?\d*|\.\d+)([eE][-+]?\d+)?|inf|infinity|nan)$", re.IGNORECASE
@@ -277,7 +291,7 @@ def _add_real_body_options(group, exclusive):
         metavar=("A", "B", "C"),
         help="uniform solid box with edges A, B, C along x, y, z (with --mass; Body.box)",
     )
-    exclusive.add_argument(
+    cylinder = exclusive.add_argument(
         "--cylinder",
         nargs="+",
         type=finite,
@@ -287,6 +301,7 @@ def _add_real_body_options(group, exclusive):
         "elliptic section (a circular one is a symmetric "
         "top); with --mass (Body.cylinder)",
     )
+    cylinder.shown = "R L [RY]"  # two or three numbers (checked after parsing)
     exclusive.add_argument(
         "--point-masses",
         metavar="FILE.csv",
