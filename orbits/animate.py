@@ -403,8 +403,10 @@ def flip_motion(body=None, *, offset=0.05, speed=1.0):
     separatrix; once per half period the body turns over (the I2 axis
     reverses), the longer the wait the smaller ``offset``
     (``T ~ log(1/offset)``).  The vector is formed from ``offset`` itself,
-    so any offset down to the smallest double keeps its digits (the period
-    to ~1e-15 relative at ``offset = 1e-300``).
+    so offsets down to about 1e-311 keep their digits (the period to
+    ~1e-15 relative at ``offset = 1e-300``); a smaller one is refused
+    (:class:`~orbits.SeparatrixError`), its orbit's ``1 - k^2`` being
+    beyond a double (``orbits.core.phase.KC_FLOOR``).
 
     Parameters
     ----------
@@ -419,6 +421,15 @@ def flip_motion(body=None, *, offset=0.05, speed=1.0):
     Returns
     -------
     Motion
+
+    Raises
+    ------
+    InputError
+        ``offset`` outside (0, pi/4).
+    AngleError
+        ``speed`` not positive and finite.
+    SeparatrixError
+        ``offset`` below about 1e-311 (see above).
     """
     offset = real_scalar("offset", offset, InputError)
     if not (math.isfinite(offset) and 0.0 < offset < 0.25 * math.pi):

@@ -206,7 +206,10 @@ class Motion:
         orbit = np.zeros(_kernels.ORBIT_SIZE)
         branch = _kernels.orbit_setup(i1, i2, i3, *unit_omega, *_gap, orbit)
         if branch == _phase.BRANCH_SEPARATRIX:
-            raise SeparatrixError("omega0 lies on the separatrix M^2 = 2 E I2 (infinite period)")
+            raise SeparatrixError(
+                "omega0 lies on the separatrix M^2 = 2 E I2 (infinite period), or so "
+                "near it (1 - k^2 below 2.4e-623) that a double cannot hold its orbit"
+            )
         self.body = body
         self.omega0 = omega0
         self._orbit = orbit

@@ -685,7 +685,8 @@ def spin_phases(body_or_moments, omega):
         k = int(np.flatnonzero(branch == 0)[0])
         raise SeparatrixError(
             f"omega = {numbers_label('', (w1[k], w2[k], w3[k]))} lies on the "
-            "separatrix M^2 = 2 E I2 (infinite period and phase)"
+            "separatrix M^2 = 2 E I2 (infinite period and phase), or so near it "
+            "(1 - k^2 below 2.4e-623) that a double cannot hold its orbit"
         )
     # E, M and D for the moments and the spin *as given* (as Motion): the
     # kernel saw unit moments (times 2**-exponent) and a unit-scale spin

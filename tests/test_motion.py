@@ -818,3 +818,54 @@ def test_dtheta_out_of_range_is_said_as_total_phase_says_it(dtheta):
         orbits.total_phase(FIG6, dtheta=dtheta)
     assert str(from_motion.value) == str(from_phase.value)
     assert "theta_c + dtheta" in str(from_motion.value) and "not folded" in str(from_motion.value)
+
+
+def _mp_period_and_phase(moments, omega, dps=800):
+    """T (eqn:TK) and Delta alpha (eqn:GeometricPhase) of a spin vector, in mpmath."""
+    with mp.workdps(dps):
+        i1, i2, i3 = (mp.mpf(float(v)) for v in moments)
+        w = [mp.mpf(float(v)) for v in omega]
+        two_e = i1 * w[0] ** 2 + i2 * w[1] ** 2 + i3 * w[2] ** 2
+        m_sq = i1**2 * w[0] ** 2 + i2**2 * w[1] ** 2 + i3**2 * w[2] ** 2
+        gap_m1, gap_3m = m_sq - two_e * i1, two_e * i3 - m_sq
+        if m_sq > two_e * i2:  # SAM
+            rate = mp.sqrt((i3 - i2) * gap_m1 / (i1 * i2 * i3))
+            m = (i2 - i1) * gap_3m / ((i3 - i2) * gap_m1)
+            n, shift = -i3 * (i2 - i1) / (i1 * (i3 - i2)), -2 * mp.pi
+        else:
+            rate = mp.sqrt((i2 - i1) * gap_3m / (i1 * i2 * i3))
+            m = (i3 - i2) * gap_m1 / ((i2 - i1) * gap_3m)
+            n, shift = -i3 * gap_m1 / (i1 * gap_3m), 0
+        period = 4 * mp.ellipk(m) / rate
+        momentum = mp.sqrt(m_sq)
+        total = momentum * period / i3 + shift
+        total += 4 * momentum * (i3 - i1) / (i1 * i3) * mp.ellippi(n, m) / rate
+        return float(period), float(total)
+
+
+@pytest.mark.parametrize("moments", [(1.0, 2.0, 2.5), (1.0, 2.0, 3.0)])
+@pytest.mark.parametrize("tilt", [1e-300, 2.2e-308, 1e-310, 2e-311])
+def test_spin_vectors_a_subnormal_tilt_from_i2(moments, tilt):
+    """(e, 1, e) for e down to 2e-311: period and phase within 4e-15 of mpmath
+    (800 digits).  Below, kc = sqrt(1 - k^2) is a subnormal of few digits:
+    e = 1e-320 was 5e-7 off, 1e-323 a ZeroDivisionError, 5e-324 called the
+    separatrix; they are refused (SeparatrixError), see the next test."""
+    omega = (tilt, 1.0, tilt)
+    period, total = _mp_period_and_phase(moments, omega)
+    motion = Motion(moments, omega)
+    assert motion.period == pytest.approx(period, rel=4e-15)
+    assert motion.total_phase() == pytest.approx(total, rel=4e-15)
+    row = orbits.spin_phases(moments, omega).iloc[0]
+    assert row["period"] == pytest.approx(period, rel=4e-15)
+    assert row["total_phase"] == pytest.approx(total, rel=4e-15)
+
+
+@pytest.mark.parametrize("tilt", [1e-313, 1e-320, 1e-323, 5e-324])
+def test_spin_vectors_beyond_a_doubles_reach_of_the_separatrix(tilt):
+    for call in (
+        lambda: Motion((1.0, 2.0, 3.0), (tilt, 1.0, tilt)),
+        lambda: orbits.spin_phases((1.0, 2.0, 3.0), (tilt, 1.0, tilt)),
+        lambda: orbits.flip_motion(offset=tilt),
+    ):
+        with pytest.raises(SeparatrixError, match="cannot hold its orbit"):
+            call()

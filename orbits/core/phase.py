@@ -71,6 +71,14 @@ _TINY_OFFSET = 1.0e-200
 # at most 3.4 measured against mpmath over 20,000 bodies; twice that margin
 SIDE_SLACK = 16.0 * 2.0**-53
 
+# the smallest kc = sqrt(1 - k^2) an orbit may have: 10**12 steps of the
+# subnormals (4.9e-312), as the command line's smallest --dtheta.  Below it
+# kc keeps fewer than 12 digits and the period ~ log(4/kc) loses more than
+# 1e-15 relative (spins (e, 1, e) with e ~ 1e-320: 5e-7; at 5e-324 kc is 0);
+# only a spin vector within ~1e-311 of the I2 axis gets there (an offset
+# dtheta >= 4.9e-312 gives kc >= 1e-156).  Such orbits are the separatrix's.
+KC_FLOOR = 2.0**-1074 * 1e12
+
 BRANCH_SAM = 1  # short-axis mode, M^2 > 2 E I2: M circles the I3 axis
 BRANCH_LAM = -1  # long-axis mode,  M^2 < 2 E I2: M circles the I1 axis
 BRANCH_SEPARATRIX = 0
@@ -344,6 +352,8 @@ def orbit_constants(i1, i2, i3, w1, w2, w3, scale, offset, closing):
         kc = math.sqrt(d31 * scale * magnitude * closing / q)
     else:
         kc = math.sqrt(d31 / q) * math.sqrt(scale) * math.sqrt(magnitude) * math.sqrt(closing)
+    if kc < KC_FLOOR:  # beyond a double's reach of the separatrix (KC_FLOOR)
+        return 0, two_e, m_sq, gap_m1, gap_3m, 0.0, 0.0, 0.0, 0.0
     return branch, two_e, m_sq, gap_m1, gap_3m, kc, q, p, b
 
 
