@@ -290,8 +290,11 @@ def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
         raise InputError("give exactly one of n and p")
     label_p = "n" if n is not None else "p"
     if n is not None:
+        if integer("q", q) != 1:
+            raise InputError(f"n is the orbit 2 pi n (q = 1); for 2 pi p/{q} give p and q")
         p, q = n, 1
     p, q = integer(label_p, p), integer("q", q)
+    body = as_body(body)
     if math.gcd(p, q) != 1:
         raise InputError(f"p/q = {p}/{q} is not in lowest terms")
     if branch is not None and (not isinstance(branch, str) or branch not in ("SAM", "LAM")):
@@ -301,7 +304,9 @@ def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         if orbits is None:
-            orbits = closed_orbits(as_body(body), n_max=max(1, math.ceil(p / q)), q_max=q)
+            orbits = closed_orbits(body, n_max=max(1, math.ceil(p / q)), q_max=q)
+        else:
+            orbits = _rows_of(body, orbits)
     match = orbits[(orbits["n"] == p) & (orbits["q"] == q)]
     if branch is not None:
         match = match[match["branch"] == branch]
@@ -324,6 +329,30 @@ def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
             f"({branches}); choose one with branch='SAM' or 'LAM' (--branch)"
         )
     return match.iloc[0]
+
+
+def _rows_of(body, orbits):
+    """The rows of a catalog given to :func:`orbit_row` that are ``body``'s.
+
+    A catalog of another body (or of several) gave another body's orbit, or
+    asked for a branch that had been given.
+    """
+    import pandas as pd
+
+    columns = ("I1", "I2", "I3", "n", "q", "branch")
+    if not isinstance(orbits, pd.DataFrame) or not all(c in orbits.columns for c in columns):
+        raise InputError(
+            "orbits must be a catalog DataFrame (orbits.closed_orbits or "
+            f"orbits.read_catalog), got {type(orbits).__name__}"
+        )
+    moments = orbits[["I1", "I2", "I3"]].to_numpy(dtype=float)
+    mine = np.all(np.isclose(moments, body.normalized_moments, rtol=1e-12, atol=0.0), axis=1)
+    if len(orbits) and not mine.any():
+        raise InputError(
+            "the catalog has no rows of this body (its moments, normalised, "
+            f"are {body.normalized_moments.tolist()})"
+        )
+    return orbits[mine]
 
 
 def _refuse_unresolved(body, p, q, branch, multiple):
@@ -983,9 +1012,31 @@ def animation_motion(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0, bod
     a title; ``body``, when given, must be the row's).
     """
     row_body = body
+    row = None if isinstance(source, Motion) else _as_row(source)
+    if isinstance(source, Motion) or row is not None:
+        # the spin is the Motion's or the row's: a spin given too would be ignored
+        given = [
+            name
+            for name, value, default in (
+                ("theta", theta, None),
+                ("dtheta", dtheta, None),
+                ("phi", phi, 0.0),
+                ("speed", speed, 1.0),
+            )
+            if not (value is default or (default is not None and _equals(value, default)))
+        ]
+        if given:
+            what = "a Motion" if row is None else "a catalog row"
+            raise InputError(
+                f"{', '.join(given)} given with {what}, which has its own spin; "
+                "give the spin with a body instead"
+            )
     if isinstance(source, Motion):
+        if body is not None and not np.allclose(
+            as_body(body).normalized_moments, source.body.normalized_moments, rtol=1e-12, atol=0.0
+        ):
+            raise InputError("body is not the Motion's body (give one of the two)")
         return source, 1.0, None
-    row = _as_row(source)
     if row is not None:
         moments = np.array([row["I1"], row["I2"], row["I3"]], dtype=float)
         if row_body is None:
@@ -1013,6 +1064,14 @@ def animation_motion(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0, bod
     if theta is None and dtheta is None:
         raise InputError("give the spin: theta or dtheta (or pass a Motion or a catalog row)")
     return Motion.from_spin(body, theta, dtheta=dtheta, phi=phi, speed=speed), 1.0, None
+
+
+def _equals(value, default):
+    """``value == default`` for a number; False for anything else (refused later)."""
+    try:
+        return bool(value == default)
+    except (TypeError, ValueError):
+        return False
 
 
 def _closure_text(row, q):

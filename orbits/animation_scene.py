@@ -162,7 +162,7 @@ def frame_times(times):
             f"times must increase from frame to frame, got times[{k}] = {times[k]:g} "
             f"then times[{k + 1}] = {times[k + 1]:g}"
         )
-    return times
+    return times.copy()  # not the caller's array
 
 
 def t_handle_boxes(l1, l2, w):

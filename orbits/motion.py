@@ -211,7 +211,7 @@ class Motion:
                 "near it (1 - k^2 below 2.4e-623) that a double cannot hold its orbit"
             )
         self.body = body
-        self.omega0 = omega0
+        self.omega0 = omega0.copy()  # not the caller's array (an edit there changed it)
         self._orbit = orbit
         self._speed = speed
         self.branch = "SAM" if branch == _phase.BRANCH_SAM else "LAM"
@@ -455,7 +455,7 @@ class Motion:
         omega = _scaled(omega, self._speed, "angular velocity")
         omega_space = _scaled(omega_space, self._speed, "angular velocity")
         return MotionState(
-            times,
+            np.array(times, dtype=float),  # a copy: not the caller's array
             omega.reshape(shape + (3,)),
             euler.reshape(shape + (3,)),
             rotation.reshape(shape + (3, 3)),

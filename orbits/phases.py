@@ -714,6 +714,15 @@ def spin_phases(body_or_moments, omega):
         columns[label] = value
     given = [np.ldexp(i, exponent) for i in (i1, i2, i3)]
     return pd.DataFrame(
-        {"I1": given[0], "I2": given[1], "I3": given[2], "w1": w1, "w2": w2, "w3": w3, **columns},
+        {
+            "I1": given[0],
+            "I2": given[1],
+            "I3": given[2],
+            # copies: the columns were read-only views of the caller's omega
+            "w1": w1.copy(),
+            "w2": w2.copy(),
+            "w3": w3.copy(),
+            **columns,
+        },
         copy=False,  # one block per column: no consolidating copy
     )

@@ -10,6 +10,7 @@ import sys  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
 from PIL import Image, ImageSequence  # noqa: E402
 
@@ -841,3 +842,31 @@ def test_few_frames_still_trace_smooth_curves():
         gaps = np.linalg.norm(np.diff(last.herpolhode, axis=0), axis=1)
         size = np.ptp(last.herpolhode[:, :2], axis=0).max()
         assert gaps.max() < size / 16
+
+
+def test_orbit_row_and_animation_take_no_argument_they_would_ignore():
+    """orbit_row dropped q with n, took another body's row from a catalog
+    (and any body at all), and raised TypeError for a catalog not a frame;
+    poinsot_animation ignored theta, dtheta, phi, speed and body with a Motion
+    or a catalog row."""
+    other = Body((1.0, 2.0, 3.0))
+    table = orbits.closed_orbits(FIG6, n_max=4)
+    with pytest.raises(InputError, match="for 2 pi p/2 give p and q"):
+        animate.orbit_row(FIG6, n=3, q=2, branch="SAM")
+    with pytest.raises(InputError, match="no rows of this body"):
+        animate.orbit_row(other, n=3, branch="SAM", orbits=table)
+    with pytest.raises(InputError, match="orbits must be a catalog DataFrame"):
+        animate.orbit_row(FIG6, n=3, orbits="x")
+    with pytest.raises(orbits.OrbitsError):
+        animate.orbit_row("not a body", n=3, orbits=table)
+    both = pd.concat([table, orbits.closed_orbits(other, n_max=4)], ignore_index=True)
+    row = animate.orbit_row(FIG6, n=3, branch="SAM", orbits=both)
+    assert row.equals(animate.orbit_row(FIG6, n=3, branch="SAM"))
+    motion = Motion.from_spin(FIG6, 0.5)
+    for extra in ({"theta": 0.3}, {"dtheta": 0.1}, {"phi": 0.2}, {"speed": 2.0}):
+        for source in (motion, row):
+            with pytest.raises(InputError, match=f"{next(iter(extra))} given with a"):
+                animate.animation_motion(source, **extra)
+    with pytest.raises(InputError, match="not the Motion's body"):
+        animate.animation_motion(motion, body=other)
+    assert animate.animation_motion(motion, body=FIG6, phi=0.0, speed=1)[0] is motion

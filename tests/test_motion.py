@@ -869,3 +869,19 @@ def test_spin_vectors_beyond_a_doubles_reach_of_the_separatrix(tilt):
     ):
         with pytest.raises(SeparatrixError, match="cannot hold its orbit"):
             call()
+
+
+def test_outputs_are_not_the_callers_arrays():
+    """Motion.omega0, MotionState.t, PoinsotAnimation.times and spin_phases'
+    w1..w3 were the caller's arrays (or read-only views of them): an edit
+    of the input changed a Motion whose period stayed the old one's."""
+    omega = np.array([0.3, 0.2, 0.9])
+    motion = Motion((1.0, 2.0, 3.0), omega)
+    frame = orbits.spin_phases((1.0, 2.0, 3.0), omega)
+    times = np.linspace(0.0, 1.0, 5)
+    state = motion.state(times)
+    animation = orbits.PoinsotAnimation(motion, times)
+    omega[0], times[1] = 5.0, 0.7
+    assert motion.omega0.tolist() == [0.3, 0.2, 0.9] and frame["w1"].iloc[0] == 0.3
+    assert state.t[1] == 0.25 and animation.times[1] == 0.25
+    frame.loc[0, "w1"] = 1.0  # a frame of its own, writable (was: read-only ValueError)
