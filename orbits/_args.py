@@ -151,6 +151,26 @@ def integer(name, value, minimum=1, maximum=None):
     return number
 
 
+def flag(name, value):
+    """``True`` or ``False`` (Python or NumPy bool) as a Python bool.
+
+    Anything else is refused: ``verify="no"`` is a true string, and an
+    array has no single truth value.
+    """
+    if not isinstance(value, (bool, np.bool_)):
+        raise ArgumentTypeError(f"{name} must be True or False, got {_describe(value)}")
+    return bool(value)
+
+
+def callback(name, value):
+    """A callable or ``None``, checked before any work is done."""
+    if value is not None and not callable(value):
+        raise ArgumentTypeError(
+            f"{name} must be a callable ({name}(done)) or None, got {_describe(value)}"
+        )
+    return value
+
+
 def path_argument(name, value):
     """A file path (str or os.PathLike); an int (a file descriptor) is refused."""
     if isinstance(value, (str, os.PathLike)) and not isinstance(value, bytes):

@@ -30,7 +30,15 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ._args import below_normal, below_normal_message, integer, path_argument, real_array
+from ._args import (
+    below_normal,
+    below_normal_message,
+    callback,
+    flag,
+    integer,
+    path_argument,
+    real_array,
+)
 from ._version import __version__
 from .atomic import atomic_path, csv_float_options
 from .bodies import FLAT_SLACK, Body, flat_excess, validate_moments
@@ -106,6 +114,7 @@ def catalog(bodies, n_max=10, q_max=1, *, verify=False, progress=None):
     if not bodies:
         raise InputError("no bodies given")
     n_max, q_max = integer("n_max", n_max, minimum=1), integer("q_max", q_max, minimum=1)
+    verify, progress = flag("verify", verify), callback("progress", progress)
     check_search_bounds(n_max, q_max, len(bodies), "the catalog")
     frames = []
     for body in bodies:
@@ -336,14 +345,25 @@ def write_catalog(frame, path, command=None, notes=()):
     ArgumentTypeError
         ``frame`` is not a pandas DataFrame.
     InputError
-        ``path`` ``"-"`` while standard output is closed; an unwritable path.
+        ``path`` ``"-"`` while standard output is closed; an unwritable
+        path; a frame :func:`read_catalog` would refuse (columns not the
+        schema, non-finite numbers, a row that is no closed orbit), checked
+        before anything is written.
     """
     if not isinstance(frame, pd.DataFrame):
         raise ArgumentTypeError(
             f"write_catalog needs a pandas DataFrame (e.g. from orbits.catalog), "
             f"got {type(frame).__name__}"
         )
+    for name in frame.columns:
+        if frame[name].dtype.kind == "f" and not np.all(np.isfinite(frame[name].to_numpy())):
+            raise InputError(f"write_catalog: the frame's column {name} has non-finite numbers")
     data = csv_text(frame)
+    # what read_catalog would refuse is not written (columns not the schema,
+    # NaN, an edited row): checked on the very text, before the file exists
+    _catalog_frame("write_catalog: the frame", data.encode())
+    if isinstance(notes, str):  # one note (iterating it wrote a line per letter)
+        notes = [notes]
     header = [
         f"orbits {__version__} closed-orbit catalog",
         f"command: {command if command else '(Python API)'}",
@@ -411,6 +431,7 @@ def read_catalog(path, *, check=True):
         with or without ``check``.
     """
     path = path_argument("path", path)
+    check = flag("check", check)
     raw = read_input_bytes(path, "catalog")  # no limit: the file orbits wrote
     try:
         header, data = _split_header(raw)
@@ -434,6 +455,17 @@ def read_catalog(path, *, check=True):
                 f"{path} is damaged: the data section does not match its "
                 "SHA-256 (changed, truncated or extended)"
             )
+    frame = _catalog_frame(path, data, recorded[ROWS_KEY] if check else None)
+    frame.attrs["header"] = header
+    return frame
+
+
+def _catalog_frame(path, data, rows=None):
+    """The catalog frame of a data section (bytes), every check of :func:`read_catalog`.
+
+    ``rows``: the row count the header records, checked when given.  Also
+    what :func:`write_catalog` checks before it writes (named ``path``).
+    """
     dtypes = {name: float for name in CATALOG_COLUMNS + (VERIFIED_COLUMN,) + NEAREST_COLUMNS}
     dtypes.update(body=str, branch=str, n="int64", q="int64", closes_after=str)
     try:
@@ -446,10 +478,9 @@ def read_catalog(path, *, check=True):
         raise InputError(
             f"{path}: a cell has the wrong type for its column ({_one_line(error)})"
         ) from None
-    if check and str(len(frame)) != recorded[ROWS_KEY].strip():
+    if rows is not None and str(len(frame)) != rows.strip():
         raise InputError(
-            f"{path} is damaged: {len(frame)} rows, the header records "
-            f"{recorded[ROWS_KEY].strip()}"
+            f"{path} is damaged: {len(frame)} rows, the header records {rows.strip()}"
         )
     columns = list(frame.columns)
     expected = list(CATALOG_COLUMNS)
@@ -481,7 +512,6 @@ def read_catalog(path, *, check=True):
         raise InputError(f"{path}: non-finite numbers")
     _check_orbit_rows(path, frame)
     frame["body"] = frame["body"].map(unneutralize).astype(frame["body"].dtype)
-    frame.attrs["header"] = header
     return frame
 
 
@@ -623,6 +653,7 @@ def read_bodies_csv(path, skip_invalid=False):
         ``skip_invalid``) the first bad row, named by its row number, with
         the count of further bad rows.
     """
+    skip_invalid = flag("skip_invalid", skip_invalid)
     text = read_input_text(path, "bodies file")
     lines = text.split("\n")
     start = 0

@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from ._args import integer, positive_finite, real_scalar
+from ._args import flag, integer, positive_finite, real_scalar
 from .bodies import REGION_BOX, Body, region_moments
 from .cells import literal_text
 from .errors import InputError
@@ -255,7 +255,7 @@ def mark_herpolhode(ax, curve, radii, *, arrow_length=0.18, color=None, centre_l
         linestyle="none",
         zorder=3,
     )
-    if centre_label:
+    if flag("centre_label", centre_label):
         ax.annotate("L", (0.0, 0.0), xytext=(3, 3), textcoords="offset points", fontsize="x-small")
     (start,) = ax.plot(
         xy[:1, 0], xy[:1, 1], marker="o", color=color, markersize=4, linestyle="none", zorder=4
@@ -361,7 +361,7 @@ def plot_phase_curves(ax, body, *, points=1500, period_axis=True):
     top = float(np.nanpercentile(table["dynamic_phase"], 90))
     ax.set_ylim(min(0.0, float(table["geometric_phase"].min())) - 1.0, top)
     handles = list(lines.values())
-    if period_axis:
+    if flag("period_axis", period_axis):
         twin = ax.twinx()
         (lines["period"],) = twin.plot(
             theta, broken("period"), label="period $T$", **STYLES["period"]
@@ -455,7 +455,7 @@ def plot_total_phase(ax, body, orbits=None, *, n_levels=None, points=2000, legen
         )
     ax.set_xlabel(r"polar angle of $\omega_0$ from the body $z$ axis, $\theta$ (rad)")
     ax.set_ylabel(r"total phase $\Delta\alpha$ (rad)")
-    if legend:
+    if flag("legend", legend):
         ax.legend(loc="upper left", fontsize="small")
     return {"curve": curve, "levels": levels, "roots": roots, "level_axis": named}
 
@@ -584,7 +584,7 @@ def plot_body_space(ax, grid=None, *, resolution=300, levels=None, colorbar=True
     ax.set_ylim(lo2 - 0.01, hi2 + 0.025)
     ax.legend(loc="lower right", fontsize="x-small", facecolor="0.3", labelcolor="white")
     bar = None
-    if colorbar:
+    if flag("colorbar", colorbar):
         bar = ax.figure.colorbar(filled, ax=ax, shrink=0.75)
         bar.set_ticks(levels)
         bar.set_ticklabels([rf"{v / TWO_PI:.2f}$\cdot 2\pi$" for v in levels])
@@ -678,7 +678,7 @@ def plot_t_handle(ax3d, l1=8.0, l2=4.0, w=1.0, *, shrink=0.25, bars="solid", ell
         )
     ax3d.add_collection3d(drawn)
     surface = None
-    if ellipsoid:
+    if flag("ellipsoid", ellipsoid):
         x, y, z = _ellipsoid_surface(np.array(semi) * shrink, resolution=60)
         surface = ax3d.plot_surface(
             x, y, z, color="tab:orange", alpha=0.55, linewidth=0, shade=True

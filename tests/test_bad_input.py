@@ -1104,6 +1104,14 @@ API_CASES = [
     ("catalog-q-max-100000", lambda d, s: lambda: orbits.catalog(_body(), n_max=30, q_max=100000)),
     ("catalog-no-bodies", call(orbits.catalog, [], n_max=2)),
     ("catalog-n-max-float", lambda d, s: lambda: orbits.catalog(_body(), n_max=1.5)),
+    # a flag that is not a bool ("no" is a true string) and a progress that
+    # is not callable (raised after the first body's search)
+    ("catalog-verify-no", lambda d, s: lambda: orbits.catalog(_body(), n_max=2, verify="no")),
+    (
+        "catalog-verify-array",
+        lambda d, s: lambda: orbits.catalog(_body(), n_max=2, verify=np.array([1, 2])),
+    ),
+    ("catalog-progress-text", lambda d, s: lambda: orbits.catalog(_body(), progress="bar")),
     ("write_catalog-dev-null", lambda d, s: lambda: orbits.write_catalog(_frame(), "/dev/null")),
     ("write_catalog-fifo", on_file(_fifo, lambda p: orbits.write_catalog(_frame(), p))),
     (

@@ -1,6 +1,7 @@
 """Catalogs: schema, exact CSV round trip, provenance, atomic output, the CLI."""
 
 import errno
+import hashlib
 import os
 import shlex
 import signal
@@ -13,9 +14,17 @@ import pytest
 from long_run import interrupted_catalog
 
 import orbits
-from orbits import Body, InputError, catalog, read_catalog, write_catalog
+from orbits import (
+    ArgumentTypeError,
+    Body,
+    InputError,
+    catalog,
+    closed_orbits,
+    read_catalog,
+    write_catalog,
+)
 from orbits.atomic import write_csv_atomic
-from orbits.catalog import bodies_from_csv
+from orbits.catalog import CHECKSUM_KEY, ROWS_KEY, bodies_from_csv, csv_text
 from orbits.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -107,7 +116,15 @@ def test_csv_round_trip_is_bit_exact(tmp_path):
 )
 def test_read_catalog_checks_schema(tmp_path, mutate, message):
     path = tmp_path / "bad.csv"
-    write_catalog(mutate(orbits.closed_orbits(FIG6, n_max=3)), path)
+    # write_catalog refuses to write it ...
+    with pytest.raises(InputError, match=message):
+        write_catalog(mutate(orbits.closed_orbits(FIG6, n_max=3)), path)
+    assert not path.exists()
+    # ... and read_catalog to read it, written by hand with its checksum rewritten
+    data = csv_text(mutate(orbits.closed_orbits(FIG6, n_max=3)))
+    rows = data.count("\n") - 1
+    digest = hashlib.sha256(data.encode()).hexdigest()
+    path.write_text(f"# {ROWS_KEY}{rows}\n# {CHECKSUM_KEY}{digest}\n{data}")
     with pytest.raises(InputError, match=message):
         read_catalog(path)
     # without the header lines too (check=False reads hand-made catalogs)
@@ -333,3 +350,36 @@ def test_a_catalog_of_a_body_listed_twice_reads_back(tmp_path, capsys):
     assert main(["catalog", "--bodies", str(bodies), "--n-max", "3", "--out", str(out)]) == 0
     table = read_catalog(out)
     assert len(table) == 2 * len(catalog(Body((1.0, 2.0, 3.0)), n_max=3))
+
+
+def test_flags_are_bools(tmp_path):
+    """read_catalog(check="no") skipped the check ("no" is true only by
+    accident here: any string was taken for its truth value)."""
+    out = tmp_path / "c.csv"
+    write_catalog(closed_orbits(Body.preset("fig6"), n_max=2), out)
+    for value in ("no", np.array([True, False]), 1, None):
+        with pytest.raises(ArgumentTypeError, match="check must be True or False"):
+            read_catalog(out, check=value)
+    assert read_catalog(out, check=np.False_).equals(read_catalog(out))
+
+
+def test_write_catalog_writes_only_what_read_catalog_reads(tmp_path):
+    """A frame read_catalog refuses (another schema, NaN, extra or reordered
+    columns, an edited row) was written with a valid checksum; notes="text"
+    wrote a header line per letter."""
+    frame = closed_orbits(FIG6, n_max=3)
+    out = tmp_path / "c.csv"
+    bad = {
+        "columns ['a'] do not start with the catalog schema": pd.DataFrame({"a": [1.0]}),
+        "column total_phase has non-finite numbers": frame.assign(total_phase=np.nan),
+        "do not start with the catalog schema": frame[frame.columns[::-1]],
+        "unexpected columns ['extra']": frame.assign(extra=1.0),
+        "its total_phase is not 2 pi n/q": frame.assign(n=frame["n"] + 1),
+    }
+    for message, wrong in bad.items():
+        with pytest.raises(InputError, match=message.replace("[", r"\[").replace("]", r"\]")):
+            write_catalog(wrong, out)
+        assert not out.exists() and list(tmp_path.iterdir()) == []
+    write_catalog(frame, out, notes="one note")
+    back = read_catalog(out)
+    assert back.equals(frame) and back.attrs["header"][3] == "one note"

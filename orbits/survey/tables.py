@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._args import flag
 from ..atomic import FLOAT_FORMAT, csv_float_options, read_bytes_nofollow, write_bytes_atomic
 from ..cells import neutralize, unneutralize
 from ..errors import InputError
@@ -255,6 +256,7 @@ def read_table(out_dir, table, verify=True):
 
     if not isinstance(table, str) or table not in ("bodies", "orbits"):
         raise InputError(f"table must be 'bodies' or 'orbits', got {table!r}")
+    verify = flag("verify", verify)
     document = load_manifest(out_dir)
     status = check_parts(out_dir) if verify else None
     if status is not None and not status["complete"]:
