@@ -49,7 +49,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._args import integer, path_argument, real_scalar
+from ._args import flag, integer, path_argument, real_scalar
 from .animation_scene import (
     FrameData,
     PoinsotScene,
@@ -61,7 +61,7 @@ from .animation_scene import (
 from .atomic import atomic_path, ensure_writable
 from .bodies import Body
 from .cells import literal_text
-from .errors import AngleError, InputError
+from .errors import AngleError, ArgumentTypeError, InputError
 from .limits import AGG_MAX_PIXELS, check_animation, short_number
 from .motion import Motion, as_body
 
@@ -124,6 +124,25 @@ def check_dpi(dpi, name="dpi", size=(9.0, 4.0)):
             f"at most {AGG_MAX_PIXELS} pixels a side), got {dpi:g}"
         )
     return dpi
+
+
+def check_size(size):
+    """``size`` as ``(width, height)`` floats in inches, or an :class:`InputError`.
+
+    Each side positive and at most what Agg draws at the smallest legible
+    dpi (``AGG_MAX_PIXELS / min_dpi()``, 9362 in).
+    """
+    if isinstance(size, (str, bytes)) or not hasattr(size, "__len__") or len(size) != 2:
+        raise InputError(f"size must be (width, height) in inches, got {size!r}")
+    width, height = (real_scalar("size", side) for side in size)
+    largest = AGG_MAX_PIXELS / min_dpi()
+    if not all(math.isfinite(side) and 0.0 < side <= largest for side in (width, height)):
+        raise InputError(
+            f"size must be two positive numbers of inches, each at most {math.floor(largest)} "
+            f"(Agg draws {AGG_MAX_PIXELS} pixels a side, the text needs {min_dpi()} dpi), "
+            f"got {size!r}"
+        )
+    return width, height
 
 
 def check_fps(fps, fmt=None, name="fps"):
@@ -530,6 +549,10 @@ class PoinsotAnimation:
     ):
         self.motion = motion
         self.fps = check_fps(fps)
+        size = check_size(size)
+        if title is not None and not isinstance(title, str):
+            raise ArgumentTypeError(f"title must be a str or None, got {type(title).__name__}")
+        pyplot = flag("pyplot", pyplot)
         times = frame_times(times)
         # a dpi that draws the text and whose frame buffers fit the machine
         self.dpi = check_dpi(dpi, size=size)

@@ -378,7 +378,13 @@ class PoinsotScene:
             )
         self.motion = motion
         self.times = frame_times(times)
-        subsamples = _trace_steps(integer("subsamples", subsamples), self.times, motion.period)
+        asked = integer("subsamples", subsamples)
+        if asked * (len(self.times) - 1) > TRACE_MAX_SAMPLES:  # 10**9 asked for 67 GiB
+            raise InputError(
+                f"subsamples = {asked} steps for each of {len(self.times) - 1} frame intervals "
+                f"exceed the {TRACE_MAX_SAMPLES} points traced at most; give fewer"
+            )
+        subsamples = _trace_steps(asked, self.times, motion.period)
         body = motion.body
         moments = body.moments
         two_e = 2.0 * motion.energy

@@ -18,7 +18,13 @@ import numpy as np
 
 from ._args import broadcast, finite_array, flat_broadcast, integer, real_array, real_scalar
 from .cells import numbers_label
-from .errors import AngleError, InputError, NonPhysicalBodyError, SymmetricTopError
+from .errors import (
+    AngleError,
+    ArgumentTypeError,
+    InputError,
+    NonPhysicalBodyError,
+    SymmetricTopError,
+)
 from .limits import check_resolution, format_bytes, memory_budget
 from .threads import size_aware
 
@@ -592,6 +598,18 @@ class Body:
         The scale-free form every kernel receives (:func:`canonical_moments`).
         """
         return self._unit
+
+    @property
+    def name(self):
+        """Label carried into catalogs and figure titles (str), or None."""
+        return self._name
+
+    @name.setter
+    def name(self, value):
+        # an array or a number here broke repr() and every catalog of the body
+        if value is not None and not isinstance(value, str):
+            raise ArgumentTypeError(f"name must be a str or None, got {type(value).__name__}")
+        self._name = None if value is None else str(value)  # np.str_ as plain text
 
     @property
     def moment_unit(self):

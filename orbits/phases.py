@@ -82,6 +82,8 @@ class PhaseLimits(namedtuple("PhaseLimits", ["theta_zero", "theta_half_pi"])):
             if values.ndim == 0:
                 rows.append((f"total phase, {name}", float(values), "rad"))
                 rows.append(("", float(values) / (2.0 * np.pi), "turns (x 2 pi)"))
+            elif values.size == 0:
+                rows.append((f"total phase, {name}", "(no bodies)", ""))
             else:
                 low, high = float(values.min()), float(values.max())
                 rows.append((f"total phase, {name}", f"{low:.10g} to {high:.10g}", "rad"))

@@ -14,7 +14,7 @@ from fractions import Fraction
 
 import numpy as np
 
-from ._args import integer
+from ._args import integer, real_array
 from .bodies import Body, canonical_moments, unit_moments
 from .cells import numbers_label
 from .core import search as _kernels
@@ -268,8 +268,9 @@ def search_bodies(moments, levels, *, capacity=None, device="cpu"):
         ``device="cuda"`` unavailable.
     """
     device = check_device(device)
-    moments = np.ascontiguousarray(moments, dtype=float)
-    levels = np.ascontiguousarray(levels, dtype=float)
+    # text, booleans, complex numbers and None refused by name (as elsewhere)
+    moments = np.ascontiguousarray(real_array("moments", moments), dtype=float)
+    levels = np.ascontiguousarray(real_array("levels", levels), dtype=float)
     if moments.ndim != 2 or moments.shape[1] != 3:
         raise InputError(f"moments must have shape (n, 3), got {moments.shape}")
     if (

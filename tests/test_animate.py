@@ -870,3 +870,21 @@ def test_orbit_row_and_animation_take_no_argument_they_would_ignore():
     with pytest.raises(InputError, match="not the Motion's body"):
         animate.animation_motion(motion, body=other)
     assert animate.animation_motion(motion, body=FIG6, phi=0.0, speed=1)[0] is motion
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        ({"title": 5}, "title must be a str or None"),
+        ({"size": "big"}, r"size must be \(width, height\) in inches"),
+        ({"size": (1e9, 1e9)}, "each at most 9362"),
+        ({"subsamples": 10**9}, "exceed the 1000000 points traced at most"),
+        ({"pyplot": np.array([1, 2])}, "pyplot must be True or False"),
+    ],
+)
+def test_animation_options_refused_by_name(options, message):
+    """Were AttributeError, TypeError, MemoryError (67 GiB), ValueError, and
+    'dpi must be a number from 7 to 0'."""
+    motion = Motion.from_spin(FIG6, 0.5)
+    with pytest.raises(orbits.OrbitsError, match=message):
+        orbits.PoinsotAnimation(motion, np.linspace(0.0, 1.0, 3), **options)

@@ -540,3 +540,13 @@ def test_one_or_two_point_masses_are_refused_for_what_they_are():
         Body.from_point_masses([1.0], [[1.0, 2.0, 3.0]])
     with pytest.raises(NonPhysicalBodyError, match="2 point masses lie on a line"):
         Body.from_point_masses([1.0, 2.0], [[0.0, 0.0, 0.0], [1.0, 0.5, 0.0]])
+
+
+def test_name_is_text_or_none():
+    """An array as the name was taken, then broke repr() and every catalog."""
+    with pytest.raises(orbits.ArgumentTypeError, match="name must be a str or None"):
+        Body([1.0, 2.0, 3.0], name=np.array([1, 2]))
+    body = Body([1.0, 2.0, 3.0], name=np.str_("x"))
+    assert type(body.name) is str and repr(body) == "Body((1, 2, 3), name='x')"
+    with pytest.raises(orbits.ArgumentTypeError):
+        body.name = 5

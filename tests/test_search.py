@@ -274,3 +274,11 @@ def test_search_bodies_refuses_repeated_or_non_positive_levels_and_huge_capacity
         orbits.search_bodies(body, [20.0], capacity=10**12)
     rows = orbits.search_bodies(body, [20.0, 25.0])
     assert rows.counts.tolist() == [4]  # two roots a level (SAM and LAM)
+
+
+@pytest.mark.parametrize("moments", [[["1", "2", "3"]], [[True, 2.0, 3.0]], [[1j, 2.0, 3.0]], "a"])
+def test_search_bodies_refuses_what_is_not_numbers(moments):
+    """Text and booleans were searched as numbers; complex and 'a' raised
+    TypeError and ValueError."""
+    with pytest.raises(orbits.ArgumentTypeError, match="moments must be real numbers"):
+        orbits.search_bodies(moments, np.array([13.0, 20.0]))
