@@ -135,7 +135,7 @@ def run():
     try:
         code = entry()
     except SystemExit as done:  # argparse: --help, --version (0) or a usage error (2)
-        code = done.code if isinstance(done.code, int) else 2
+        code = done.code if isinstance(done.code, int) else (0 if done.code is None else 2)
     for stream in (sys.stdout, sys.stderr):
         try:
             if stream is not None:

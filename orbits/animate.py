@@ -451,10 +451,11 @@ def flip_motion(body=None, *, offset=0.05, speed=1.0):
     separatrix; once per half period the body turns over (the I2 axis
     reverses), the longer the wait the smaller ``offset``
     (``T ~ log(1/offset)``).  The vector is formed from ``offset`` itself,
-    so offsets down to about 1e-311 keep their digits (the period to
-    ~1e-15 relative at ``offset = 1e-300``); a smaller one is refused
-    (:class:`~orbits.SeparatrixError`), its orbit's ``1 - k^2`` being
-    beyond a double (``orbits.core.phase.KC_FLOOR``).
+    so it keeps its digits (the period to ~1e-15 relative at ``offset =
+    1e-300``) down to where the orbit's ``k_c = sqrt(1 - k^2)`` would fall
+    below ``orbits.core.phase.KC_FLOOR`` (4.9e-312): an offset of 3.5e-312
+    on the T-handle, 3.5e-306 on a thin rod; a smaller one is refused
+    (:class:`~orbits.SeparatrixError`).
 
     Parameters
     ----------
@@ -477,7 +478,7 @@ def flip_motion(body=None, *, offset=0.05, speed=1.0):
     AngleError
         ``speed`` not positive and finite.
     SeparatrixError
-        ``offset`` below about 1e-311 (see above).
+        ``offset`` too small for a double (see above).
     """
     offset = real_scalar("offset", offset, InputError)
     if not (math.isfinite(offset) and 0.0 < offset < 0.25 * math.pi):
@@ -1063,7 +1064,7 @@ def animation_motion(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0, bod
     if row is not None:
         moments = np.array([row["I1"], row["I2"], row["I3"]], dtype=float)
         if row_body is None:
-            body = Body(moments, name=row.get("body"))
+            body = Body(moments, name=_row_name(row))
         else:
             body = as_body(row_body)
             if not np.allclose(body.normalized_moments, moments, rtol=1e-12, atol=0.0):
@@ -1075,7 +1076,7 @@ def animation_motion(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0, bod
         motion = Motion.from_spin(body, dtheta=float(row["dtheta"]))
         p, q = int(row["n"]), int(row["q"])
         multiple = f"{p}" if q == 1 else f"{p}/{q}"
-        name = literal_text(row.get("body") or "body")
+        name = literal_text(_row_name(row) or "body")
         label = (
             rf"{name}: closed orbit $\Delta\alpha = 2\pi\cdot{multiple}$, "
             rf"{row['branch']}, $\theta-\theta_c$ = {float(row['dtheta']):.3e}"
@@ -1084,9 +1085,22 @@ def animation_motion(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0, bod
         )
         return motion, float(q), label
     body = as_body(source)
+    if row_body is not None and not np.allclose(
+        as_body(row_body).normalized_moments, body.normalized_moments, rtol=1e-12, atol=0.0
+    ):
+        raise InputError("body is not the body given as the source (give one of the two)")
     if theta is None and dtheta is None:
         raise InputError("give the spin: theta or dtheta (or pass a Motion or a catalog row)")
     return Motion.from_spin(body, theta, dtheta=dtheta, phi=phi, speed=speed), 1.0, None
+
+
+def _row_name(row):
+    """A row's body name as text, or None: pandas reads the names 7, 1e5 and
+    NA of a catalog (``read_csv(comment="#")``) as an int, a float and NaN."""
+    name = row.get("body")
+    if name is None or (isinstance(name, float) and math.isnan(name)):
+        return None
+    return str(name)
 
 
 def _equals(value, default):

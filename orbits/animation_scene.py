@@ -19,6 +19,7 @@ import numpy as np
 from ._args import finite_array, integer, real_array
 from .bodies import Body, cylinder_moments
 from .errors import ArgumentTypeError, InputError
+from .limits import format_bytes, memory_budget
 from .motion import Motion, as_body
 from .plotting import box_faces
 
@@ -304,6 +305,10 @@ class FrameData:
 # (a smooth curve at any frame count), and at most this many points in all
 TRACE_SAMPLES_PER_PERIOD = 256
 TRACE_MAX_SAMPLES = 1_000_000
+# memory of one traced point: its time, the motion's state (omega, Euler
+# angles, rotation, omega in space) and the two rho curves, with the
+# temporaries of Motion.state, about twice the 200 bytes kept
+TRACE_BYTES_PER_POINT = 400
 
 
 def _trace_steps(asked, times, period):
@@ -379,10 +384,13 @@ class PoinsotScene:
         self.motion = motion
         self.times = frame_times(times)
         asked = integer("subsamples", subsamples)
-        if asked * (len(self.times) - 1) > TRACE_MAX_SAMPLES:  # 10**9 asked for 67 GiB
+        points = asked * (len(self.times) - 1)
+        if points * TRACE_BYTES_PER_POINT > memory_budget():  # 10**9 asked for 67 GiB
             raise InputError(
-                f"subsamples = {asked} steps for each of {len(self.times) - 1} frame intervals "
-                f"exceed the {TRACE_MAX_SAMPLES} points traced at most; give fewer"
+                f"subsamples = {asked} steps for each of {len(self.times) - 1} frame "
+                f"intervals: {points:.3g} traced points need about "
+                f"{format_bytes(points * TRACE_BYTES_PER_POINT)}, beyond half of this "
+                "machine's memory; give fewer subsamples or frames"
             )
         subsamples = _trace_steps(asked, self.times, motion.period)
         body = motion.body

@@ -355,6 +355,9 @@ def write_catalog(frame, path, command=None, notes=()):
             f"write_catalog needs a pandas DataFrame (e.g. from orbits.catalog), "
             f"got {type(frame).__name__}"
         )
+    if frame.columns.duplicated().any():
+        twice = sorted({str(name) for name in frame.columns[frame.columns.duplicated()]})
+        raise InputError(f"write_catalog: the frame has columns given twice: {twice}")
     for name in frame.columns:
         if frame[name].dtype.kind == "f" and not np.all(np.isfinite(frame[name].to_numpy())):
             raise InputError(f"write_catalog: the frame's column {name} has non-finite numbers")

@@ -228,6 +228,7 @@ def mark_herpolhode(ax, curve, radii, *, arrow_length=0.18, color=None, centre_l
         start along the curve), ``centre`` (Line2D at the origin: the L
         axis), ``circles`` (two Circle patches, r_min and r_max).
     """
+    centre_label = flag("centre_label", centre_label)  # before anything is drawn
     from matplotlib.patches import Circle
 
     color = color or curve.get_color()
@@ -255,7 +256,7 @@ def mark_herpolhode(ax, curve, radii, *, arrow_length=0.18, color=None, centre_l
         linestyle="none",
         zorder=3,
     )
-    if flag("centre_label", centre_label):
+    if centre_label:
         ax.annotate("L", (0.0, 0.0), xytext=(3, 3), textcoords="offset points", fontsize="x-small")
     (start,) = ax.plot(
         xy[:1, 0], xy[:1, 1], marker="o", color=color, markersize=4, linestyle="none", zorder=4
@@ -336,6 +337,7 @@ def plot_phase_curves(ax, body, *, points=1500, period_axis=True):
         The lines by name (``total``, ``dynamic``, ``geometric``,
         ``period``) and the twin axes under ``period_axes``.
     """
+    period_axis = flag("period_axis", period_axis)  # before anything is drawn
     points = _theta_points(points)
     body = as_body(body)
     theta_c = critical_angle(body)
@@ -361,7 +363,7 @@ def plot_phase_curves(ax, body, *, points=1500, period_axis=True):
     top = float(np.nanpercentile(table["dynamic_phase"], 90))
     ax.set_ylim(min(0.0, float(table["geometric_phase"].min())) - 1.0, top)
     handles = list(lines.values())
-    if flag("period_axis", period_axis):
+    if period_axis:
         twin = ax.twinx()
         (lines["period"],) = twin.plot(
             theta, broken("period"), label="period $T$", **STYLES["period"]
@@ -418,6 +420,7 @@ def plot_total_phase(ax, body, orbits=None, *, n_levels=None, points=2000, legen
         (PathCollection or None), ``level_axis`` (the right-hand axis that
         names the levels).
     """
+    legend = flag("legend", legend)  # before anything is drawn
     points = _theta_points(points)
     if n_levels is not None:
         n_levels = integer("n_levels", n_levels, minimum=1, maximum=MAX_LEVELS)
@@ -455,7 +458,7 @@ def plot_total_phase(ax, body, orbits=None, *, n_levels=None, points=2000, legen
         )
     ax.set_xlabel(r"polar angle of $\omega_0$ from the body $z$ axis, $\theta$ (rad)")
     ax.set_ylabel(r"total phase $\Delta\alpha$ (rad)")
-    if flag("legend", legend):
+    if legend:
         ax.legend(loc="upper left", fontsize="small")
     return {"curve": curve, "levels": levels, "roots": roots, "level_axis": named}
 
@@ -546,6 +549,7 @@ def plot_body_space(ax, grid=None, *, resolution=300, levels=None, colorbar=True
         ``contours`` (ContourSet), ``boundaries`` (dict of Line2D), ``kink``
         (Line2D), ``filled`` (the filled ContourSet), ``colorbar``.
     """
+    colorbar = flag("colorbar", colorbar)  # before anything is drawn
     if grid is None:
         grid = body_space_grid(check_resolution(resolution))
     i1, i2, minimum = grid
@@ -584,7 +588,7 @@ def plot_body_space(ax, grid=None, *, resolution=300, levels=None, colorbar=True
     ax.set_ylim(lo2 - 0.01, hi2 + 0.025)
     ax.legend(loc="lower right", fontsize="x-small", facecolor="0.3", labelcolor="white")
     bar = None
-    if flag("colorbar", colorbar):
+    if colorbar:
         bar = ax.figure.colorbar(filled, ax=ax, shrink=0.75)
         bar.set_ticks(levels)
         bar.set_ticklabels([rf"{v / TWO_PI:.2f}$\cdot 2\pi$" for v in levels])
@@ -653,6 +657,7 @@ def plot_t_handle(ax3d, l1=8.0, l2=4.0, w=1.0, *, shrink=0.25, bars="solid", ell
         pairs), ``ellipsoid`` (surface) and ``semi_axes`` (the unshrunk
         a, b, c).
     """
+    ellipsoid = flag("ellipsoid", ellipsoid)  # before anything is drawn
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
     if not isinstance(bars, str) or bars not in ("solid", "outline"):
@@ -678,7 +683,7 @@ def plot_t_handle(ax3d, l1=8.0, l2=4.0, w=1.0, *, shrink=0.25, bars="solid", ell
         )
     ax3d.add_collection3d(drawn)
     surface = None
-    if flag("ellipsoid", ellipsoid):
+    if ellipsoid:
         x, y, z = _ellipsoid_surface(np.array(semi) * shrink, resolution=60)
         surface = ax3d.plot_surface(
             x, y, z, color="tab:orange", alpha=0.55, linewidth=0, shade=True

@@ -878,7 +878,7 @@ def test_orbit_row_and_animation_take_no_argument_they_would_ignore():
         ({"title": 5}, "title must be a str or None"),
         ({"size": "big"}, r"size must be \(width, height\) in inches"),
         ({"size": (1e9, 1e9)}, "each at most 9362"),
-        ({"subsamples": 10**9}, "exceed the 1000000 points traced at most"),
+        ({"subsamples": 10**9}, "beyond half of this machine.s memory"),
         ({"pyplot": np.array([1, 2])}, "pyplot must be True or False"),
     ],
 )
@@ -888,3 +888,22 @@ def test_animation_options_refused_by_name(options, message):
     motion = Motion.from_spin(FIG6, 0.5)
     with pytest.raises(orbits.OrbitsError, match=message):
         orbits.PoinsotAnimation(motion, np.linspace(0.0, 1.0, 3), **options)
+
+
+def test_scene_of_many_frames_and_rows_with_numeric_names(tmp_path):
+    """200,000 frames at the default subsamples were built (1.6e6 traced
+    points) before a cap of 1e6 points refused them; a catalog row whose
+    name pandas reads as a number (7) or NaN ("NA") animates as before."""
+    from orbits.animation_scene import PoinsotScene
+
+    motion = Motion.from_spin(FIG6, 0.5)
+    scene = PoinsotScene(motion, np.linspace(0.0, 10.0, 130_001))
+    assert scene.subsamples == 8 and len(scene.dense_times) == 8 * 130_000 + 1
+    for name in ("7", "NA"):
+        out = tmp_path / f"{name}.csv"
+        orbits.write_catalog(orbits.closed_orbits(Body(FIG6.moments, name=name), n_max=3), out)
+        row = pd.read_csv(out, comment="#").iloc[0]
+        motion, _, title = animate.animation_motion(row)
+        assert motion.body.name == (None if name == "NA" else name) and title
+    with pytest.raises(InputError, match="not the body given as the source"):
+        animate.animation_motion(FIG6, 0.5, body=Body((1.0, 2.0, 3.0)))

@@ -374,6 +374,7 @@ def test_write_catalog_writes_only_what_read_catalog_reads(tmp_path):
         "column total_phase has non-finite numbers": frame.assign(total_phase=np.nan),
         "do not start with the catalog schema": frame[frame.columns[::-1]],
         "unexpected columns ['extra']": frame.assign(extra=1.0),
+        "columns given twice: ['n']": pd.concat([frame, frame[["n"]]], axis=1),
         "its total_phase is not 2 pi n/q": frame.assign(n=frame["n"] + 1),
     }
     for message, wrong in bad.items():

@@ -471,3 +471,19 @@ def test_the_foliation_axes_state_their_unit():
     plotting.plot_polhode_foliation(ax, T_HANDLE)
     names = sorted(text.get_text() for text in ax.texts)
     assert names == ["$M_1$ (J s)", "$M_2$ (J s)", "$M_3$ (J s)"]
+
+
+@pytest.mark.parametrize(
+    "draw",
+    [
+        lambda ax: plotting.plot_total_phase(ax, T_HANDLE, legend="no"),
+        lambda ax: plotting.plot_phase_curves(ax, T_HANDLE, period_axis="no"),
+        lambda ax: plotting.plot_body_space(ax, resolution=20, colorbar="no"),
+    ],
+)
+def test_a_flag_that_is_not_a_bool_is_refused_before_drawing(draw):
+    """("no" is a true string: the flag was taken for True.)"""
+    ax = _axes()
+    with pytest.raises(orbits.ArgumentTypeError, match="must be True or False"):
+        draw(ax)
+    assert not ax.get_lines() and not ax.collections and not ax.images

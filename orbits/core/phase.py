@@ -75,8 +75,10 @@ SIDE_SLACK = 16.0 * 2.0**-53
 # subnormals (4.9e-312), as the command line's smallest --dtheta.  Below it
 # kc keeps fewer than 12 digits and the period ~ log(4/kc) loses more than
 # 1e-15 relative (spins (e, 1, e) with e ~ 1e-320: 5e-7; at 5e-324 kc is 0);
-# only a spin vector within ~1e-311 of the I2 axis gets there (an offset
-# dtheta >= 4.9e-312 gives kc >= 1e-156).  Such orbits are the separatrix's.
+# only a spin vector that near the separatrix gets there, (e, 1, e) for e
+# below ~1e-311 on the Fig. 6 body (an offset dtheta >= 4.9e-312 gives kc
+# above 1e-170 on every body swept, phi = pi/2 the lowest).  Such orbits are
+# the separatrix's.
 KC_FLOOR = 2.0**-1074 * 1e12
 
 BRANCH_SAM = 1  # short-axis mode, M^2 > 2 E I2: M circles the I3 axis
