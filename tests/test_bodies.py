@@ -413,19 +413,23 @@ def test_t_handle_at_a_decimal_small_scale_keeps_its_unit_moments():
 
 
 def _t_handle_exact(l1, l2, w):
-    """Principal moments of the unit-mass T by parts, in exact rationals."""
+    """eqn:IsforT as the paper prints it (expanded), in exact rationals:
+    independent of the code's mass-fraction form."""
     from fractions import Fraction
 
     l1, l2, w = (Fraction(v) for v in (l1, l2, w))
-    a, b = l1 / (l1 + l2), l2 / (l1 + l2)
-    apart = a * b * ((w + l2) / 2) ** 2
-    return sorted(
-        (
-            a * w * w / 6 + b * (l2 * l2 + w * w) / 12 + apart,
-            a * (l1 * l1 + w * w) / 12 + b * w * w / 6,
-            a * (l1 * l1 + w * w) / 12 + b * (l2 * l2 + w * w) / 12 + apart,
-        )
-    )
+    total = l1 + l2
+    ix = (
+        6 * l1 * l2 * w**2 + 2 * l1**2 * w**2 + l2**2 * w * (6 * l1 + w) + l2**4 + 4 * l1 * l2**3
+    ) / (12 * total**2)
+    iy = ((l1 + 2 * l2) * w**2 + l1**3) / (12 * total)
+    iz = (
+        l1 * l2 * (l1**2 + 5 * w**2 + 4 * l2**2)
+        + l1**2 * (l1**2 + w**2)
+        + l2**2 * w * (6 * l1 + w)
+        + l2**4
+    ) / (12 * total**2)
+    return sorted((ix, iy, iz))
 
 
 @pytest.mark.parametrize(
