@@ -162,6 +162,22 @@ def flag(name, value):
     return bool(value)
 
 
+def utf8_text(name, value):
+    """``value`` (a str) if UTF-8 can encode it, else an :class:`InputError`.
+
+    A lone surrogate (``"a\\ud800"``, from a file name decoded with
+    ``surrogateescape``) passes as a str but fails when a catalog or a
+    survey is written: after the first files, as a bare UnicodeEncodeError.
+    """
+    try:
+        value.encode("utf-8")
+    except UnicodeEncodeError:
+        raise InputError(
+            f"{name} {value!r} is not text UTF-8 can hold (a lone surrogate)"
+        ) from None
+    return value
+
+
 def callback(name, value):
     """A callable or ``None``, checked before any work is done."""
     if value is not None and not callable(value):

@@ -16,7 +16,15 @@ import re
 
 import numpy as np
 
-from ._args import broadcast, finite_array, flat_broadcast, integer, real_array, real_scalar
+from ._args import (
+    broadcast,
+    finite_array,
+    flat_broadcast,
+    integer,
+    real_array,
+    real_scalar,
+    utf8_text,
+)
 from .cells import numbers_label
 from .errors import (
     AngleError,
@@ -609,7 +617,8 @@ class Body:
         # an array or a number here broke repr() and every catalog of the body
         if value is not None and not isinstance(value, str):
             raise ArgumentTypeError(f"name must be a str or None, got {type(value).__name__}")
-        self._name = None if value is None else str(value)  # np.str_ as plain text
+        # np.str_ as plain text; a lone surrogate refused here, not when written
+        self._name = None if value is None else utf8_text("name", str(value))
 
     @property
     def moment_unit(self):

@@ -79,7 +79,7 @@ def _body_columns_numpy(moments, info, end_slack, end_tolerance):
             limits.theta_half_pi,
             minimum,
             where,
-            theta_c + where,
+            np.minimum(theta_c + where, 0.5 * np.pi),  # within the quadrant
         ]
     )
     unresolved = (

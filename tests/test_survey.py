@@ -716,3 +716,50 @@ def test_a_scheduler_of_the_wrong_type_is_said_so_at_once(tmp_path):
     with pytest.raises(orbits.ArgumentTypeError, match="got int"):
         survey.run(scheduler=123)
     assert not (tmp_path / "s").exists()
+
+
+def test_a_rerun_whose_file_skipped_other_rows_is_refused(tmp_path, capsys):
+    """The same bodies from a file that skipped other rows: the rerun was
+    accepted and rewrote report.json but not the manifest (--check: damaged)."""
+    first, second = tmp_path / "a.csv", tmp_path / "c.csv"
+    first.write_text("I1,I2,I3\n1,2,2.5\n1,1,2\n2,3,4\n")  # row 2 symmetric: skipped
+    second.write_text("I1,I2,I3\n1,2,2.5\n2,3,4\n")
+    out = str(tmp_path / "s")
+    assert (
+        main(["survey", "--bodies", str(first), "--skip-invalid", "--n-max", "4", "--out", out])
+        == 0
+    )
+    before = {p.name: p.read_bytes() for p in (tmp_path / "s").iterdir() if p.is_file()}
+    capsys.readouterr()
+    assert main(["survey", "--bodies", str(second), "--n-max", "4", "--out", out]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"orbits: error: {out} holds a survey whose bodies file skipped other rows "
+        "(1 there, 0 now); use a new directory"
+    ]
+    assert before == {p.name: p.read_bytes() for p in (tmp_path / "s").iterdir() if p.is_file()}
+    assert main(["survey", "--check", out]) == 0
+
+
+def test_a_manifest_edited_down_to_format_2_is_refused(tmp_path):
+    """Format 2 has no checksum: "orbits_survey": 2 switched the manifest's
+    own SHA-256 off, and any further edit (n_max) passed --check."""
+    Survey.grid(tmp_path / "s", 20, 4, chunk=100).run()
+    manifest = tmp_path / "s" / "manifest.json"
+    text = manifest.read_text()
+    manifest.write_text(text.replace('"orbits_survey": 3', '"orbits_survey": 2'))
+    with pytest.raises(InputError, match="says format 2 but carries a later format's keys"):
+        read_survey(tmp_path / "s")
+
+
+def test_names_utf8_cannot_hold_are_refused_before_anything_is_written(tmp_path):
+    with pytest.raises(InputError, match="lone surrogate"):
+        Survey.from_bodies(tmp_path / "s", [[1.0, 2.0, 2.5]], 3, names=["a\ud800"]).run()
+    assert not (tmp_path / "s").exists()
+
+
+def test_min_theta_stays_in_the_quadrant(tmp_path):
+    """theta_c + (pi/2 - theta_c) rounded 1 ulp above pi/2 for some bodies."""
+    Survey.grid(tmp_path / "s", 40, 3).run()
+    bodies, _ = read_survey(tmp_path / "s")
+    assert bodies["min_theta"].between(0.0, 0.5 * np.pi).all()
+    assert (bodies["min_theta"] == 0.5 * np.pi).any()

@@ -139,7 +139,8 @@ def _print_report(args, report, total, pending, elapsed):
         print(
             f"orbits survey: {total} bodies ({pending} computed now in "
             f"{elapsed:.1f} s{rate}), {report['orbits']} closed orbits with "
-            f"n <= {args.n_max}, in {args.out}"
+            + (f"n <= {args.n_max}" if args.q_max == 1 else f"p/q <= {args.n_max}")
+            + f", in {args.out}"
         )
         low, high = report["min_total_phase_range"]
         print(

@@ -210,6 +210,8 @@ def body_columns(moments, info, end_slack, end_tolerance):
         floats[5, k] = at_half_pi
         floats[6, k] = minimum
         floats[7, k] = where
-        floats[8, k] = theta_c + where
+        # theta_c + (pi/2 - theta_c) rounds 1 ulp above pi/2 for some bodies:
+        # the spin's polar angle stays in [0, pi/2]
+        floats[8, k] = min(theta_c + where, 0.5 * math.pi)
         unresolved[k] = np.int64(info[k, INFO_UNREACHED_SAM] + info[k, INFO_UNREACHED_LAM])
     return floats, at_end, unresolved

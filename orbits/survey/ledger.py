@@ -76,8 +76,10 @@ def _part_rows(path, fmt, newlines, quoted):
     import csv
     import io
 
-    with open_nofollow(path) as handle:
-        return sum(1 for _ in csv.reader(io.TextIOWrapper(handle, "utf-8", newline=""))) - 1
+    # the wrapper owns the handle: closing it closes both (a wrapper left to
+    # the collector warned ResourceWarning once per part)
+    with io.TextIOWrapper(open_nofollow(path), "utf-8", newline="") as text:
+        return sum(1 for _ in csv.reader(text)) - 1
 
 
 def manifest_checksum(document):
@@ -242,6 +244,14 @@ def load_manifest(out_dir):
         raise InputError(
             f"{manifest} is not a survey manifest of this orbits version "
             "(no ledger); rerun the survey into a new directory"
+        )
+    # a format-2 manifest (before checksums and layouts) has neither key: one
+    # that has them was edited down to 2, which would switch the check off
+    if version < 3 and ("sha256" in document or "columns" in (document.get("parameters") or {})):
+        raise InputError(
+            f"{manifest} says format {version} but carries a later format's keys "
+            "(edited by hand or damaged): its ledger cannot be trusted; rerun the "
+            "survey into a new directory"
         )
     if version >= 3 and document.get("sha256") != manifest_checksum(document):
         raise InputError(
@@ -478,6 +488,15 @@ class Ledger:
             raise InputError(
                 f"{self.out_dir} holds a survey with different parameters "
                 f"({', '.join(changed)}); use a new directory"
+            )
+        # the same bodies from a file that skipped other rows: the report the
+        # run rewrites would disagree with the manifest kept (--check: damaged)
+        skipped = json.loads(json.dumps(self.skipped))
+        if existing.get("skipped_rows", []) != skipped:
+            raise InputError(
+                f"{self.out_dir} holds a survey whose bodies file skipped other rows "
+                f"({len(existing.get('skipped_rows', []))} there, {len(skipped)} now); "
+                "use a new directory"
             )
 
     def prepare(self):

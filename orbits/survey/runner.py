@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._args import integer, path_argument, real_array
+from .._args import integer, path_argument, real_array, utf8_text
 from .._version import __version__, source_fingerprint
 from ..atomic import refuse_link
 from ..bodies import as_moments, region_grid
@@ -88,7 +88,7 @@ class Survey:
         self.n_max, self.q_max, self.format, self.chunk = int(n_max), int(q_max), fmt, int(chunk)
         check_survey_bounds(self.moments.shape[0], self.n_max, self.q_max, self.chunk)
         if names is not None:
-            names = [str(name) for name in names]
+            names = [utf8_text("name", str(name)) for name in names]
             if len(names) != self.moments.shape[0]:
                 raise InputError(f"{len(names)} names for {self.moments.shape[0]} bodies")
         self.names = names
