@@ -763,3 +763,18 @@ def test_min_theta_stays_in_the_quadrant(tmp_path):
     bodies, _ = read_survey(tmp_path / "s")
     assert bodies["min_theta"].between(0.0, 0.5 * np.pi).all()
     assert (bodies["min_theta"] == 0.5 * np.pi).any()
+
+
+def test_a_grid_into_a_directory_it_cannot_use_is_one_line(tmp_path, capsys):
+    """The grid's estimate ("estimated 10 s ...; working...") came first and
+    the grid was built, then the directory was refused: two lines."""
+    (tmp_path / "file").write_text("x")
+    argv = ["survey", "--resolution", "150", "--n-max", "10", "--chunk", "10"]
+    assert main([*argv, "--out", str(tmp_path / "file")]) == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"orbits: error: {tmp_path / 'file'} exists and is not a directory"
+    ]
+    Survey.grid(tmp_path / "s", 150, 3, chunk=20_000).run()
+    assert main([*argv, "--out", str(tmp_path / "s")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "different parameters (chunk, n_max)" in err[0], err

@@ -66,11 +66,28 @@ def _cmd_survey(args):
     announced = False
     if args.resolution is not None:
         # say it before building the grid, which itself takes seconds when large
-        from ..survey import GRID_INSIDE, check_survey_bounds
+        from ..survey import GRID_INSIDE, Ledger, check_survey_bounds
 
         check_resolution(args.resolution)
         count = max(1, int(GRID_INSIDE * args.resolution**2))
         check_survey_bounds(count, args.n_max, args.q_max, args.chunk)
+        # the directory judged on what is known before the grid is built, so
+        # that a refusal is one line, not after the estimate (the run checks
+        # every parameter again, touching nothing)
+        known = {
+            "bodies": {"grid": int(args.resolution)},
+            "n_max": args.n_max,
+            "q_max": args.q_max,
+            "format": args.format,
+            "chunk": args.chunk,
+            "columns": options["columns"],
+        }
+        from ..atomic import refuse_link
+
+        refuse_link(args.out)
+        ledger = Ledger(args.out, known, {"grid": args.resolution}, ())
+        ledger.refuse_foreign_directory()
+        ledger.refuse_other_parameters(partial=True)
         announce("survey", *reversed(survey_estimate(count, args.n_max, args.q_max, args.chunk)))
         announced = True
         survey = Survey.grid(args.out, args.resolution, args.n_max, **options)

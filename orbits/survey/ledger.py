@@ -469,12 +469,16 @@ class Ledger:
         if any(not ours.fullmatch(p.name) for p in self.out_dir.iterdir()):
             raise InputError(f"{self.out_dir} exists and is not a survey directory")
 
-    def refuse_other_parameters(self):
-        """Refuse a directory that holds another survey (touching nothing)."""
-        if (self.out_dir / MANIFEST).exists():
-            self.compare(load_manifest(self.out_dir))
+    def refuse_other_parameters(self, partial=False):
+        """Refuse a directory that holds another survey (touching nothing).
 
-    def compare(self, existing):
+        ``partial``: :attr:`parameters` holds only some of the keys (those
+        known before a grid is built); only they are compared.
+        """
+        if (self.out_dir / MANIFEST).exists():
+            self.compare(load_manifest(self.out_dir), partial)
+
+    def compare(self, existing, partial=False):
         """Refuse a loaded manifest of another format or other parameters."""
         if existing["orbits_survey"] != SURVEY_FORMAT:
             raise InputError(
@@ -482,8 +486,11 @@ class Ledger:
                 f"({existing['orbits_survey']}); it can be read but not resumed: "
                 "use a new directory"
             )
-        if existing["parameters"] != self.parameters:
-            old, new = existing["parameters"], self.parameters
+        old = existing["parameters"]
+        if partial:
+            old = {key: old.get(key) for key in self.parameters}
+        if old != self.parameters:
+            new = self.parameters
             changed = sorted(k for k in set(old) | set(new) if old.get(k) != new.get(k))
             raise InputError(
                 f"{self.out_dir} holds a survey with different parameters "
