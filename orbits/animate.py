@@ -301,7 +301,9 @@ def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
         exists but lies closer than ``|dtheta| = 2.2e-308`` to the
         separatrix (a double cannot hold it: the message gives the largest
         ``n`` drawable on the branch); two orbits match and no ``branch``
-        was given.
+        was given; ``n`` with ``q`` other than 1; ``orbits`` not a catalog
+        frame, or without rows of ``body`` (rows of other bodies are left
+        out).
     """
     from .search import UnresolvedOrbitsWarning, closed_orbits
 
