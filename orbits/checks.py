@@ -231,7 +231,10 @@ def rotation_by_integration(
             f"{int(periods)} {budget} {beyond}"
         )
     error = max(float(circular_distance(angle, expected)), off_axis)
-    return RotationCheck(period, angle, off_axis, float(expected), error)
+    # Python floats from either engine (scipy's gave period as np.float64)
+    return RotationCheck(
+        float(period), float(angle), float(off_axis), float(expected), float(error)
+    )
 
 
 def motion_closed_form(motion):

@@ -338,7 +338,9 @@ def total_phase(body_or_moments, theta=None, *, dtheta=None, phi=0.0, device="cp
     Returns
     -------
     ndarray
-        ``Delta alpha``, broadcast over bodies and angles.  On SAM it is
+        ``Delta alpha``, broadcast over bodies and angles (NumPy
+        broadcasting, by position: a pandas Series or DataFrame is taken as
+        its values, its index neither aligned nor kept).  On SAM it is
         ``phi_Euler(T) - 2 pi``, on LAM ``phi_Euler(T)`` (eqn:alphaproto);
         the orientation after one period is ``Rot(M, Delta alpha) R(0)``.
 
