@@ -608,7 +608,7 @@ def _small_survey(target, capsys):
     return json.loads((target / "report.json").read_text())
 
 
-@pytest.mark.parametrize("damage", ["edited", "deleted", "not-json"])
+@pytest.mark.parametrize("damage", ["edited", "deleted", "not-json", "directory"])
 def test_check_verifies_the_report(tmp_path, capsys, damage):
     """--check recomputes report.json from the verified parts; a rerun rewrites it."""
     from orbits.survey import check_survey
@@ -624,6 +624,10 @@ def test_check_verifies_the_report(tmp_path, capsys, damage):
     elif damage == "deleted":
         path.unlink()
         problem = "report.json is missing"
+    elif damage == "directory":  # was exit 2, "Is a directory" (unreadable, not damage)
+        path.unlink()
+        path.mkdir()
+        problem = "report.json is a directory, not the report; remove it"
     else:
         path.write_text("{")
         problem = "report.json is not valid JSON"
@@ -635,6 +639,8 @@ def test_check_verifies_the_report(tmp_path, capsys, damage):
     assert main(["survey", "--check", str(target)]) == 1
     out = capsys.readouterr().out
     assert "DAMAGED" in out and problem in out and "every part" not in out
+    if damage == "directory":
+        path.rmdir()  # as the message says
     # the rerun recomputes nothing and rewrites the report
     assert main(_SMALL + ["--out", str(target)]) == 0
     assert "(0 computed now" in capsys.readouterr().out

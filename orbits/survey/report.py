@@ -172,6 +172,8 @@ def check_report(out_dir, document=None):
         return f"{REPORT} is missing; {_RERUN}"
     except UnicodeDecodeError:
         return f"{REPORT} is not valid JSON; {_RERUN}"
+    except IsADirectoryError:  # damage, as a missing report (exit 1), not unreadable
+        return f"{REPORT} is a directory, not the report; remove it and {_RERUN}"
     except OSError as error:
         raise InputError(f"cannot read {out_dir / REPORT}: {error.strerror}") from None
     try:
