@@ -310,11 +310,12 @@ def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
     if (n is None) == (p is None):
         raise InputError("give exactly one of n and p")
     label_p = "n" if n is not None else "p"
+    q = integer("q", q)
     if n is not None:
-        if integer("q", q) != 1:
+        if q != 1:
             raise InputError(f"n is the orbit 2 pi n (q = 1); for 2 pi p/{q} give p and q")
-        p, q = n, 1
-    p, q = integer(label_p, p), integer("q", q)
+        p = n
+    p = integer(label_p, p)
     body = as_body(body)
     if math.gcd(p, q) != 1:
         raise InputError(f"p/q = {p}/{q} is not in lowest terms")
@@ -366,8 +367,7 @@ def _rows_of(body, orbits):
             "orbits must be a catalog DataFrame (orbits.closed_orbits or "
             f"orbits.read_catalog), got {type(orbits).__name__}"
         )
-    moments = orbits[["I1", "I2", "I3"]].to_numpy(dtype=float)
-    mine = np.all(np.isclose(moments, body.normalized_moments, rtol=1e-12, atol=0.0), axis=1)
+    mine = _same_moments(body, orbits[["I1", "I2", "I3"]].to_numpy(dtype=float))
     if len(orbits) and not mine.any():
         raise InputError(
             "the catalog has no rows of this body (its moments, normalised, "
@@ -1058,9 +1058,7 @@ def animation_motion(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0, bod
                 "give the spin with a body instead"
             )
     if isinstance(source, Motion):
-        if body is not None and not np.allclose(
-            as_body(body).normalized_moments, source.body.normalized_moments, rtol=1e-12, atol=0.0
-        ):
+        if body is not None and not _same_moments(body, source.body.normalized_moments):
             raise InputError("body is not the Motion's body (give one of the two)")
         return source, 1.0, None
     if row is not None:
@@ -1069,7 +1067,7 @@ def animation_motion(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0, bod
             body = Body(moments, name=_row_name(row))
         else:
             body = as_body(row_body)
-            if not np.allclose(body.normalized_moments, moments, rtol=1e-12, atol=0.0):
+            if not _same_moments(body, moments):
                 raise InputError(
                     "the catalog row is not of the given body: its moments "
                     f"{moments.tolist()} differ from the body's normalised "
@@ -1087,13 +1085,19 @@ def animation_motion(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0, bod
         )
         return motion, float(q), label
     body = as_body(source)
-    if row_body is not None and not np.allclose(
-        as_body(row_body).normalized_moments, body.normalized_moments, rtol=1e-12, atol=0.0
-    ):
+    if row_body is not None and not _same_moments(row_body, body.normalized_moments):
         raise InputError("body is not the body given as the source (give one of the two)")
     if theta is None and dtheta is None:
         raise InputError("give the spin: theta or dtheta (or pass a Motion or a catalog row)")
     return Motion.from_spin(body, theta, dtheta=dtheta, phi=phi, speed=speed), 1.0, None
+
+
+def _same_moments(body, moments):
+    """Whether ``body``'s normalised moments are ``moments`` (``I/|I|``, as a
+    catalog's I1, I2, I3 hold them) to 1e-12; rows of shape (k, 3) give k answers."""
+    moments = np.asarray(moments, dtype=float)
+    close = np.isclose(moments, as_body(body).normalized_moments, rtol=1e-12, atol=0.0)
+    return close.all(axis=-1)
 
 
 def _row_name(row):

@@ -380,11 +380,11 @@ def closed_orbits(body, n_max=10, q_max=1):
     }
     unreached = sum(per_branch.values())
     if unreached:
-        where = [(name, count) for name, count in per_branch.items() if count]
+        left = [(name, count) for name, count in per_branch.items() if count]
         where = (
-            f"on {where[0][0]}"
-            if len(where) == 1
-            else " and ".join(f"{count} on {name}" for name, count in where)
+            f"on {left[0][0]}"
+            if len(left) == 1
+            else " and ".join(f"{count} on {name}" for name, count in left)
         )
         warnings.warn(
             f"{plural(unreached, 'closed orbit')} ({where}) with 2 pi p/q <= 2 pi {n_max} "
