@@ -221,6 +221,26 @@ def test_a_survey_run_never_loads_pandas(tmp_path):
     assert bodies["name"].tolist() == ["phone", "rod"]
 
 
+def test_table_workers_before_any_parallel_kernel():
+    # a survey on the GPU asks before any CPU parallel kernel has run: the
+    # answer must still be the layer's, not "one chunk at a time"
+    code = (
+        "import numba\n"
+        "from orbits.survey.runner import table_workers\n"
+        "workers = table_workers(10, 1, 100)\n"
+        "print(numba.threading_layer(), workers)\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=300
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    layer, workers = done.stdout.split()
+    if layer in ("omp", "tbb"):
+        assert int(workers) >= 1
+    else:
+        assert int(workers) == 0
+
+
 def test_other_parameters_are_refused(tmp_path):
     Survey.grid(tmp_path / "s", 20, 4, chunk=100).run()
     with pytest.raises(InputError, match="different parameters.*n_max"):

@@ -22,7 +22,7 @@ tables written beside the search took 0.92 s instead of 1.00 s.
 CPU only: CUDA kernels (:mod:`orbits.core.cuda`) run one thread per body.
 """
 
-from numba import njit, types
+from numba import njit, prange, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
@@ -63,3 +63,15 @@ def take_task(counter):
     index reaches its number of tasks.
     """
     return _fetch_add(counter, 1)
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def start_threads(out):
+    """Set every element of ``out`` to 1 in a parallel loop.
+
+    Running any parallel kernel starts numba's threading layer; until then
+    ``numba.threading_layer()`` cannot say which one it is (a survey on the
+    GPU runs no CPU parallel kernel before it needs to know).
+    """
+    for i in prange(out.size):
+        out[i] = 1.0

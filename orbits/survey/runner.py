@@ -496,8 +496,11 @@ def table_workers(n_max, q_max, chunk):
 
     try:
         layer = numba.threading_layer()
-    except ValueError:  # no parallel kernel has run yet
-        layer = numba.config.THREADING_LAYER
+    except ValueError:  # no parallel kernel has run yet (a survey on the GPU)
+        from ..core.tasks import start_threads
+
+        start_threads(np.zeros(1))
+        layer = numba.threading_layer()
     if layer not in ("omp", "tbb"):
         return 0
     # survey_estimate counts two chunks in flight
