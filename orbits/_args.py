@@ -187,18 +187,28 @@ def callback(name, value):
     return value
 
 
+# the longest file name (one path component) of ext4, XFS, Btrfs and APFS, bytes
+NAME_MAX = 255
+
+
 def path_argument(name, value):
     """A file path (str or os.PathLike); an int (a file descriptor) is refused."""
     if isinstance(value, (str, os.PathLike)) and not isinstance(value, bytes):
         path = os.fspath(value)
         if isinstance(path, str) and path and "\x00" not in path:
             try:
-                os.fsencode(path)
+                raw = os.fsencode(path)
             except UnicodeError:
                 raise InputError(
                     f"{name} {_describe(value)} cannot be a file name on this "
                     "system (not encodable)"
                 ) from None
+            longest = max(len(part) for part in raw.split(os.fsencode(os.sep)))
+            if longest > NAME_MAX:
+                raise InputError(
+                    f"{name}: a file or directory name of {longest} bytes is too long "
+                    f"(at most {NAME_MAX} on Linux and macOS file systems)"
+                )
             return path
         raise InputError(f"{name} must be a non-empty path, got {_describe(value)}")
     raise ArgumentTypeError(f"{name} must be a path (str or os.PathLike), got {_describe(value)}")

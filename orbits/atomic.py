@@ -14,6 +14,9 @@ directory, is flushed and fsync'ed, and then replaces the target with
   outside the path given; one planted after the check is replaced itself
   (``os.replace`` never follows it), never written through.  (Links in the
   directories above the target are the user's own layout and are used.)
+  :func:`write_bytes_under` and :func:`file_set` go further: they write
+  through directory descriptors held from a root down, so a directory
+  swapped for a link during a long run is refused, never written through.
 * Temporary names are ``.NAME.PID.RANDOM.part`` (NAME shortened, with a
   hash of the whole, when the name is too long to take the suffix).  A
   process killed with
@@ -79,15 +82,19 @@ def ensure_writable(path, stdout_hint=True):
         )
     path = Path(path)
     directory = path.parent if str(path.parent) else Path(".")
-    if not directory.is_dir():
-        if directory.exists():
-            raise InputError(f"cannot write {path}: {directory} is not a directory")
-        raise InputError(f"cannot write {path}: directory {directory} does not exist")
-    if not os.access(directory, os.W_OK | os.X_OK):
-        raise InputError(f"cannot write {path}: directory {directory} is not writable")
-    if path.is_dir():
-        raise InputError(f"cannot write {path}: it is a directory")
+    try:
+        if not directory.is_dir():
+            if directory.exists():
+                raise InputError(f"cannot write {path}: {directory} is not a directory")
+            raise InputError(f"cannot write {path}: directory {directory} does not exist")
+        if not os.access(directory, os.W_OK | os.X_OK):
+            raise InputError(f"cannot write {path}: directory {directory} is not writable")
+        if path.is_dir():
+            raise InputError(f"cannot write {path}: it is a directory")
+    except OSError as error:  # a name too long for the file system (ENAMETOOLONG)
+        raise InputError(f"cannot write {path}: {error.strerror or error}") from None
     _refuse_special(path, stdout_hint)
+    refuse_link(path)  # found now, not after the work (atomic_path refuses it too)
     probe_directory(directory, path)
 
 
@@ -221,7 +228,10 @@ def remove_stale_temporaries(directory, name, regex=False):
         this one) and files of any other pattern are never touched.
     """
     stem = name if regex else re.escape(temporary_stem(name))
-    pattern = re.compile(r"^\." + stem + r"\.(\d+)\.[^/]*\.part$")
+    # RANDOM is mkstemp's (or write_bytes_under's) letters, digits and
+    # underscores, never a dot: ".run.4242.mp4.PID.RANDOM.part", the
+    # temporary of "run.4242.mp4", is not one of "run" (of process 4242)
+    pattern = re.compile(r"^\." + stem + r"\.(\d+)\.[a-z0-9_]+\.part$")
     removed = 0
     try:
         entries = list(os.scandir(directory))
@@ -331,7 +341,6 @@ def file_set(directory, names):
         directory (a write into it failed: disk full) names ``directory``
         instead, the user's target.
     """
-    import shutil
 
     directory = Path(directory)
     names = list(dict.fromkeys(names))
@@ -343,18 +352,22 @@ def file_set(directory, names):
         )
     except OSError as error:
         raise InputError(f"cannot write into {directory}: {error.strerror}") from None
+    descriptors = []
     try:
+        # held from the start: the files are moved from this stage into this
+        # directory, even if either path is swapped for a link meanwhile
+        descriptors.append(_open_directory(directory))
+        descriptors.append(open_directory_nofollow(stage))
+        directory_fd, stage_fd = descriptors
         yield stage
-        missing = [name for name in names if not (stage / name).is_file()]
+        missing = [name for name in names if not _regular_at(stage_fd, name)]
         if missing:
             raise InputError(f"{directory}: {missing[0]} was not made")
         _COMMITTING.append(True)
         try:
             for name in names:
-                target = directory / name
-                refuse_link(target)
-                _refuse_special(target, stdout_hint=False)
-                os.replace(stage / name, target)
+                _refuse_special_at(directory_fd, name, directory / name)
+                os.replace(name, name, src_dir_fd=stage_fd, dst_dir_fd=directory_fd)
         finally:
             _COMMITTING.clear()
     except InputError as error:
@@ -366,7 +379,34 @@ def file_set(directory, names):
         error.args = (text.replace(str(stage), str(directory)),)
         raise
     finally:
-        shutil.rmtree(stage, ignore_errors=True)
+        for descriptor in descriptors:
+            os.close(descriptor)
+        _remove_stage(directory, stage)
+
+
+def _open_directory(directory):
+    """A descriptor of ``directory`` (its own path followed: the caller's layout)."""
+    try:
+        return os.open(directory, os.O_RDONLY | os.O_DIRECTORY | os.O_CLOEXEC)
+    except OSError as error:
+        raise InputError(f"cannot write into {directory}: {error.strerror or error}") from None
+
+
+def _regular_at(fd, name):
+    """Whether ``name`` in directory ``fd`` is a regular file (not a link)."""
+    try:
+        return stat.S_ISREG(os.stat(name, dir_fd=fd, follow_symlinks=False).st_mode)
+    except OSError:
+        return False
+
+
+def _remove_stage(directory, stage):
+    """Remove a set's staging directory, unless a link was put in its place."""
+    import shutil
+
+    if os.path.islink(stage):
+        return  # never removed through: the link is the other process's
+    shutil.rmtree(stage, ignore_errors=True)
 
 
 def make_directories(path, made=None):
@@ -468,6 +508,122 @@ def write_bytes_atomic(path, data):
     """Write ``data`` (bytes) to ``path`` atomically (see :func:`atomic_path`)."""
     with atomic_path(path) as temporary:
         temporary.write_bytes(data)
+
+
+_DIRECTORY_FLAGS = os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW | os.O_CLOEXEC
+
+
+def open_directory_nofollow(path, shown=None, dir_fd=None):
+    """A descriptor of the directory ``path`` (relative to ``dir_fd``), never through a link.
+
+    Only ``path``'s last component is checked: the directories above it
+    are the user's layout.  ``shown`` names it in messages.
+
+    Raises
+    ------
+    InputError
+        ``path`` is a symbolic link, not a directory, or cannot be opened.
+    """
+    shown = path if shown is None else shown
+    try:
+        return os.open(path, _DIRECTORY_FLAGS, dir_fd=dir_fd)
+    except OSError as error:
+        try:
+            link = stat.S_ISLNK(os.lstat(path, dir_fd=dir_fd).st_mode)
+        except OSError:
+            link = False
+        if link:
+            refuse_link(shown)  # raises
+        if error.errno == errno.ENOTDIR:
+            raise InputError(f"cannot write into {shown}: it is not a directory") from None
+        raise InputError(f"cannot write into {shown}: {error.strerror or error}") from None
+
+
+def write_bytes_under(root, relative, data):
+    """Write ``data`` to ``root/relative`` atomically, following no link from ``root`` down.
+
+    As :func:`write_bytes_atomic`, but every directory from ``root`` (its
+    last component included) to the file is opened in turn without
+    following a link, and the temporary file is made, moved and removed
+    through the last one's descriptor: a directory swapped for a link
+    while a long run writes (a survey's ``orbits/`` folder) is refused,
+    never written through.  The directories above ``root`` are the user's
+    layout and are used as they are.
+
+    Raises
+    ------
+    InputError
+        A link or a non-directory on the way, a target that is a link or
+        not a regular file, or a write that failed (naming the path).
+    """
+    import secrets
+
+    root, relative = Path(root), Path(relative)
+    target = root / relative
+    shown = root
+    fd = open_directory_nofollow(root)
+    try:
+        for name in relative.parts[:-1]:
+            shown = shown / name
+            inner = open_directory_nofollow(name, shown, dir_fd=fd)
+            os.close(fd)
+            fd = inner
+        name = relative.name
+        mode = _refuse_special_at(fd, name, target)
+        temporary = f".{temporary_stem(name)}.{os.getpid()}.{secrets.token_hex(4)}.part"
+        try:
+            handle = os.open(
+                temporary,
+                os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW | os.O_CLOEXEC,
+                0o666 if mode is None else 0o600,  # a new file: as open() makes it
+                dir_fd=fd,
+            )
+        except OSError as error:
+            raise InputError(f"cannot write {target}: {error.strerror}") from None
+        try:
+            with os.fdopen(handle, "wb") as stream:
+                if mode is not None:  # keep the mode of the file it replaces
+                    os.fchmod(stream.fileno(), mode)
+                stream.write(data)
+                stream.flush()
+                os.fsync(stream.fileno())
+            # a link or a special file may have appeared since: never replace it
+            _refuse_special_at(fd, name, target)
+            os.replace(temporary, name, src_dir_fd=fd, dst_dir_fd=fd)
+        except BaseException as error:
+            try:
+                os.unlink(temporary, dir_fd=fd)
+            except FileNotFoundError:
+                pass
+            if (
+                isinstance(error, OSError)
+                and not isinstance(error, InputError)
+                and error.errno in _WRITE_ERRNOS
+            ):
+                raise InputError(f"cannot write {target}: {os.strerror(error.errno)}") from None
+            raise
+    finally:
+        os.close(fd)
+
+
+def _refuse_special_at(fd, name, target):
+    """The mode of ``name`` in directory ``fd`` (None: it does not exist).
+
+    Raises :class:`InputError` if it is a link or exists and is not a
+    regular file (``target`` names it).
+    """
+    try:
+        info = os.stat(name, dir_fd=fd, follow_symlinks=False)
+    except FileNotFoundError:
+        return None
+    if stat.S_ISLNK(info.st_mode):
+        refuse_link(target)
+    if not stat.S_ISREG(info.st_mode):
+        kind = "a directory" if stat.S_ISDIR(info.st_mode) else "not a regular file"
+        raise InputError(
+            f"cannot write {target}: it is {kind}; orbits only replaces regular files"
+        )
+    return info.st_mode & 0o7777
 
 
 def refuse_link(path):

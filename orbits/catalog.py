@@ -343,13 +343,14 @@ def write_catalog(frame, path, command=None, notes=()):
     Raises
     ------
     ArgumentTypeError
-        ``frame`` is not a pandas DataFrame.
+        ``frame`` is not a pandas DataFrame, or ``path`` is not a path (str or os.PathLike).
     InputError
         ``path`` ``"-"`` while standard output is closed; an unwritable
         path; a frame :func:`read_catalog` would refuse (columns not the
         schema, non-finite numbers, a row that is no closed orbit), checked
         before anything is written.
     """
+    path = path_argument("path", path)
     if not isinstance(frame, pd.DataFrame):
         raise ArgumentTypeError(
             f"write_catalog needs a pandas DataFrame (e.g. from orbits.catalog), "

@@ -17,7 +17,7 @@ from matplotlib.figure import Figure
 
 from . import plotting
 from ._args import integer, path_argument
-from .atomic import file_set
+from .atomic import file_set, refuse_link, write_bytes_under
 from .bodies import Body
 from .cells import literal_text
 from .errors import InputError
@@ -74,17 +74,44 @@ def save_figure(figure, stem, formats=("png", "svg")):
     """
     formats = _formats(formats)
     stem = Path(path_argument("stem", stem))
+    if stem.name in ("", ".", ".."):
+        raise InputError(
+            f"stem {str(stem)!r} names a directory; give the files' path without "
+            "the extension (e.g. figures/orbit)"
+        )
     names = [f"{stem.name}.{fmt}" for fmt in formats]
-    with file_set(stem.parent, names) as stage, _fixed_layout(figure):
-        for name, fmt in zip(names, formats):
-            try:
-                with mpl.rc_context(_RC):
-                    figure.savefig(stage / name, format=fmt, dpi=DPI, metadata=_METADATA[fmt])
-            except OSError as error:  # disk full, quota, I/O error: name the target
-                raise InputError(
-                    f"cannot write {stem.parent / name}: {error.strerror or error}"
-                ) from None
+    with file_set(stem.parent, names) as stage:
+        for name, data in zip(names, figure_bytes(figure, formats)):
+            write_bytes_under(stage, name, data)
     return [stem.parent / name for name in names]
+
+
+def figure_bytes(figure, formats):
+    """The files of ``figure`` in each of ``formats`` (known ones), as bytes.
+
+    The layout is computed once, at :data:`DPI`, before the first and kept
+    for all (:func:`save_figure`).
+    """
+    import io
+
+    files = []
+    with _fixed_layout(figure), mpl.rc_context(_RC):
+        for fmt in formats:
+            buffer = io.BytesIO()
+            figure.savefig(buffer, format=fmt, dpi=DPI, metadata=_METADATA[fmt])
+            files.append(buffer.getvalue())
+    return files
+
+
+def _stage_figure(figure, out_dir, stage, stem, formats):
+    """Write ``figure`` as ``stem.<format>`` into a set's ``stage`` in ``out_dir``.
+
+    Through descriptors from ``out_dir`` down (:func:`orbits.atomic.write_bytes_under`):
+    a stage swapped for a link while the set is drawn is refused.
+    """
+    formats = _formats(formats)
+    for fmt, data in zip(formats, figure_bytes(figure, formats)):
+        write_bytes_under(out_dir, Path(stage.name) / f"{stem}.{fmt}", data)
 
 
 def _formats(formats):
@@ -208,11 +235,11 @@ def herpolhode_set(
         limit = _common_limit(radii) if radii else None
         for row, bounds in zip(orbits.itertuples(), radii):
             figure = closed_herpolhode_figure(body, row, name, limit=limit, radii=bounds)
-            save_figure(figure, stage / _stem(row), formats)
+            _stage_figure(figure, out_dir, stage, _stem(row), formats)
             if progress is not None:
                 progress(1)
         if len(orbits):
-            save_figure(contact_sheet(body, orbits), stage / "contact_sheet", formats)
+            _stage_figure(contact_sheet(body, orbits), out_dir, stage, "contact_sheet", formats)
         if progress is not None:
             progress(1)
     return [out_dir / name for name in files]
@@ -496,9 +523,16 @@ def contact_sheet(body, orbits, columns=None):
 
 
 def _directory(out_dir):
-    path = Path(out_dir)
-    if not path.is_dir():
-        raise InputError(f"output directory {path} does not exist")
+    """An existing directory for a figure set, not a link (nothing is written through one)."""
+    path = Path(path_argument("out_dir", out_dir))
+    refuse_link(path)
+    try:
+        if not path.is_dir():
+            if path.exists():
+                raise InputError(f"output directory {path} is not a directory")
+            raise InputError(f"output directory {path} does not exist")
+    except OSError as error:  # a name too long for the file system
+        raise InputError(f"cannot write into {path}: {error.strerror or error}") from None
     return path
 
 
@@ -714,7 +748,7 @@ def paper_figures(out_dir, *, formats=("png", "svg"), survey_grid=None, progress
             figure = (
                 build(survey_grid) if (name == "fig2" and survey_grid is not None) else build()
             )
-            save_figure(figure, stage / name, formats)
+            _stage_figure(figure, out_dir, stage, name, formats)
             if progress is not None:
                 progress(1)
     return [out_dir / name for name in files]

@@ -407,7 +407,12 @@ def test_the_directories_a_run_made_are_removed_after_an_error_or_a_stop(
     def broken(*args, **kwargs):
         raise _fault(kind)
 
-    monkeypatch.setattr(Figure, "savefig", broken)
+    if kind == "full":  # the figures are drawn in memory: the disk fills as one is written
+        import orbits.atomic
+
+        monkeypatch.setattr(orbits.atomic.os, "fsync", broken)
+    else:
+        monkeypatch.setattr(Figure, "savefig", broken)
     argv = ["figures", "--preset", "fig6", "--n-max", "3", "--formats", "png"]
     assert main(argv + ["--out", "kept/nd/sub/dir"]) == code
     err = capsys.readouterr().err.strip().splitlines()
@@ -445,15 +450,19 @@ def test_save_figure_writes_every_format_or_none(tmp_path, monkeypatch):
     with pytest.raises(orbits.errors.InputError, match="formats is empty"):
         figures.save_figure(figure, tmp_path / "f", ())
     assert list(tmp_path.iterdir()) == []
-    # a failure on the second format leaves no first one either
-    original = type(figure).savefig
+    # a failure on the second format (the disk fills as it is written)
+    # leaves no first one either
+    from orbits import atomic
 
-    def no_svg(self, path, **kwargs):
-        if kwargs["format"] == "svg":
+    original, synced = atomic.os.fsync, []
+
+    def second_fails(descriptor):
+        synced.append(descriptor)
+        if len(synced) == 2:
             raise OSError(28, "No space left on device")
-        return original(self, path, **kwargs)
+        return original(descriptor)
 
-    monkeypatch.setattr(type(figure), "savefig", no_svg)
+    monkeypatch.setattr(atomic.os, "fsync", second_fails)
     with pytest.raises(orbits.errors.InputError) as caught:
         figures.save_figure(figure, tmp_path / "f", ("png", "svg"))
     assert str(caught.value) == f"cannot write {tmp_path / 'f.svg'}: No space left on device"

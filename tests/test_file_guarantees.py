@@ -607,3 +607,166 @@ def test_another_users_process_is_alive_even_where_proc_hides_it(monkeypatch):
     assert atomic._pid_alive(424242)
     monkeypatch.setattr(atomic.os, "kill", lambda pid, signal: None)
     assert atomic._pid_alive(2**22 + 12345)  # no /proc entry: taken as alive
+
+
+def test_another_names_temporary_is_never_taken_for_a_stale_one(tmp_path):
+    """Writing "run" removed ".run.4242.mp4.LIVEPID.X.part", the live temporary
+    of "run.4242.mp4", reading 4242 as its (dead) process."""
+    other = tmp_path / f".run.{DEAD_PID}.mp4.{os.getpid()}.abcd1234.part"
+    also = tmp_path / f".run.{DEAD_PID}.{os.getpid()}.abcd1234.part"  # of "run.DEAD_PID"
+    for path in (other, also):
+        path.write_text("in flight")
+    write_text_atomic(tmp_path / "run", "new\n")
+    assert other.exists() and also.exists()
+    assert remove_stale_temporaries(tmp_path, "run") == 0
+
+
+def test_a_folder_swapped_for_a_link_during_a_survey_is_not_written_through(tmp_path, monkeypatch):
+    """A survey's orbits/ swapped for a link to a folder outside while it ran:
+    141 parts were written outside before the run failed."""
+    from orbits.survey import compute
+
+    out, outside = tmp_path / "s", tmp_path / "outside"
+    outside.mkdir()
+    chunk_columns, calls = compute.chunk_columns, []
+
+    def swap_after_first(found, first_id, columns="all"):
+        calls.append(first_id)
+        if len(calls) == 2:
+            (out / "orbits").rename(tmp_path / "moved")
+            (out / "orbits").symlink_to(outside)
+        return chunk_columns(found, first_id, columns)
+
+    monkeypatch.setattr(compute, "chunk_columns", swap_after_first)
+    survey = orbits.survey.Survey.grid(out, 6, 3, chunk=3, fmt="csv")
+    with pytest.raises(orbits.InputError, match="symbolic link"):
+        survey.run()
+    assert list(outside.iterdir()) == []
+    assert len(calls) >= 2
+
+
+def test_a_stage_swapped_for_a_link_is_not_written_through(tmp_path, monkeypatch):
+    from orbits import figures
+
+    out, outside = tmp_path / "figs", tmp_path / "outside"
+    out.mkdir()
+    outside.mkdir()
+    draw, calls = figures.closed_herpolhode_figure, []
+
+    def swap_after_first(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            (stage,) = out.glob(".orbits-set.*.part")
+            stage.rename(tmp_path / "moved")
+            stage.symlink_to(outside)
+        return draw(*args, **kwargs)
+
+    monkeypatch.setattr(figures, "closed_herpolhode_figure", swap_after_first)
+    with pytest.raises(orbits.InputError, match="symbolic link"):
+        figures.herpolhode_set(orbits.Body.preset("fig6"), 3, out, formats="png")
+    assert list(outside.iterdir()) == []
+    assert [p.name for p in out.iterdir() if not p.is_symlink()] == []
+
+
+def test_a_figure_set_is_not_written_through_a_linked_directory(tmp_path, monkeypatch):
+    """The command line refused a link as --out; herpolhode_set and
+    paper_figures wrote through it."""
+    from orbits import figures
+
+    real = tmp_path / "real"
+    real.mkdir()
+    (tmp_path / "link").symlink_to(real)
+    with pytest.raises(orbits.InputError, match="symbolic link"):
+        figures.herpolhode_set(orbits.Body.preset("fig6"), 2, tmp_path / "link")
+    with pytest.raises(orbits.InputError, match="symbolic link"):
+        figures.paper_figures(tmp_path / "link", names="fig5")
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(orbits.InputError, match="file is not a directory"):
+        figures.herpolhode_set(orbits.Body.preset("fig6"), 2, tmp_path / "file")
+    monkeypatch.chdir(real)
+    for stem in (".", ".."):  # "." wrote a hidden ./.png
+        with pytest.raises(orbits.InputError, match="names a directory"):
+            figures.save_figure(figures.new_figure(), stem)
+    assert list(real.iterdir()) == []
+
+
+@pytest.mark.parametrize("option", ["--bodies", "--point-masses"])
+def test_an_output_that_is_the_input_file_is_refused(tmp_path, monkeypatch, capsys, option):
+    """catalog --bodies in.csv --out in.csv replaced the bodies with the catalog."""
+    monkeypatch.chdir(tmp_path)
+    if option == "--bodies":
+        text = "I1,I2,I3\n1,1.5,2\n"
+    else:
+        text = "mass,x,y,z\n1,1,0,0\n1,-1,0,0\n2,0,0.7,0\n2,0,-0.7,0\n1.5,0,0,0.3\n1.5,0,0,-0.3\n"
+    (tmp_path / "in.csv").write_text(text)
+    (tmp_path / "alias.csv").symlink_to(tmp_path / "in.csv")
+    runs = [["catalog", option, "in.csv", "--n-max", "2", "--out", "./in.csv"]]
+    runs.append(["catalog", option, "alias.csv", "--n-max", "2", "--out", "in.csv"])
+    if option == "--point-masses":
+        runs.append(["verify", option, "in.csv", "--angles", "2", "--table", "in.csv"])
+    for argv in runs:
+        capsys.readouterr()
+        assert main(argv) == 2, argv
+        out, err = capsys.readouterr()
+        assert err.strip().splitlines() == [
+            f"orbits: error: {'--table' if 'verify' in argv else '--out'} "
+            f"{argv[-1]} is the input file of {option}: writing it would replace "
+            "the input; give another path"
+        ]
+        assert out == ""
+    assert (tmp_path / "in.csv").read_text() == text
+
+
+def test_a_link_as_the_target_is_refused_before_the_work(tmp_path, monkeypatch, capsys):
+    """catalog and verify --table refused a link only after the whole run."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "real.csv").write_text("mine\n")
+    (tmp_path / "link.csv").symlink_to(tmp_path / "real.csv")
+    runs = [
+        ["catalog", "--preset", "fig6", "--n-max", "2", "--out", "link.csv"],
+        ["verify", "--moments", "1", "2", "3", "--angles", "2", "--table", "link.csv"],
+    ]
+    for argv in runs:
+        capsys.readouterr()
+        assert main(argv) == 2
+        out, err = capsys.readouterr()
+        assert out == "" and len(err.strip().splitlines()) == 1, (out, err)
+        assert "symbolic link" in err
+    assert (tmp_path / "real.csv").read_text() == "mine\n"
+
+
+@pytest.mark.parametrize("out", ["home/new/..", "fresh/a/.."])
+def test_a_refused_survey_leaves_nothing(tmp_path, monkeypatch, capsys, out):
+    """--out home/new/.. made home/new and home/.lock before the refusal."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "home").mkdir()
+    (tmp_path / "home" / "notes.txt").write_text("mine\n")
+    before = sorted(p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*"))
+    assert main(GRID + ["--out", out]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"orbits: error: {out} exists and is not a survey directory"]
+    after = sorted(p.relative_to(tmp_path).as_posix() for p in tmp_path.rglob("*"))
+    assert after == before
+    assert main(GRID + ["--out", "-"]) == 2
+    assert "give a directory" in capsys.readouterr().err
+    assert not (tmp_path / "-").exists()
+
+
+def test_names_too_long_and_paths_of_other_types_are_one_error(tmp_path):
+    table = orbits.closed_orbits(orbits.Body.preset("fig6"), n_max=2)
+    long = "c" * 256
+    calls = [
+        lambda: orbits.write_catalog(table, tmp_path / (long + ".csv")),
+        lambda: orbits.survey.Survey.grid(tmp_path / long, 6, 3).run(),
+        lambda: check_survey(tmp_path / long),
+        lambda: orbits.poinsot_animation(orbits.Body.preset("fig6"), theta=0.5).save(
+            tmp_path / (long + ".gif")
+        ),
+    ]
+    for call in calls:
+        with pytest.raises(orbits.InputError, match="name of 2.. bytes is too long"):
+            call()
+    for path in (None, 123, b"x.csv"):
+        with pytest.raises(orbits.ArgumentTypeError, match="path must be a path"):
+            orbits.write_catalog(table, path)
+    assert list(tmp_path.iterdir()) == []

@@ -852,10 +852,42 @@ def check_arguments(args):
             raise InputError(f"{option} applies only with {_targets(allowed, command)}")
     _check_angles(args, given)
     _check_names(args, given)
+    _check_output_is_no_input(args, given)
 
 
 # options that name files the command writes or reads
 _PATH_OPTIONS = ("out", "table", "bodies", "point_masses", "mesh")
+_OUTPUT_OPTIONS = ("out", "table")
+_INPUT_OPTIONS = ("bodies", "point_masses", "mesh", "survey")
+
+
+def _check_output_is_no_input(args, given):
+    """Refuse an output that is one of the command's input files.
+
+    ``catalog --bodies in.csv --out in.csv`` would replace the bodies with
+    the catalog.  The same file under another name (a link, a hard link,
+    ``./in.csv``) is found too (``os.path.samefile``).
+    """
+    import os
+
+    for out in _OUTPUT_OPTIONS:
+        target = getattr(args, out, None)
+        if out not in given or not isinstance(target, str) or target == "-":
+            continue
+        for source in _INPUT_OPTIONS:
+            read = getattr(args, source, None)
+            if source not in given or not isinstance(read, str) or read == "-":
+                continue
+            try:
+                same = os.path.samefile(target, read)
+            except (OSError, ValueError):  # one of them does not exist (yet)
+                continue
+            if same:
+                raise InputError(
+                    f"{option_string(out)} {target} is the input file of "
+                    f"{option_string(source)}: writing it would replace the input; "
+                    "give another path"
+                )
 
 
 def _check_names(args, given):

@@ -28,6 +28,11 @@ def _cmd_survey(args):
         return _check_survey_directory(args, check_survey)
     if args.out is None:
         raise InputError("orbits survey: --out DIR is required (or --check DIR)")
+    if args.out == "-":
+        raise InputError(
+            "orbits survey writes a directory of parts; --out - (standard output) "
+            "cannot take them: give a directory"
+        )
     from ..atomic import refuse_link
 
     refuse_link(args.out.rstrip("/") or args.out)  # before the estimate, the grid, any file

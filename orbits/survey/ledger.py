@@ -20,7 +20,7 @@ from ..atomic import (
     read_bytes_nofollow,
     refuse_link,
     remove_stale_temporaries,
-    write_text_atomic,
+    write_bytes_under,
 )
 from ..errors import InputError
 
@@ -403,10 +403,14 @@ class _DirectoryLock:
             error = _held(self.path, self.handle)
             self.handle.close()
             raise error from None
-        self.handle.seek(0)
-        self.handle.truncate()
-        self.handle.write(f"{os.getpid()}\n")
-        self.handle.flush()
+        try:
+            self.handle.seek(0)
+            self.handle.truncate()
+            self.handle.write(f"{os.getpid()}\n")
+            self.handle.flush()
+        except OSError as error:  # a file size limit, a full disk
+            self.handle.close()
+            raise InputError(f"cannot write {self.path}: {error.strerror or error}") from None
         return self
 
     def __exit__(self, *exc):
@@ -552,7 +556,8 @@ class Ledger:
             "parts": dict(sorted(self.parts.items(), key=lambda item: int(item[0]))),
         }
         document["sha256"] = manifest_checksum(document)
-        write_text_atomic(self.out_dir / MANIFEST, json.dumps(document, indent=1) + "\n")
+        text = json.dumps(document, indent=1) + "\n"
+        write_bytes_under(self.out_dir, MANIFEST, text.encode("utf-8"))
 
     def record(self, index, entry):
         """Add a finished chunk's entry (both parts on disk) and write the manifest."""

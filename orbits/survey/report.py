@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..atomic import read_bytes_nofollow, write_text_atomic
+from ..atomic import read_bytes_nofollow, write_bytes_under
 from ..errors import InputError
 from .ledger import REPORT, check_parts, load_manifest
 from .tables import read_table
@@ -107,7 +107,8 @@ def survey_report(out_dir, n_max, q_max, skipped_rows, verify=True, summaries=No
     """
     out_dir = Path(out_dir)
     report = build_report(out_dir, n_max, q_max, skipped_rows, verify, summaries)
-    write_text_atomic(out_dir / REPORT, json.dumps(report, indent=2) + "\n")
+    text = json.dumps(report, indent=2) + "\n"
+    write_bytes_under(out_dir, REPORT, text.encode("utf-8"))
     return report
 
 

@@ -17,7 +17,7 @@ import numpy as np
 
 from .._args import integer, path_argument, real_array, utf8_text
 from .._version import __version__, source_fingerprint
-from ..atomic import refuse_link
+from ..atomic import make_directories, refuse_link, remove_directories
 from ..bodies import as_moments, region_grid
 from ..device import check_device, cuda_kernels
 from ..errors import ArgumentTypeError, InputError, OrbitsError
@@ -200,7 +200,7 @@ class Survey:
                 "file": name,
                 "rows": int(len(frame["body"])),
                 # of the bytes written, hashed before they went to disk
-                "sha256": write_part(frame, self.out_dir / name, self.format),
+                "sha256": write_part(frame, self.out_dir / name, self.format, root=self.out_dir),
             }
         summary = bodies_summary(bodies)  # for the report: no reading back
         with self._record_lock:  # chunks finish on several threads
@@ -262,10 +262,17 @@ class Survey:
                 client.close()
 
     def _run_locked(self, client, progress, notify):
+        made = []
         try:
-            self.out_dir.mkdir(parents=True, exist_ok=True)
+            make_directories(self.out_dir, made)
+            # "new/.." did not exist before: what it names now is checked again
+            self.ledger.refuse_foreign_directory()
         except OSError as error:
+            remove_directories(made)
             raise InputError(f"cannot create {self.out_dir}: {error.strerror}") from None
+        except BaseException:
+            remove_directories(made)
+            raise
         with self.lock():
             self._summaries = {}
             self.prepare()

@@ -13,7 +13,13 @@ from pathlib import Path
 import numpy as np
 
 from .._args import flag
-from ..atomic import FLOAT_FORMAT, csv_float_options, read_bytes_nofollow, write_bytes_atomic
+from ..atomic import (
+    FLOAT_FORMAT,
+    csv_float_options,
+    read_bytes_nofollow,
+    write_bytes_atomic,
+    write_bytes_under,
+)
 from ..cells import neutralize, unneutralize
 from ..errors import InputError
 from ..search import CATALOG_COLUMNS
@@ -26,7 +32,7 @@ def require_pyarrow():
         raise InputError("--format parquet needs pyarrow: pip install 'orbits[parquet]'")
 
 
-def write_part(table, path, fmt, engine=None):
+def write_part(table, path, fmt, engine=None, root=None):
     """Write one table part atomically; return the SHA-256 (hex) of its bytes.
 
     Parameters
@@ -40,6 +46,11 @@ def write_part(table, path, fmt, engine=None):
     fmt : {"parquet", "csv"}
     engine : {"arrow", "pandas"}, optional
         The CSV writer (default: pyarrow's).
+    root : path, optional
+        The survey's directory, which ``path`` lies in: no directory from
+        it down to the part is followed if it is a link
+        (:func:`orbits.atomic.write_bytes_under`), even one swapped in
+        while the survey runs.
 
     Notes
     -----
@@ -97,7 +108,10 @@ def write_part(table, path, fmt, engine=None):
         frame = as_frame(table)
         data = frame.to_csv(index=False, float_format=FLOAT_FORMAT).encode("utf-8")
     digest = hashlib.sha256(data).hexdigest()
-    write_bytes_atomic(path, data)
+    if root is None:
+        write_bytes_atomic(path, data)
+    else:
+        write_bytes_under(root, Path(path).relative_to(root), data)
     return digest
 
 
