@@ -1216,7 +1216,11 @@ def _quick_kwargs(name, gpu):
         return {"repeats": 2}
     if name == "search_evaluations":
         return {"resolution": 30}
-    return {}
+    if name.startswith("motion"):  # one orbit: the size is the row's, fewer repeats
+        return {"repeats": 2}
+    if name == "search":
+        return {"repeats": 3}
+    return {}  # cold_compile: one compile, as it is
 
 
 def _skipped(name, reason):

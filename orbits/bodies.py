@@ -180,7 +180,28 @@ def _snap_flat(unit, given):
             "differs from them in one moment by that excess; give moments with "
             "I3 <= I1 + I2"
         )
+    # a rod thinner than the rounding of I3 gets an I1 of ~eps I3: its phases
+    # are those of the thin rod still, but not its energy along I1
+    grown = np.abs(out[:, 0] - unit[:, 0]) > FLAT_MOVE_WARNING * unit[:, 0]
+    if grown.any():
+        import warnings
+
+        k = int(np.flatnonzero(grown)[0])
+        change = abs(out[k, 0] / unit[k, 0] - 1.0)
+        warnings.warn(
+            f"moments {_row(given, grown)} lie beyond the flat edge by rounding and "
+            f"were moved onto it: I1 {given[k, 0]:.17g} became "
+            f"{out[k, 0] / unit[k, 0] * given[k, 0]:.17g}, {change:.2g} of itself (a "
+            "thin rod next to the rounding of I3: its phases are the thin rod's, "
+            "but energies and momenta are those of the moved body)",
+            InertialDefectWarning,
+            stacklevel=4,
+        )
     return out
+
+
+# _snap_flat warns when it changes I1 by more than this fraction of itself
+FLAT_MOVE_WARNING = 1e-6
 
 
 def validate_moments(moments):
@@ -596,7 +617,11 @@ class Body:
     # -- properties ----------------------------------------------------
     @property
     def moments(self):
-        """Principal moments ``(I1, I2, I3)``, ascending, as given."""
+        """Principal moments ``(I1, I2, I3)``, ascending, as given.
+
+        Moments given beyond the flat edge by rounding are those moved onto
+        it (:func:`canonical_moments`; docs: conventions).
+        """
         return self._moments
 
     @property
@@ -1122,7 +1147,9 @@ class InertialDefectWarning(UserWarning):
     """A body whose excess over the flat limit was removed (``defect="flatten"``).
 
     Rotational constants (the inertial defect of a planar molecule), point
-    masses, meshes and inertia tensors.
+    masses, meshes and inertia tensors; also moments given beyond the flat
+    edge by rounding when moving them onto it changes I1 by more than
+    :data:`FLAT_MOVE_WARNING` of itself (a rod thinner than ``eps I3``).
     """
 
 

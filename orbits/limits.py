@@ -252,6 +252,12 @@ ODE_ERROR_FACTOR = 6.0
 GAP_ROUNDING_FACTOR = 20.0
 
 
+def _count(n):
+    """An integer for a message: its digits, or its power of ten when it has more than 15."""
+    digits = str(n)
+    return digits if len(digits) <= 15 else f"~1e{len(digits) - 1}"
+
+
 def check_verify_size(n_bodies, n_angles):
     """Refuse a verification whose table would exceed the memory allowed.
 
@@ -261,9 +267,14 @@ def check_verify_size(n_bodies, n_angles):
     total = n_bodies * n_angles
     memory = total * VERIFY_BYTES_PER_CONDITION
     if memory > memory_budget():
+        need = (
+            f"about {format_bytes(memory)}"
+            if memory < 2.0**1000  # a double can hold it (--angles 1e400 is an int)
+            else "more bytes than a double can count"
+        )
         raise InputError(
-            f"verify with {n_bodies} bodies x {n_angles} angles = {total} initial "
-            f"conditions would need about {format_bytes(memory)} of memory, more than "
+            f"verify with {_count(n_bodies)} bodies x {_count(n_angles)} angles = "
+            f"{_count(total)} initial conditions would need {need} of memory, more than "
             f"the {format_bytes(memory_budget())} allowed (half of this machine's)"
         )
     return total, memory
@@ -372,6 +383,12 @@ def short_number(number):
 
 def format_bytes(count):
     """``3.2 GiB``: a byte count with three significant digits and a binary unit."""
+    try:
+        count = float(count)
+    except OverflowError:  # an int beyond a double
+        count = math.inf
+    if not math.isfinite(count):
+        return "more bytes than a double can count"
     for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
         if count < 1024 or unit == "PiB":
             return f"{count:.3g} {unit}"

@@ -5,6 +5,7 @@ row is re-timed beside a CPU-bound child, that the child is stopped, and
 that the table prints the check.
 """
 
+import inspect
 import math
 import os
 import signal
@@ -666,3 +667,18 @@ def test_bytecode_note_only_when_fresh_processes_compile(monkeypatch):
     assert count >= 40 and seconds > 0.0  # every module of the package
     note = bench._bytecode_note()
     assert f"{count} modules of orbits have no cached bytecode" in note
+
+
+def test_quick_changes_every_row_it_can():
+    """--quick ran six rows (motion*, search, ...) at full size, silently."""
+    from orbits import bench
+
+    for name in bench.BENCHMARKS:
+        kwargs = bench._quick_kwargs(name, None)
+        if name == "cold_compile":  # one compile: nothing to make smaller
+            assert kwargs == {}
+            continue
+        assert kwargs, name
+        signature = inspect.signature(bench.BENCHMARKS[name])
+        if not any(p.kind is p.VAR_KEYWORD for p in signature.parameters.values()):
+            assert set(kwargs) <= set(signature.parameters), name

@@ -152,6 +152,7 @@ def test_cli_verify_paper_count_and_ten_times(capsys, bodies, expected):
         "montgomery",
         "ode_rotation",
         "exact_motion",
+        "theta_orbit",
         "closed_form_routes",
     }
     for check in out["checks"].values():
@@ -257,6 +258,7 @@ def test_verify_summary_has_no_nan_and_explains_missing_values():
             "ode_error": [nan, 5e-11, nan],
             "ode_period_error": [nan, 1e-10, nan],
             "routes_error": [0.0, 0.0, nan],
+            "theta_orbit_error": [0.0, 0.0, nan],
             **{f"route_{name}": [1.0, 2.0, nan] for name, _ in checks.ROUTES},
         }
     )
@@ -660,6 +662,54 @@ def test_verify_fails_when_a_public_route_is_wrong(route, monkeypatch, capsys):
     assert routes["beyond_tolerance"] == 2
 
 
+def test_verify_fails_when_the_orbit_of_theta_is_wrong(tmp_path):
+    """The orbit of theta (angle_triplet: total_phase, phases, 'orbits phase')
+    1e-9 relative off in its offset from theta_c passed 'orbits verify': the
+    routes were compared with that same path only.  In a copy of the package
+    with the one-line mutation (compiled afresh, ~20 s)."""
+    import re
+    import shutil
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    copy = tmp_path / "orbits"
+    shutil.copytree(
+        Path(orbits.__file__).parent, copy, ignore=shutil.ignore_patterns("__pycache__")
+    )
+    source = copy / "core" / "phase.py"
+    text, count = re.subn(
+        r"dtheta = (theta - theta_c|co_theta_c - co_theta)\n",
+        r"dtheta = (\1) * (1.0 + 1e-9)\n",
+        source.read_text(),
+    )
+    assert count == 2
+    source.write_text(text)
+    env = {**os.environ, "PYTHONPATH": str(tmp_path), "NUMBA_CACHE_DIR": str(tmp_path / "nb")}
+    argv = [sys.executable, "-m", "orbits", "verify", "--bodies", "3", "--angles", "2"]
+    done = subprocess.run(
+        argv + ["--no-progress", "--json"],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=tmp_path,  # not the repository's own orbits
+        timeout=600,
+    )
+    assert done.returncode == 1, done.stderr[-2000:]
+    report = json.loads(done.stdout)
+    failed = {name for name, check in report["checks"].items() if not check["passed"]}
+    assert failed == {"theta_orbit"}
+    assert report["checks"]["theta_orbit"]["beyond_tolerance"] == 6
+
+
+def test_the_orbit_of_theta_agrees_with_that_of_omega0():
+    """Unmutated: within the rounding of omega0 (0.22 of the allowance at
+    most, measured over verify(29300, 22))."""
+    for report in (checks.verify(50, 7), checks.verify_body(T_HANDLE, 11)):
+        check = report.summary["checks"]["theta_orbit"]
+        assert check["passed"] and check["max_fraction_of_allowance"] <= 0.5
+
+
 def test_the_routes_agree_to_a_few_ulps():
     """Unmutated, the public routes match the scalar closed form to <= 16 ulps
     (ROUTE_ULPS = 64 leaves a margin of 4), on both verify paths."""
@@ -777,6 +827,7 @@ def test_summary_allows_ulps_but_not_more():
             "ode_error": [np.nan, np.nan],
             "ode_period_error": [np.nan, np.nan],
             "routes_error": [0.0, 65 * ulp],
+            "theta_orbit_error": [ulp, 65 * ulp],
             **{f"route_{name}": [phase, phase + 65 * ulp] for name, _ in checks.ROUTES},
         }
     )
@@ -790,9 +841,11 @@ def test_summary_allows_ulps_but_not_more():
     assert summary["checks"]["montgomery"]["max_ulps"] == 160
     assert summary["checks"]["exact_motion"]["passed"]  # 16 ulps: the allowance
     assert not summary["checks"]["closed_form_routes"]["passed"]
-    # a loose tolerance relaxes the checks but not the routes
+    assert not summary["checks"]["theta_orbit"]["passed"]  # 65 ulps, past 64
+    # a loose tolerance relaxes the checks but not the routes or theta's orbit
     loose = checks._summarize(table, 1e-3, exhausted)
     assert loose["checks"]["montgomery"]["passed"]
+    assert not loose["checks"]["theta_orbit"]["passed"]
     assert not loose["checks"]["closed_form_routes"]["passed"]
 
 
@@ -915,6 +968,7 @@ def test_summary_allows_check_a_its_integrators_error_and_no_more():
             "ode_error": [0.9 * budget, 1.1 * budget],
             "ode_period_error": [1e-9, 1e-9],
             "routes_error": [0.0, 0.0],
+            "theta_orbit_error": [0.0, 0.0],
             **{f"route_{name}": [phase, phase] for name, _ in checks.ROUTES},
         }
     )
@@ -1117,3 +1171,73 @@ def test_catalog_verify_of_a_thin_rod_passes_with_a_note(tmp_path, capsys):
     assert main([*argv, "--out", str(tmp_path / "rod.csv")]) == 0
     err = capsys.readouterr().err
     assert "within the check's own error" in err and "error:" not in err
+
+
+# ------------------------------------------------ arguments of the helpers
+
+
+def test_a_count_beyond_a_double_is_one_error(capsys):
+    """--angles 1e400 (an int) was an OverflowError traceback in format_bytes."""
+    huge = 10**400
+    with pytest.raises(orbits.InputError, match="~1e400 angles = ~1e400 initial conditions"):
+        checks.verify_body((1, 2, 3), huge)
+    assert main(["verify", "--moments", "1", "2", "3", "--angles", str(huge)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "more bytes than a double can count" in err[0]
+
+
+@pytest.mark.parametrize(
+    "moments, omega0, times, dps, error",
+    [
+        ((1, 2, 3), [np.nan, 0, 1], [0.1], 40, orbits.AngleError),
+        ((1, 2, 3), [0, 0, 0], [0.1], 40, orbits.AngleError),
+        ((-1, 2, 3), [1, 0, 1], [0.1], 40, orbits.NonPhysicalBodyError),
+        ((1, 1, 2), [1, 0, 1], [0.1], 40, orbits.SymmetricTopError),
+        ((1, 2, 30), [1, 0, 1], [0.1], 40, orbits.NonPhysicalBodyError),
+        ((1, 2, 3), [0, 1, 0], [0.1], 40, orbits.SeparatrixError),
+        ((1, 2, 3), [1, 0], [0.1], 40, orbits.AngleError),
+        ((1, 2, 3), [1, 0, 1], [], 40, orbits.InputError),
+        ((1, 2, 3), [1, 0, 1], [np.nan], 40, orbits.InputError),
+        ((1, 2, 3), [1, 0, 1], [0.1], 0, orbits.InputError),
+    ],
+)
+def test_the_mpmath_reference_refuses_what_motion_refuses(moments, omega0, times, dps, error):
+    """exact_motion_mpmath gave NaN, plausible values for a symmetric or
+    non-physical body, or ZeroDivision/Index/AttributeErrors."""
+    with pytest.raises(error):
+        checks.exact_motion_mpmath(moments, omega0, times, dps=dps)
+
+
+def test_the_error_budgets_refuse_what_their_checks_refuse():
+    """closure_error_budget(rtol=-1) was -30 rad, periods=-5 negative,
+    dtheta=nan 0; ode_error_budget(rtol=-1) -600; negative slopes negative."""
+    calls = [
+        lambda: checks.closure_error_budget((1, 2, 3), 1e-4, 1, rtol=-1),
+        lambda: checks.closure_error_budget((1, 2, 3), 1e-4, -5),
+        lambda: checks.closure_error_budget((1, 2, 3), 1e-4, 2.5),
+        lambda: checks.closure_error_budget((1, 2, 3), np.nan, 1),
+        lambda: checks.closure_error_budget((1, 2, 3), 0.0, 1),
+        lambda: checks.closure_error_budget((1, 2, 3), [1e-4, 1e-4], [1, 2, 3]),
+        lambda: checks.ode_error_budget(100, rtol=-1),
+        lambda: checks.ode_error_budget(-1.0),
+        lambda: checks.gap_rounding_allowance(1e-3, -5),
+    ]
+    for call in calls:
+        with pytest.raises(orbits.OrbitsError):
+            call()
+    for call in (lambda: checks.ode_error_budget(None), lambda: checks.circular_distance("a", 1)):
+        with pytest.raises(orbits.ArgumentTypeError):
+            call()
+    # the values themselves, where the arguments are right
+    rod = checks.closure_error_budget((1e-6, 1, 1.000001), [1e-4, 0.1], 3)
+    assert rod[0] == pytest.approx(checks.QUARTER_ERROR_FACTOR * 1e-13 * 1.000001e6 * 3, rel=1e-12)
+    assert rod[1] == 0.0
+    assert np.isnan(checks.ode_error_budget(np.array([1.0, np.nan]))[1])
+    assert np.isnan(checks.circular_distance(np.inf, 1.0))
+
+
+def test_a_spin_along_an_axis_is_refused_at_once():
+    """theta = 0 (along I3) used up 10**7 steps, then blamed a nearly
+    symmetric body or the separatrix."""
+    with pytest.raises(orbits.InputError, match="along the principal axis I3: a steady rotation"):
+        checks.rotation_by_integration((1, 2, 3), 0.0)

@@ -194,3 +194,16 @@ def test_survey_of_flat_bodies_reports_no_two_pi_orbit():
     assert bodies["min_at_end"].all()
     assert (table["n"] > table["q"]).all()
     assert (bodies["n_smallest"] != 1).all()
+
+
+def test_a_rod_thinner_than_rounding_says_that_its_i1_was_moved():
+    """spin_phases([1e-20, 1 - 2**-53, 1], [1, 0, 0]) reported I1, E, M and D
+    11,000 times those of the moments given, with no word."""
+    import warnings
+
+    with pytest.warns(orbits.InertialDefectWarning, match="I1 9.99.*e-21 became 1.11.*e-16"):
+        table = orbits.spin_phases([1e-20, 1 - 2**-53, 1.0], [1.0, 0.0, 0.0])
+    assert table["I1"].iloc[0] == 2.0**-53  # the moved body, as the warning says
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        orbits.Body([0.3, 0.6, 0.9])  # moved by one rounding: no warning

@@ -65,7 +65,8 @@ def add_parser(subparsers):
     parser.add_argument(
         "--quick",
         action="store_true",
-        help="smaller problem sizes (a smoke test, not for the README)",
+        help="smaller problem sizes, or fewer repeats where the size is the row's "
+        "(motion, search); cold_compile runs as it is (a smoke test, not for the README)",
     )
     parser.add_argument(
         "--device",

@@ -28,6 +28,7 @@ _CHECK_LABELS = (
     ("montgomery", "(b) Montgomery"),
     ("ode_rotation", "(a) ODE rotation"),
     ("exact_motion", "(c) exact motion"),
+    ("theta_orbit", "theta -> orbit"),
     ("closed_form_routes", "public routes"),
 )
 
@@ -136,6 +137,12 @@ def _print_summary(summary, args, one):
             f"g the relative gap), here up to {ode['largest_allowance']:.3g} rad; the "
             f"largest discrepancy is {ode['max_fraction_of_allowance']:.2g} of its allowance"
         )
+    notes.append(
+        f"theta -> orbit: the closed form of the exact theta (total_phase, phases) "
+        f"against that of the double omega0 the checks start from, within "
+        f"{summary['route_ulps']} ulps or, next to the separatrix, what the rounding "
+        f"of omega0 moves the phase by"
+    )
     notes.append(
         f"public routes: orbits.total_phase (both SIMD kernels), orbits.phases "
         f"('orbits phase') and orbits.spin_phases against the scalar closed form of "
