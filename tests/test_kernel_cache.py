@@ -111,3 +111,28 @@ def test_the_fingerprint_follows_every_file(tmp_path):
     assert second != first
     (tmp_path / "b.py").rename(tmp_path / "c.py")  # a file renamed
     assert kernel_cache.sources_fingerprint(tmp_path) not in (first, second)
+
+
+def test_a_private_temporary_cache_where_no_other_can_be_written(tmp_path, monkeypatch):
+    """A read-only install with HOME unset or read-only: numba found no
+    locator and 'import orbits' failed (RuntimeError: cannot cache function
+    'cel': no locator available)."""
+    import tempfile
+
+    from orbits.core import elliptic
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    monkeypatch.setattr(kernel_cache._IMPL, "_locator_classes", [kernel_cache.PackageLocator])
+    function = elliptic.cel.py_func
+    source = function.__code__.co_filename
+    locator = kernel_cache.PackageLocator.from_function(function, source)
+    root = tmp_path / f"orbits-numba-{os.getuid()}"
+    assert locator.get_cache_path().startswith(str(root))
+    assert (root.stat().st_mode & 0o777) == 0o700
+    # never a directory another user could have planted (numba's index is a pickle)
+    root.chmod(0o777)
+    assert kernel_cache.PackageLocator.from_function(function, source) is None
+    root.chmod(0o700)
+    os.rename(root, tmp_path / "real")
+    root.symlink_to(tmp_path / "real")
+    assert kernel_cache.PackageLocator.from_function(function, source) is None

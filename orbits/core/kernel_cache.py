@@ -90,7 +90,41 @@ class PackageLocator(caching._CacheLocator):
             base = other.from_function(py_func, py_file)
             if base is not None:
                 return cls(base, fingerprint)
-        return None
+        # neither the package's __pycache__ nor the user's cache directory can
+        # be written (a read-only install, HOME unset or read-only): numba
+        # would refuse to import the kernels at all
+        base = PrivateTempLocator.from_function(py_func, py_file)
+        return None if base is None else cls(base, fingerprint)
+
+
+class PrivateTempLocator(caching.UserWideCacheLocator):
+    """A cache in ``TMPDIR/orbits-numba-UID``: the last resort, private to the user.
+
+    Used only where no locator of numba's applies.  numba's cache index is
+    a pickle, so the directory must be the user's own: made with mode 0700,
+    and refused (no cache: numba's own error) if it is a link, belongs to
+    another user or can be read or written by others.
+    """
+
+    def __init__(self, py_func, py_file):
+        import tempfile
+
+        self._py_file = py_file
+        self._lineno = py_func.__code__.co_firstlineno
+        self._root = os.path.join(tempfile.gettempdir(), f"orbits-numba-{os.getuid()}")
+        self._cache_path = os.path.join(self._root, self.get_suitable_cache_subpath(py_file))
+
+    def ensure_cache_path(self):
+        import stat
+
+        try:
+            os.mkdir(self._root, 0o700)
+        except FileExistsError:
+            pass
+        info = os.lstat(self._root)
+        if not stat.S_ISDIR(info.st_mode) or info.st_uid != os.getuid() or info.st_mode & 0o077:
+            raise OSError(f"{self._root} is not a private directory of this user")
+        super().ensure_cache_path()
 
 
 def track_package(directory):
