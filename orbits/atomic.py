@@ -374,9 +374,14 @@ def file_set(directory, names):
         # a write that failed in the stage (disk full) names the user's target,
         # not the private staging directory
         text = str(error)
-        if str(stage) not in text:
+        # the stage as mkdtemp named it (absolute from Python 3.12), or as
+        # a caller joined it to the directory it was given
+        named = [str(stage), str(directory / stage.name)]
+        if not any(name in text for name in named):
             raise
-        error.args = (text.replace(str(stage), str(directory)),)
+        for name in named:
+            text = text.replace(name, str(directory))
+        error.args = (text,)
         raise
     finally:
         for descriptor in descriptors:
@@ -387,7 +392,7 @@ def file_set(directory, names):
 def _open_directory(directory):
     """A descriptor of ``directory`` (its own path followed: the caller's layout)."""
     try:
-        return os.open(directory, os.O_RDONLY | os.O_DIRECTORY | os.O_CLOEXEC)
+        return os.open(directory, _DIRECTORY_ACCESS | os.O_DIRECTORY | os.O_CLOEXEC)
     except OSError as error:
         raise InputError(f"cannot write into {directory}: {error.strerror or error}") from None
 
@@ -510,7 +515,10 @@ def write_bytes_atomic(path, data):
         temporary.write_bytes(data)
 
 
-_DIRECTORY_FLAGS = os.O_RDONLY | os.O_DIRECTORY | os.O_NOFOLLOW | os.O_CLOEXEC
+# O_PATH (Linux): a descriptor that needs no read permission on the
+# directory (a drop box, mode 0733, takes files) and still serves as dir_fd
+_DIRECTORY_ACCESS = getattr(os, "O_PATH", os.O_RDONLY)
+_DIRECTORY_FLAGS = _DIRECTORY_ACCESS | os.O_DIRECTORY | os.O_NOFOLLOW | os.O_CLOEXEC
 
 
 def open_directory_nofollow(path, shown=None, dir_fd=None):

@@ -187,17 +187,33 @@ def _snap_flat(unit, given):
         import warnings
 
         k = int(np.flatnonzero(grown)[0])
-        change = abs(out[k, 0] / unit[k, 0] - 1.0)
+        # in the given units (unit I1 may have underflowed to 0)
+        scale = float(given[k, 2]) / float(unit[k, 2])  # a power of two
+        new, old = float(out[k, 0]) * scale, float(given[k, 0])
+        change = abs(new / old - 1.0)  # Python floats: inf, not a RuntimeWarning
+        changed = f"{change:.2g} of itself" if math.isfinite(change) else "by far more"
         warnings.warn(
             f"moments {_row(given, grown)} lie beyond the flat edge by rounding and "
-            f"were moved onto it: I1 {given[k, 0]:.17g} became "
-            f"{out[k, 0] / unit[k, 0] * given[k, 0]:.17g}, {change:.2g} of itself (a "
-            "thin rod next to the rounding of I3: its phases are the thin rod's, "
-            "but energies and momenta are those of the moved body)",
+            f"were moved onto it: I1 {old:.17g} became {new:.17g}, "
+            f"{changed} (a thin rod next to the rounding of I3: its "
+            "phases are the thin rod's, but energies and momenta are those of the "
+            "moved body)",
             InertialDefectWarning,
-            stacklevel=4,
+            stacklevel=_outside_package(),
         )
     return out
+
+
+def _outside_package():
+    """The ``stacklevel`` of the first frame outside ``orbits``, for a warning raised here."""
+    import os
+    import sys
+
+    package = os.path.dirname(os.path.abspath(__file__)) + os.sep
+    frame, level = sys._getframe(1), 1  # the function that warns
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(package):
+        frame, level = frame.f_back, level + 1
+    return level
 
 
 # _snap_flat warns when it changes I1 by more than this fraction of itself

@@ -770,3 +770,61 @@ def test_names_too_long_and_paths_of_other_types_are_one_error(tmp_path):
         with pytest.raises(orbits.ArgumentTypeError, match="path must be a path"):
             orbits.write_catalog(table, path)
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root can read any directory")
+def test_a_drop_box_directory_takes_files(tmp_path):
+    """Directory descriptors opened O_RDONLY needed read permission: a
+    drop box (mode 0733) refused every figure and survey part."""
+    from orbits import atomic, figures
+
+    box = tmp_path / "box"
+    box.mkdir()
+    box.chmod(0o733)
+    try:
+        atomic.write_bytes_under(box, "a.bin", b"x")
+        figures.save_figure(figures.new_figure(), box / "f", "png")
+    finally:
+        box.chmod(0o755)
+    assert sorted(p.name for p in box.iterdir()) == ["a.bin", "f.png"]
+
+
+def test_directory_descriptors_need_no_read_permission():
+    from orbits import atomic
+
+    if hasattr(os, "O_PATH"):  # Linux: the drop box above works even as root's test
+        assert atomic._DIRECTORY_ACCESS == os.O_PATH
+
+
+def test_a_figure_into_the_survey_it_reads_is_no_overwrite(reference, tmp_path, capsys):
+    """figures --survey S --out S was refused as 'the input file of --survey'."""
+    target = copy(reference, tmp_path)
+    capsys.readouterr()
+    assert (
+        main(["figures", "--survey", str(target), "--out", str(target), "--formats", "png"]) == 0
+    )
+    assert (target / "fig2.png").is_file()
+    assert main(["survey", "--check", str(target)]) == 0
+
+
+def test_a_failed_write_names_the_target_not_the_stage(tmp_path, monkeypatch):
+    """From Python 3.12 mkdtemp returns an absolute path: the message named
+    figs/.orbits-set.PID.X.part/... (simulated here)."""
+    import tempfile
+
+    from orbits import atomic, figures
+
+    make = tempfile.mkdtemp
+    monkeypatch.setattr(tempfile, "mkdtemp", lambda *a, **k: os.path.abspath(make(*a, **k)))
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "figs").mkdir()
+
+    def full(descriptor):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(atomic.os, "fsync", full)
+    with pytest.raises(orbits.InputError) as caught:
+        figures.herpolhode_set(orbits.Body.preset("fig6"), 3, "figs", formats="png")
+    assert ".orbits-set" not in str(caught.value)
+    assert str(caught.value).startswith("cannot write ")
+    assert list((tmp_path / "figs").iterdir()) == []

@@ -207,3 +207,40 @@ def test_a_rod_thinner_than_rounding_says_that_its_i1_was_moved():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         orbits.Body([0.3, 0.6, 0.9])  # moved by one rounding: no warning
+
+
+def test_the_flat_edge_warning_points_at_the_callers_line_and_never_overflows():
+    """stacklevel=4 pointed into orbits/phases.py for spin_phases and
+    total_phase; a unit I1 that underflowed gave 'became inf, inf of itself'
+    and two RuntimeWarnings (errors in this suite)."""
+    import warnings
+
+    rod = (1e-20, 1 - 2**-53, 1.0)
+    calls = [
+        lambda: orbits.Body(rod),
+        lambda: orbits.spin_phases(rod, [1.0, 0.0, 0.0]),
+        lambda: orbits.total_phase(rod, 0.3),
+        lambda: orbits.Motion(rod, [1.0, 0.0, 1.0]),
+    ]
+    for call in calls:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            call()
+        (warning,) = [w for w in caught if issubclass(w.category, orbits.InertialDefectWarning)]
+        assert warning.filename == __file__
+    with pytest.warns(
+        orbits.InertialDefectWarning, match="became 1.48701690847778..e\\+284, by far"
+    ):
+        orbits.Body((1e-300, 9.999999999999999e299, 1e300))
+
+
+def test_catalog_verify_of_a_moved_rod_warns_once(tmp_path, capsys):
+    """The closure check warned again about the catalog's own |I| = 1
+    moments ('0.41 of itself'), which describe the same moved body."""
+    from orbits.cli import main
+
+    argv = ["catalog", "--moments", "1e-20", "0.99999999999999989", "1", "--n-max", "4"]
+    assert main(argv + ["--verify", "--out", str(tmp_path / "rod.csv")]) == 0
+    err = capsys.readouterr().err
+    warned = [line for line in err.splitlines() if "flat edge by rounding" in line]
+    assert len(warned) == 1 and "1.1e+04 of itself" in warned[0]

@@ -13,6 +13,7 @@ import os
 import pkgutil
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -129,10 +130,16 @@ def test_a_private_temporary_cache_where_no_other_can_be_written(tmp_path, monke
     root = tmp_path / f"orbits-numba-{os.getuid()}"
     assert locator.get_cache_path().startswith(str(root))
     assert (root.stat().st_mode & 0o777) == 0o700
-    # never a directory another user could have planted (numba's index is a pickle)
+    # never a directory another user could have planted (numba's index is a
+    # pickle): the process compiles into a fresh private one of its own
+    monkeypatch.setattr(kernel_cache, "_PROCESS_DIRECTORY", [])
     root.chmod(0o777)
-    assert kernel_cache.PackageLocator.from_function(function, source) is None
+    fresh = kernel_cache.PackageLocator.from_function(function, source).get_cache_path()
+    assert not fresh.startswith(str(root)) and fresh.startswith(str(tmp_path / "orbits-numba-"))
+    own = Path(fresh).parent
+    assert (own.stat().st_mode & 0o777) == 0o700 and own.stat().st_uid == os.getuid()
     root.chmod(0o700)
     os.rename(root, tmp_path / "real")
     root.symlink_to(tmp_path / "real")
-    assert kernel_cache.PackageLocator.from_function(function, source) is None
+    again = kernel_cache.PackageLocator.from_function(function, source).get_cache_path()
+    assert Path(again).parent == own

@@ -804,3 +804,19 @@ def test_a_grid_into_a_directory_it_cannot_use_is_one_line(tmp_path, capsys):
     assert main([*argv, "--out", str(tmp_path / "s")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "different parameters (chunk, n_max)" in err[0], err
+
+
+def test_table_workers_where_no_threading_layer_loads(monkeypatch):
+    """NUMBA_THREADING_LAYER=tbb without tbb: a ValueError traceback, where
+    one chunk at a time (0) is the answer."""
+    import numba
+
+    from orbits.core import tasks
+    from orbits.survey import runner
+
+    def no_layer(*args):
+        raise ValueError("No threading layer could be loaded.")
+
+    monkeypatch.setattr(numba, "threading_layer", no_layer)
+    monkeypatch.setattr(tasks, "start_threads", no_layer)
+    assert runner.table_workers(10, 1, 100) == 0

@@ -878,6 +878,8 @@ def _check_output_is_no_input(args, given):
             read = getattr(args, source, None)
             if source not in given or not isinstance(read, str) or read == "-":
                 continue
+            if not os.path.isfile(read):  # a survey directory takes a figure beside its parts
+                continue
             try:
                 same = os.path.samefile(target, read)
             except (OSError, ValueError):  # one of them does not exist (yet)

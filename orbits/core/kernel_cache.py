@@ -102,8 +102,9 @@ class PrivateTempLocator(caching.UserWideCacheLocator):
 
     Used only where no locator of numba's applies.  numba's cache index is
     a pickle, so the directory must be the user's own: made with mode 0700,
-    and refused (no cache: numba's own error) if it is a link, belongs to
-    another user or can be read or written by others.
+    and never used if it is a link, belongs to another user or can be read
+    or written by others; the process then compiles into a fresh private
+    directory of its own (``mkdtemp``), removed when it exits.
     """
 
     def __init__(self, py_func, py_file):
@@ -115,16 +116,49 @@ class PrivateTempLocator(caching.UserWideCacheLocator):
         self._cache_path = os.path.join(self._root, self.get_suitable_cache_subpath(py_file))
 
     def ensure_cache_path(self):
-        import stat
-
-        try:
-            os.mkdir(self._root, 0o700)
-        except FileExistsError:
-            pass
-        info = os.lstat(self._root)
-        if not stat.S_ISDIR(info.st_mode) or info.st_uid != os.getuid() or info.st_mode & 0o077:
-            raise OSError(f"{self._root} is not a private directory of this user")
+        if not _private(self._root):
+            # another user took the name first (a link, or a directory open
+            # to others): this process's own fresh directory, not its cache
+            self._root = _process_directory()
+            self._cache_path = os.path.join(
+                self._root, self.get_suitable_cache_subpath(self._py_file)
+            )
         super().ensure_cache_path()
+
+
+def _private(root):
+    """Make ``root`` (mode 0700) if missing; whether it is this user's private directory."""
+    import stat
+
+    try:
+        os.mkdir(root, 0o700)
+    except FileExistsError:
+        pass
+    except OSError:
+        return False
+    try:
+        info = os.lstat(root)
+    except OSError:
+        return False
+    return bool(
+        stat.S_ISDIR(info.st_mode) and info.st_uid == os.getuid() and not info.st_mode & 0o077
+    )
+
+
+_PROCESS_DIRECTORY = []
+
+
+def _process_directory():
+    """A fresh private directory (``mkdtemp``, 0700) for this process, removed at exit."""
+    if not _PROCESS_DIRECTORY:
+        import atexit
+        import shutil
+        import tempfile
+
+        path = tempfile.mkdtemp(prefix="orbits-numba-")
+        atexit.register(shutil.rmtree, path, True)
+        _PROCESS_DIRECTORY.append(path)
+    return _PROCESS_DIRECTORY[0]
 
 
 def track_package(directory):

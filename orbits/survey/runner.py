@@ -506,8 +506,11 @@ def table_workers(n_max, q_max, chunk):
     except ValueError:  # no parallel kernel has run yet (a survey on the GPU)
         from ..core.tasks import start_threads
 
-        start_threads(np.zeros(1))
-        layer = numba.threading_layer()
+        try:
+            start_threads(np.zeros(1))
+            layer = numba.threading_layer()
+        except ValueError:  # no layer can be loaded (or the JIT is off)
+            return 0
     if layer not in ("omp", "tbb"):
         return 0
     # survey_estimate counts two chunks in flight
