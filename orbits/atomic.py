@@ -292,13 +292,22 @@ def atomic_path(path):
             os.unlink(temporary)
         except FileNotFoundError:
             pass
-        if (
-            isinstance(error, OSError)
-            and not isinstance(error, InputError)
-            and error.errno in _WRITE_ERRNOS
-        ):
-            raise InputError(f"cannot write {path}: {os.strerror(error.errno)}") from None
+        failure = _write_failure(error, path)
+        if failure is not None:
+            raise failure from None
         raise
+
+
+def _write_failure(error, target):
+    """``error`` as an :class:`InputError` naming ``target`` if a write failed
+    (disk full, quota, I/O error, permission); None for any other error."""
+    if (
+        isinstance(error, OSError)
+        and not isinstance(error, InputError)
+        and error.errno in _WRITE_ERRNOS
+    ):
+        return InputError(f"cannot write {target}: {os.strerror(error.errno)}")
+    return None
 
 
 # set while file_set moves its files into place, or make_directories makes
@@ -603,12 +612,9 @@ def write_bytes_under(root, relative, data):
                 os.unlink(temporary, dir_fd=fd)
             except FileNotFoundError:
                 pass
-            if (
-                isinstance(error, OSError)
-                and not isinstance(error, InputError)
-                and error.errno in _WRITE_ERRNOS
-            ):
-                raise InputError(f"cannot write {target}: {os.strerror(error.errno)}") from None
+            failure = _write_failure(error, target)
+            if failure is not None:
+                raise failure from None
             raise
     finally:
         os.close(fd)

@@ -906,7 +906,13 @@ def theta_orbit_allowance(table, spacing):
     the tolerance.  Measured: at most 14 ulps far from the separatrix and
     0.22 of this allowance over verify(29300, 22) and verify(2930, 200).
     """
-    limit = ROUTE_ULPS * spacing
+    return _with_gap_rounding(table, ROUTE_ULPS * spacing)
+
+
+def _with_gap_rounding(table, limit):
+    """``limit``, raised where the rounding of the state allows more
+    (:func:`gap_rounding_allowance`; unchanged for a table without the
+    ``relative_gap`` and ``gap_slope`` columns)."""
     if "relative_gap" in table and "gap_slope" in table:
         limit = np.fmax(
             limit,
@@ -926,14 +932,7 @@ def _ode_limit(table, allowance):
     limit = allowance
     if "ode_period" in table:
         limit = np.fmax(limit, ode_error_budget(table["ode_period"].to_numpy()))
-    if "relative_gap" in table and "gap_slope" in table:
-        limit = np.fmax(
-            limit,
-            gap_rounding_allowance(
-                table["relative_gap"].to_numpy(), table["gap_slope"].to_numpy()
-            ),
-        )
-    return limit
+    return _with_gap_rounding(table, limit)
 
 
 def _add_routes(table, unit, moments, theta, n_angles, one_body):
