@@ -272,6 +272,20 @@ def check_output(out, name="out", fmt=None):
     return path, fmt
 
 
+def clock_text(t, times):
+    """``t`` (s) with the decimals that tell the frames ``times`` apart (at least 3).
+
+    A motion of period 1e-4 s (``--speed 1e4``) showed ``t = 0.000 s`` on
+    every frame at three decimals.
+    """
+    steps = np.diff(np.asarray(times, dtype=float))
+    step = float(steps[steps > 0].min()) if np.any(steps > 0) else 1.0
+    decimals = 3 if step >= 1e-3 else math.ceil(-math.log10(step)) + 1
+    if decimals > 12:
+        return f"{t:.3e}"
+    return f"{t:.{decimals}f}"
+
+
 def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
     """The catalog row of one closed orbit of ``body``.
 
@@ -723,7 +737,7 @@ class PoinsotAnimation:
             [contact_body[0]], [contact_body[1]], [contact_body[2]]
         )
         fraction = data.t / self.motion.period
-        self._clock.set_text(f"t = {data.t:.3f} s = {fraction:.3f} T")
+        self._clock.set_text(f"t = {clock_text(data.t, self.scene.times)} s = {fraction:.3f} T")
         return data
 
     @property
@@ -1058,8 +1072,13 @@ def animation_motion(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0, bod
                 "give the spin with a body instead"
             )
     if isinstance(source, Motion):
-        if body is not None and not _same_moments(body, source.body.normalized_moments):
-            raise InputError("body is not the Motion's body (give one of the two)")
+        if body is not None and body is not source.body:
+            # the Motion's own body is drawn (its solid, its units): another
+            # one, even of the same moments, would be ignored
+            raise InputError(
+                "body given with a Motion, whose own body is drawn; build the Motion "
+                "from that body (Motion.from_spin(body, ...)) and leave body out"
+            )
         return source, 1.0, None
     if row is not None:
         moments = np.array([row["I1"], row["I2"], row["I3"]], dtype=float)
@@ -1085,8 +1104,11 @@ def animation_motion(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0, bod
         )
         return motion, float(q), label
     body = as_body(source)
-    if row_body is not None and not _same_moments(row_body, body.normalized_moments):
-        raise InputError("body is not the body given as the source (give one of the two)")
+    if row_body is not None and row_body is not source:
+        # the source is the body drawn: another one would be ignored
+        raise InputError(
+            "body given with a body as the source, which is the one drawn; give one of the two"
+        )
     if theta is None and dtheta is None:
         raise InputError("give the spin: theta or dtheta (or pass a Motion or a catalog row)")
     return Motion.from_spin(body, theta, dtheta=dtheta, phi=phi, speed=speed), 1.0, None

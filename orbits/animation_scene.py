@@ -302,8 +302,14 @@ class FrameData:
 
 
 # the traced polhode and herpolhode: at least this many steps per period T
-# (a smooth curve at any frame count), and at most this many points in all
+# (a smooth curve at any frame count) and per turn of the herpolhode about
+# the L axis (|Delta alpha| / 2 pi turns a period: near the separatrix the
+# point creeps by the I2 axis for most of T and turns over in a small
+# fraction of it, ~1/turns; 128 steps a turn keep a chord within
+# 1 - cos(pi/128) = 3e-4 of the curve's size), and at most this many
+# points in all
 TRACE_SAMPLES_PER_PERIOD = 256
+TRACE_SAMPLES_PER_TURN = 128
 TRACE_MAX_SAMPLES = 1_000_000
 # memory of one traced point: its time, the motion's state (omega, Euler
 # angles, rotation, omega in space) and the two rho curves, with the
@@ -311,14 +317,16 @@ TRACE_MAX_SAMPLES = 1_000_000
 TRACE_BYTES_PER_POINT = 400
 
 
-def _trace_steps(asked, times, period):
+def _trace_steps(asked, times, period, turns=0.0):
     """Steps per frame interval: ``asked``, or more for TRACE_SAMPLES_PER_PERIOD
-    steps per period, within TRACE_MAX_SAMPLES points in all."""
+    steps per period and TRACE_SAMPLES_PER_TURN per turn (``turns`` a
+    period) over the longest interval, within TRACE_MAX_SAMPLES points in all."""
     intervals = len(times) - 1
-    span = float(times[-1] - times[0])
-    if not (intervals > 0 and span > 0.0 and math.isfinite(period) and period > 0.0):
+    longest = float(np.max(np.diff(times))) if intervals > 0 else 0.0
+    if not (intervals > 0 and longest > 0.0 and math.isfinite(period) and period > 0.0):
         return asked
-    needed = math.ceil(TRACE_SAMPLES_PER_PERIOD * span / (period * intervals))
+    per_period = max(TRACE_SAMPLES_PER_PERIOD, TRACE_SAMPLES_PER_TURN * turns)
+    needed = math.ceil(per_period * longest / period)
     cap = max(1, TRACE_MAX_SAMPLES // intervals)
     return max(asked, min(needed, cap))
 
@@ -336,9 +344,11 @@ class PoinsotScene:
     subsamples : int
         Steps of the traced curves per frame interval (>= 1); more where
         that is needed for :data:`TRACE_SAMPLES_PER_PERIOD` steps per period
-        T of the motion (a few frames would otherwise trace the polhode as
-        chords through the ellipsoid and the herpolhode as a polygon), up
-        to :data:`TRACE_MAX_SAMPLES` in all.
+        T of the motion and :data:`TRACE_SAMPLES_PER_TURN` per turn of the
+        herpolhode, in the longest interval (a few frames, or an orbit
+        near the separatrix, would otherwise trace the polhode as chords
+        through the ellipsoid and the herpolhode as a polygon), up to
+        :data:`TRACE_MAX_SAMPLES` in all.
 
     Raises
     ------
@@ -392,15 +402,19 @@ class PoinsotScene:
                 f"{format_bytes(points * TRACE_BYTES_PER_POINT)}, beyond half of this "
                 "machine's memory; give fewer subsamples or frames"
             )
-        subsamples = _trace_steps(asked, self.times, motion.period)
+        turns = abs(motion.total_phase()) / (2.0 * math.pi)  # of the herpolhode, a period
+        subsamples = _trace_steps(asked, self.times, motion.period, turns)
         body = motion.body
         moments = body.moments
         two_e = 2.0 * motion.energy
         self.plane_height = math.sqrt(two_e) / motion.momentum
         self.semi_axes = 1.0 / np.sqrt(moments)
-        # a dense grid for the traced curves: `subsamples` steps per frame
-        count = max(1, (len(self.times) - 1) * subsamples)
-        self.dense_times = np.linspace(self.times[0], self.times[-1], count + 1)
+        # a dense grid for the traced curves: `subsamples` even steps in each
+        # frame interval, so that frame k is point k * subsamples for any
+        # frame times (one linspace over all put uneven ones between points)
+        steps = np.arange(subsamples) / subsamples
+        start, width = self.times[:-1, None], np.diff(self.times)[:, None]
+        self.dense_times = np.append((start + width * steps).ravel(), self.times[-1])
         self.subsamples = subsamples
         state = motion.state(self.dense_times)
         self.rho_space = state.omega_space / math.sqrt(two_e)

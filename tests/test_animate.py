@@ -867,7 +867,7 @@ def test_orbit_row_and_animation_take_no_argument_they_would_ignore():
         for source in (motion, row):
             with pytest.raises(InputError, match=f"{next(iter(extra))} given with a"):
                 animate.animation_motion(source, **extra)
-    with pytest.raises(InputError, match="not the Motion's body"):
+    with pytest.raises(InputError, match="body given with a Motion, whose own body is drawn"):
         animate.animation_motion(motion, body=other)
     assert animate.animation_motion(motion, body=FIG6, phi=0.0, speed=1)[0] is motion
 
@@ -905,5 +905,52 @@ def test_scene_of_many_frames_and_rows_with_numeric_names(tmp_path):
         row = pd.read_csv(out, comment="#").iloc[0]
         motion, _, title = animate.animation_motion(row)
         assert motion.body.name == (None if name == "NA" else name) and title
-    with pytest.raises(InputError, match="not the body given as the source"):
+    with pytest.raises(InputError, match="body given with a body as the source"):
         animate.animation_motion(FIG6, 0.5, body=Body((1.0, 2.0, 3.0)))
+
+
+def test_the_traced_curves_stay_on_the_ellipsoid_next_to_the_separatrix():
+    """At dtheta = 1e-300 the polhode was traced as chords through the
+    ellipsoid (x.I.x down to 0.72 at chord midpoints, 0.50 with 5 frames):
+    256 steps a period left ~1 for the turn-over past the I2 axis."""
+    from orbits.animation_scene import PoinsotScene
+
+    for dtheta, frames in ((1e-300, 120), (1e-300, 5), (-1e-100, 120)):
+        motion = Motion.from_spin(FIG6, dtheta=dtheta)
+        scene = PoinsotScene(motion, np.linspace(0.0, motion.period, frames))
+        middle = 0.5 * (scene.rho_body[1:] + scene.rho_body[:-1])
+        on_ellipsoid = np.einsum("ij,j,ij->i", middle, motion.body.moments, middle)
+        assert on_ellipsoid.min() > 0.999  # the curve itself: 1
+        space = 0.5 * (scene.rho_space[1:] + scene.rho_space[:-1])
+        radius = np.hypot(scene.rho_space[:, 0], scene.rho_space[:, 1]).max()
+        # a chord's midpoint within 1e-3 of the radius inside the curve's ring
+        inner = np.hypot(scene.rho_space[:, 0], scene.rho_space[:, 1]).min()
+        assert np.hypot(space[:, 0], space[:, 1]).min() > inner - 1e-3 * radius
+
+
+def test_uneven_frame_times_trace_to_each_frame_only():
+    """With frame times 0, 0.1 T, T the dense grid was one linspace: frame 1
+    traced the herpolhode on to 0.496 T, then jumped back to its contact point."""
+    from orbits.animation_scene import PoinsotScene
+
+    motion = Motion.from_spin(FIG6, 0.5)
+    times = np.array([0.0, 0.1, 1.0]) * motion.period
+    scene = PoinsotScene(motion, times)
+    assert np.array_equal(scene.dense_times[:: scene.subsamples], times)
+    data = scene.frame(1)
+    traced = scene.dense_times[: len(data.herpolhode)]
+    assert traced[-1] == times[1]
+    expected = motion.omega_space(traced) / np.sqrt(2.0 * motion.energy)
+    assert np.allclose(data.herpolhode, expected, rtol=0.0, atol=1e-12)
+
+
+def test_the_clock_tells_fast_frames_apart():
+    """A period of 7.7e-4 s showed 0.000, 0.000, 0.001, 0.001 s."""
+    anim = animate.poinsot_animation(FIG6, 0.5, speed=1e4, frames=4)
+    shown = []
+    for k in range(4):
+        anim.frame(k)
+        (clock,) = [t.get_text() for t in anim.figure.texts if t.get_text().startswith("t = ")]
+        shown.append(clock.split(" s =")[0])
+    assert len(set(shown)) == 4, shown
+    assert animate.clock_text(1.5, np.linspace(0.0, 3.0, 10)) == "1.500"
