@@ -260,3 +260,16 @@ def below_normal_message(text):
         f"{text} is below the smallest normal double (2.2e-308) and would be "
         "stored with reduced precision; give the moments in larger units"
     )
+
+
+def caller_stacklevel():
+    """The ``stacklevel`` that names the first frame outside ``orbits``.
+
+    For a warning raised by the function that calls this: it points at the
+    user's line, however deep in the package the warning arises.
+    """
+    package = os.path.dirname(os.path.abspath(__file__)) + os.sep
+    frame, level = sys._getframe(1), 1  # the function that warns
+    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(package):
+        frame, level = frame.f_back, level + 1
+    return level

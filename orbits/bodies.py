@@ -18,6 +18,7 @@ import numpy as np
 
 from ._args import (
     broadcast,
+    caller_stacklevel,
     finite_array,
     flat_broadcast,
     integer,
@@ -199,21 +200,9 @@ def _snap_flat(unit, given):
             "phases are the thin rod's, but energies and momenta are those of the "
             "moved body)",
             InertialDefectWarning,
-            stacklevel=_outside_package(),
+            stacklevel=caller_stacklevel(),
         )
     return out
-
-
-def _outside_package():
-    """The ``stacklevel`` of the first frame outside ``orbits``, for a warning raised here."""
-    import os
-    import sys
-
-    package = os.path.dirname(os.path.abspath(__file__)) + os.sep
-    frame, level = sys._getframe(1), 1  # the function that warns
-    while frame is not None and os.path.abspath(frame.f_code.co_filename).startswith(package):
-        frame, level = frame.f_back, level + 1
-    return level
 
 
 # _snap_flat warns when it changes I1 by more than this fraction of itself

@@ -14,7 +14,7 @@ import warnings
 
 import numpy as np
 
-from ._args import positive_finite
+from ._args import caller_stacklevel, positive_finite
 from .bodies import unit_moments
 from .cells import exact_number
 from .errors import InputError
@@ -58,15 +58,17 @@ def _solve(moments, targets, what, reachable=None):
         unreached += int(info[slot])
     offsets = np.sort(np.concatenate(found)) if found else np.empty(0)
     if offsets.size == 0:
-        raise _too_near(moments, what) if unreached else _no_spin(moments, what, reachable)
+        if unreached:
+            raise _too_near(moments, what, reachable)
+        raise _no_spin(moments, what, reachable)
     if unreached:
         warnings.warn(
-            f"{plural(unreached, 'spin')} with this total phase "
+            f"{plural(unreached, 'spin')} with {what} "
             f"{'lies' if unreached == 1 else 'lie'} closer than "
             "|dtheta| = 2.2e-308 to the separatrix and cannot be stored in "
             "double precision; they are left out",
             UnresolvedOrbitsWarning,
-            stacklevel=3,
+            stacklevel=caller_stacklevel(),
         )
     return offsets
 
@@ -106,15 +108,22 @@ def _no_spin(moments, what, reachable=None):
     )
 
 
-def _too_near(moments, what):
+def _too_near(moments, what, reachable=None):
+    """InputError: every spin with ``what`` lies nearer the separatrix than a
+    double holds; the largest value each branch reaches, in the request's terms."""
     from .phases import total_phase
 
     sam, lam = total_phase(moments, dtheta=[-_SMALLEST_OFFSET, _SMALLEST_OFFSET])
+    if reachable is _ratio_at_least:
+        largest = (
+            f"P_psi/P_phi is {sam / TWO_PI + 1.0:.12g} on SAM and {lam / TWO_PI - 1.0:.12g} on LAM"
+        )
+    else:
+        largest = f"the total phase is {sam:.6f} rad on SAM and {lam:.6f} rad on LAM"
     return InputError(
         f"every spin of this body with {what} lies closer than |dtheta| = "
         f"{_SMALLEST_OFFSET:.2g} rad to the separatrix, nearer than a double holds "
-        f"to full precision (the smallest normal double): the largest total phase "
-        f"at that offset is {sam:.6f} rad on SAM and {lam:.6f} rad on LAM"
+        f"to full precision (the smallest normal double): at that offset {largest}"
     )
 
 
@@ -268,6 +277,12 @@ def spins_with_periods(body_or_moments, p_psi, p_phi):
         ``phi = 0``), ``w1, w2, w3`` (the starting spin in the principal
         axes, radians per time unit), ``energy``, ``momentum`` (in the
         moments' unit and that time unit), ``D`` and ``total_phase``.
+        Every column but ``w1, w2, w3`` and ``theta`` is of the orbit of
+        ``dtheta``; those are doubles, which next to the separatrix round
+        the orbit (a spin vector resolves ``dtheta`` only to ~1e-16): where
+        started from them the periods would be more than
+        :data:`SPIN_VECTOR_RTOL` off, an
+        :class:`~orbits.UnresolvedOrbitsWarning` says so.
 
     Raises
     ------
@@ -290,7 +305,7 @@ def spins_with_periods(body_or_moments, p_psi, p_phi):
             "periods in one time unit (their ratio is what fixes the orbit)"
         )
     table = spins_with_period_ratio(body, ratio)
-    rows = []
+    rows, loose = [], []
     i3 = float(body.moments[2])
     for dtheta, theta in zip(table["dtheta"].to_numpy(), table["theta"].to_numpy()):
         unit = Motion.from_spin(body, dtheta=float(dtheta))
@@ -306,6 +321,9 @@ def spins_with_periods(body_or_moments, p_psi, p_phi):
             )
         motion = Motion.from_spin(body, dtheta=float(dtheta), speed=speed)
         periods = motion.tumbling_periods()
+        rounded = _rounded_spin(body, motion, periods)
+        if rounded is not None:
+            loose.append(rounded)
         rows.append(
             {
                 "branch": motion.branch,
@@ -325,4 +343,39 @@ def spins_with_periods(body_or_moments, p_psi, p_phi):
                 "total_phase": motion.total_phase(),
             }
         )
+    if loose:
+        from .search import UnresolvedOrbitsWarning
+
+        branch, off = max(loose, key=lambda item: item[1])
+        warnings.warn(
+            f"the spin vector w1, w2, w3 (and theta) of {plural(len(loose), 'row')} "
+            f"round the orbit (dtheta so near the separatrix that a double spin does "
+            f"not hold it): started from w, the periods are up to {off:.2g} "
+            f"(relative) off ({branch}); the periods, E_over_E0 and dtheta are the "
+            "orbit's: start from dtheta (Motion.from_spin(body, dtheta=..., speed=...))",
+            UnresolvedOrbitsWarning,
+            stacklevel=caller_stacklevel(),
+        )
     return pd.DataFrame(rows)
+
+
+# the spin vector of spins_with_periods must give its periods to this
+# (relative) accuracy, or a warning says it does not hold the orbit
+SPIN_VECTOR_RTOL = 1e-9
+
+
+def _rounded_spin(body, motion, periods):
+    """``(branch, relative error)`` when the double ``motion.omega0``, started
+    from as given, has periods more than SPIN_VECTOR_RTOL off; else None."""
+    from .errors import OrbitsError
+    from .motion import Motion
+
+    try:
+        again = Motion(body, motion.omega0).tumbling_periods()
+        off = max(
+            abs(again.rotation / periods.rotation - 1.0),
+            abs(again.precession / periods.precession - 1.0),
+        )
+    except OrbitsError:  # the rounded vector lies on the separatrix itself
+        off = math.inf
+    return (motion.branch, off) if not off <= SPIN_VECTOR_RTOL else None

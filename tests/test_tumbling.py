@@ -230,3 +230,36 @@ def test_periods_beyond_a_double_name_the_period_not_a_speed(periods):
 def test_a_period_ratio_beyond_a_double_names_the_periods():
     with pytest.raises(orbits.InputError, match=r"P_psi / P_phi = 1e\+308 / 1e-308"):
         orbits.spins_with_periods(orbits.Body.preset("fig6"), 1e308, 1e-308)
+
+
+def test_a_spin_vector_that_rounds_the_orbit_is_flagged():
+    """spins_with_periods(fig6, 1, 0.01) printed w = (613.22, 0, 382.91) rad/s,
+    whose own periods are 0.222 s and 0.00976 s: its dtheta = -1.85e-79 is
+    beyond what a double spin holds, and nothing said so."""
+    import warnings
+
+    apophis = (0.61, 0.965, 1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the published periods: w holds the orbit
+        table = orbits.spins_with_periods(apophis, 263.0, 27.38)
+    for _, row in table.iterrows():
+        again = orbits.Motion(apophis, row[["w1", "w2", "w3"]].to_numpy(float))
+        assert again.tumbling_periods().rotation == pytest.approx(263.0, rel=1e-9)
+    with pytest.warns(orbits.UnresolvedOrbitsWarning, match="round the orbit") as caught:
+        table = orbits.spins_with_periods(orbits.Body.preset("fig6"), 1.0, 0.01)
+    assert all(w.filename == __file__ for w in caught)
+    # the periods are the orbit's (of dtheta); w started from is far off
+    assert table["P_psi"].to_numpy() == pytest.approx(1.0, rel=1e-12)
+    row = table.iloc[0]
+    again = orbits.Motion(orbits.Body.preset("fig6"), row[["w1", "w2", "w3"]].to_numpy(float))
+    assert abs(again.tumbling_periods().rotation - 1.0) > 0.1
+
+
+def test_too_near_the_separatrix_speaks_in_the_requests_terms():
+    """A period ratio beyond reach was answered in total-phase radians
+    (2423.57 on SAM, 2429.85 on LAM: the order reversed in ratio terms)."""
+    with pytest.raises(orbits.InputError, match=r"P_psi/P_phi is 386\.72\d+ on SAM and 385\.72"):
+        orbits.spins_with_period_ratio(orbits.Body.preset("fig6"), 387.105)
+    with pytest.warns(orbits.UnresolvedOrbitsWarning, match="with period ratio") as caught:
+        orbits.spins_with_periods(orbits.Body.preset("fig6"), 386.0, 1.0)
+    assert all(w.filename == __file__ for w in caught)
