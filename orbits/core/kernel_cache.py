@@ -155,7 +155,7 @@ def _process_directory():
         import shutil
         import tempfile
 
-        path = tempfile.mkdtemp(prefix="orbits-numba-")
+        path = tempfile.mkdtemp(prefix="orbits-numba-run-")
         atexit.register(shutil.rmtree, path, True)
         _PROCESS_DIRECTORY.append(path)
     return _PROCESS_DIRECTORY[0]
