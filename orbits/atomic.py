@@ -94,7 +94,7 @@ def ensure_writable(path, stdout_hint=True):
     except OSError as error:  # a name too long for the file system (ENAMETOOLONG)
         raise InputError(f"cannot write {path}: {error.strerror or error}") from None
     _refuse_special(path, stdout_hint)
-    refuse_link(path)  # found now, not after the work (atomic_path refuses it too)
+    refuse_link(path)  # found now, not after the work
     probe_directory(directory, path)
 
 
@@ -265,8 +265,7 @@ def atomic_path(path):
         is not a regular file, or the write failed (the message names the
         path and the reason, e.g. no space left on device).
     """
-    ensure_writable(path)
-    refuse_link(path)
+    ensure_writable(path)  # a link at path refused with the other checks
     path = Path(path)
     directory = path.parent if str(path.parent) else Path(".")
     remove_stale_temporaries(directory, path.name)
@@ -477,13 +476,12 @@ def remove_directories(made):
 def check_targets(directory, names):
     """Raise :class:`InputError` unless every file ``names`` in ``directory`` can be written.
 
-    :func:`ensure_writable` and no symbolic link, for each; what
-    :func:`file_set` checks before anything is made.
+    :func:`ensure_writable` (no symbolic link among its checks), for each;
+    what :func:`file_set` checks before anything is made.
     """
     for name in names:
         # a file of a set has no standard-output form: no '--out -' hint
         ensure_writable(Path(directory) / name, stdout_hint=False)
-        refuse_link(Path(directory) / name)
 
 
 def _remove_stale_sets(directory):

@@ -59,7 +59,7 @@ from .core import grid as _grid_kernels
 from .core import motion as _kernels
 from .core import phase as _phase
 from .errors import AngleError, InputError, SeparatrixError
-from .phases import total_phase
+from .phases import TOO_NEAR_SEPARATRIX, total_phase
 from .threads import size_aware
 
 MotionState = namedtuple("MotionState", ["t", "omega", "euler", "rotation", "omega_space"])
@@ -207,8 +207,8 @@ class Motion:
         branch = _kernels.orbit_setup(i1, i2, i3, *unit_omega, *_gap, orbit)
         if branch == _phase.BRANCH_SEPARATRIX:
             raise SeparatrixError(
-                "omega0 lies on the separatrix M^2 = 2 E I2 (infinite period), or so "
-                "near it (1 - k^2 below 2.4e-623) that a double cannot hold its orbit"
+                "omega0 lies on the separatrix M^2 = 2 E I2 (infinite period), "
+                + TOO_NEAR_SEPARATRIX
             )
         self.body = body
         self.omega0 = omega0.copy()  # not the caller's array (an edit there changed it)

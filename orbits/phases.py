@@ -60,6 +60,12 @@ from .threads import size_aware
 HALF_PI = 0.5 * np.pi
 
 
+# how a spin (or a Motion's omega0) on the separatrix as a double holds it is
+# refused, after "on the separatrix M^2 = 2 E I2 (...)": k_c below
+# orbits.core.phase.KC_FLOOR (4.9e-312), so 1 - k^2 below its square
+TOO_NEAR_SEPARATRIX = "or so near it (1 - k^2 below 2.4e-623) that a double cannot hold its orbit"
+
+
 class PhaseLimits(namedtuple("PhaseLimits", ["theta_zero", "theta_half_pi"])):
     """Limits of the total phase at the two ends of 0 < theta < pi/2 (phi = 0).
 
@@ -689,8 +695,7 @@ def spin_phases(body_or_moments, omega):
         k = int(np.flatnonzero(branch == 0)[0])
         raise SeparatrixError(
             f"omega = {numbers_label('', (w1[k], w2[k], w3[k]))} lies on the "
-            "separatrix M^2 = 2 E I2 (infinite period and phase), or so near it "
-            "(1 - k^2 below 2.4e-623) that a double cannot hold its orbit"
+            f"separatrix M^2 = 2 E I2 (infinite period and phase), {TOO_NEAR_SEPARATRIX}"
         )
     # E, M and D for the moments and the spin *as given* (as Motion): the
     # kernel saw unit moments (times 2**-exponent) and a unit-scale spin

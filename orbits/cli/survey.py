@@ -87,9 +87,7 @@ def _cmd_survey(args):
             "chunk": args.chunk,
             "columns": options["columns"],
         }
-        from ..atomic import refuse_link
-
-        refuse_link(args.out)
+        # (--out as a link was refused above)
         ledger = Ledger(args.out, known, {"grid": args.resolution}, ())
         ledger.refuse_foreign_directory()
         ledger.refuse_other_parameters(partial=True)
