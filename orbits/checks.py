@@ -412,9 +412,9 @@ def closure_errors(moments, dtheta, periods, rtol=1e-13):
     ----------
     moments : array_like, shape (n, 3) or (3,)
         Principal moments (any order, any scale).
-    dtheta : array_like, shape (n,)
+    dtheta : float or array_like, shape (n,)
         Offsets from the critical angle (phi = 0), finite and nonzero.
-    periods : array_like of int, shape (n,)
+    periods : int or array_like of int, shape (n,)
         After how many periods each orbit should close (the catalog's q),
         1 to :data:`MAX_CLOSURE_PERIODS`.
     rtol : float
@@ -424,7 +424,9 @@ def closure_errors(moments, dtheta, periods, rtol=1e-13):
 
     Returns
     -------
-    ndarray
+    float or ndarray, shape (n,)
+        A float for one orbit given as scalars (moments of shape (3,),
+        scalar ``dtheta`` and ``periods``), else one entry per orbit.
         The angle (radians) by which the orientation after ``q`` periods
         differs from the start.  For ``|dtheta| >= 1e-3``: Euler's equations
         with quaternion kinematics integrated (compiled DOP853) over the q
@@ -457,7 +459,7 @@ def closure_errors(moments, dtheta, periods, rtol=1e-13):
         ``periods`` not integers in range, ``rtol`` out of range, shapes
         that do not match.
     """
-    moments, dtheta, periods, rtol = _closure_arguments(moments, dtheta, periods, rtol)
+    moments, dtheta, periods, rtol, scalar = _closure_arguments(moments, dtheta, periods, rtol)
     out = np.full(dtheta.shape, np.nan)  # an unwritten entry reads as NaN (refused)
     with threads_for(out.size, serial_below=2):
         _checks.closure_batch(
@@ -474,12 +476,18 @@ def closure_errors(moments, dtheta, periods, rtol=1e-13):
             f"dtheta = {float(dtheta[k])!r} puts theta outside [0, pi/2] for the "
             f"body {moments[k].tolist()} (unit scale)"
         )
-    return out
+    return float(out[0]) if scalar else out
 
 
 def _closure_arguments(moments, dtheta, periods, rtol):
-    """The checked arguments of :func:`closure_errors`, broadcast to one row per orbit."""
-    dtheta = np.atleast_1d(real_array("dtheta", dtheta, AngleError))
+    """The checked arguments of :func:`closure_errors`, broadcast to one row per orbit.
+
+    The fifth value says whether the call was for one orbit given as
+    scalars (moments (3,), scalar dtheta and periods): its answer is a float.
+    """
+    dtheta = real_array("dtheta", dtheta, AngleError)
+    scalar = dtheta.ndim == 0
+    dtheta = np.atleast_1d(dtheta)
     if not np.all(np.isfinite(dtheta)) or np.any(dtheta == 0.0):
         raise AngleError("dtheta must be finite and nonzero (0 is the separatrix)")
     import warnings
@@ -493,6 +501,7 @@ def _closure_arguments(moments, dtheta, periods, rtol):
         warnings.simplefilter("ignore", InertialDefectWarning)
         moments, _ = unit_moments(moments)
     periods = real_array("periods", periods)
+    scalar = scalar and periods.ndim == 0 and moments.ndim == 1
     if (
         not np.all(np.isfinite(periods))
         or np.any(periods != np.round(periods))
@@ -515,7 +524,7 @@ def _closure_arguments(moments, dtheta, periods, rtol):
     dtheta = np.broadcast_to(dtheta, shape)
     moments = np.broadcast_to(moments, shape + (3,))
     periods = np.broadcast_to(periods.astype(np.int64), shape)
-    return moments, dtheta, periods, rtol
+    return moments, dtheta, periods, rtol, scalar
 
 
 # closure_errors' quarter path (|dtheta| < 1e-3) is accurate to about
@@ -536,10 +545,11 @@ def closure_error_budget(moments, dtheta, periods, rtol=1e-13):
     :func:`closure_errors` (moments broadcast against ``dtheta``), and
     refused as it refuses them.
     """
-    moments, dtheta, periods, rtol = _closure_arguments(moments, dtheta, periods, rtol)
+    moments, dtheta, periods, rtol, scalar = _closure_arguments(moments, dtheta, periods, rtol)
     ratio = moments[..., 2] / moments[..., 0]
     quarter = np.abs(dtheta) < _checks.FULL_INTEGRATION_FROM
-    return np.where(quarter, QUARTER_ERROR_FACTOR * rtol * ratio * periods, 0.0)
+    budget = np.where(quarter, QUARTER_ERROR_FACTOR * rtol * ratio * periods, 0.0)
+    return float(budget[0]) if scalar else budget
 
 
 # the integration and quadrature tolerances of verify's checks (the ODE's

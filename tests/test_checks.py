@@ -519,6 +519,21 @@ def test_closure_errors_refuses_an_rtol_it_cannot_meet(rtol, monkeypatch):
         checks.closure_errors(FIG6.moments, [1e-4, 0.01], [1, 1], rtol=rtol)
 
 
+def test_closure_errors_of_one_orbit_given_as_scalars_is_a_float():
+    """A scalar dtheta and q for one body gave an array of shape (1,), as
+    its budget did; an array argument keeps one entry per orbit."""
+    one = checks.closure_errors(FIG6.moments, -0.05, 1)
+    many = checks.closure_errors(FIG6.moments, [-0.05, 1e-4], [1, 1])
+    assert isinstance(one, float)
+    assert one == many[0]
+    assert checks.closure_errors(FIG6.moments, [-0.05], 1).shape == (1,)
+    assert checks.closure_errors(FIG6.moments, -0.05, [1]).shape == (1,)
+    assert checks.closure_errors([FIG6.moments], -0.05, 1).shape == (1,)
+    budget = checks.closure_error_budget(FIG6.moments, 1e-4, 1)
+    assert isinstance(budget, float)
+    assert budget == checks.closure_error_budget(FIG6.moments, [-0.05, 1e-4], [1, 1])[1] > 0.0
+
+
 @pytest.mark.parametrize("periods", [0, -1, 1.5, float("nan"), float("inf"), True, "1", 10**6])
 def test_rotation_by_integration_refuses_bad_periods(periods, monkeypatch):
     """nan and inf were a ValueError and an OverflowError, True ran 1 period."""
