@@ -74,6 +74,7 @@ _LAZY = {
     "spins_with_total_phase": "tumbling",
     "set_num_threads": "threads",
     "PoinsotAnimation": "animate",
+    "AliasingWarning": "animate",
     "flip_motion": "animate",
     "orbit_row": "animate",
     "poinsot_animation": "animate",
@@ -113,6 +114,7 @@ def __dir__():
 
 
 __all__ = [
+    "AliasingWarning",
     "AngleError",
     "ArgumentTypeError",
     "AxesWarning",

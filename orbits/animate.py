@@ -49,7 +49,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._args import flag, integer, path_argument, real_scalar
+from ._args import caller_stacklevel, flag, integer, path_argument, real_scalar
 from .animation_scene import (
     FrameData,
     PoinsotScene,
@@ -85,6 +85,23 @@ COLOURS = {
     "polhode": "tab:orange",
     "axes": ("tab:red", "tab:green", "tab:blue"),
 }
+
+
+# the most the body may turn between frames before a warning: the drawn
+# solids (ellipsoid, box, cylinder) look alike after a half turn about an
+# axis, so past a quarter turn a frame can read as a turn the other way
+ALIASING_TURN = 0.5 * math.pi
+# the turn between frames the warning's suggested frame count keeps to
+SMOOTH_TURN = 0.25 * math.pi
+
+
+class AliasingWarning(UserWarning):
+    """The body turns more than a quarter turn (:data:`ALIASING_TURN`) between frames.
+
+    The drawn solid can then seem to turn slowly, stand still or turn
+    backwards (the wagon-wheel effect); the traced curves stay right.  The
+    message gives a frame count that keeps the turn under 45 degrees.
+    """
 
 
 # ----------------------------------------------------------------- inputs
@@ -549,6 +566,14 @@ class PoinsotAnimation:
         (:func:`orbits.animation_scene.frame_times`); ``fps`` not an
         integer from 1 to 100; ``dpi`` out of :func:`check_dpi`'s range or
         too large for the machine; a bad ``solid``.
+
+
+    Warns
+    -----
+    AliasingWarning
+        The body turns more than a quarter turn between two frames
+        (:data:`ALIASING_TURN`); the message gives a frame count that keeps
+        each turn under 45 degrees.
     """
 
     def __init__(
@@ -576,6 +601,7 @@ class PoinsotAnimation:
         check_animation(len(times), dpi, size, keep_frames=False)
         self.scene = PoinsotScene(motion, times, solid=solid, subsamples=subsamples)
         self.times = self.scene.times
+        _warn_aliasing(self.scene.frame_turns, self.times)
         self.plane_height = self.scene.plane_height
         self.solid_kind = self.scene.solid_kind
         self.solid_scale = self.scene.solid_scale
@@ -691,10 +717,14 @@ class PoinsotAnimation:
         self.artists = artists
         body = self.motion.body
         name = literal_text(body.name or "body")
-        heading = title or (
-            f"{name}: Poinsot construction, {self.motion.branch}, "
-            f"T = {self.motion.period:.4g} s at "
-            f"|omega0| = {np.linalg.norm(self.motion.omega0):.4g} rad/s"
+        heading = (
+            title
+            if title is not None
+            else (
+                f"{name}: Poinsot construction, {self.motion.branch}, "
+                f"T = {self.motion.period:.4g} s at "
+                f"|omega0| = {np.linalg.norm(self.motion.omega0):.4g} rad/s"
+            )
         )
         self._title = figure.suptitle(heading, fontsize="medium", y=0.985)
         figure.text(
@@ -897,6 +927,24 @@ class PoinsotAnimation:
         writer.close()
 
 
+def _warn_aliasing(turns, times):
+    """An :class:`AliasingWarning` where the body turns past :data:`ALIASING_TURN` a frame."""
+    largest = float(turns.max())
+    if not largest > ALIASING_TURN:
+        return
+    # evenly spaced frames turn at most `largest` each: scale their number
+    # (5 % more: the fastest interval moves as the frames do)
+    enough = 1 + math.ceil(1.05 * len(turns) * largest / SMOOTH_TURN)
+    warnings.warn(
+        f"the body turns up to {math.degrees(largest):.0f} degrees between frames, more "
+        "than a quarter turn: the solid can seem to turn slowly or backwards (aliasing); "
+        f"about {enough} frames over these {times[-1] - times[0]:.4g} s keep each turn "
+        "under 45 degrees (more frames, or a higher fps in real time)",
+        AliasingWarning,
+        stacklevel=caller_stacklevel(),
+    )
+
+
 def _cube(ax, half, zrange, zoom=1.45):
     ax.set_xlim(-half, half)
     ax.set_ylim(-half, half)
@@ -967,6 +1015,8 @@ def poinsot_animation(
     solid : "auto", "ellipsoid" or tuple
         The solid drawn; see :func:`solid_faces`.
     title : str, optional
+        The heading above the two panels.  Default (None): the body, branch
+        and period, or a catalog row's orbit and closure; ``""``: none.
     dpi : float
         Pixel density of the frames (figure 9 x 4 in; the default 120 gives
         1080 x 480 px): from 7 to 7281 (:func:`check_dpi`: FreeType
@@ -998,6 +1048,14 @@ def poinsot_animation(
         a GIF holds every frame).
     AngleError, SeparatrixError
         Bad spin, as :meth:`Motion.from_spin`.
+
+    Warns
+    -----
+    AliasingWarning
+        The body turns more than a quarter turn between two frames (a
+        catalog row of large ``n`` over the default 120 frames: about 105
+        degrees at n = 30); the message says how many frames keep each turn
+        under 45 degrees.
 
     Examples
     --------
@@ -1032,7 +1090,13 @@ def poinsot_animation(
     check_animation(frames, dpi, keep_frames=fmt == "gif")
     times = np.linspace(0.0, duration, frames)
     animation = PoinsotAnimation(
-        motion, times, fps=fps, solid=solid, title=title or label, dpi=dpi, pyplot=pyplot
+        motion,
+        times,
+        fps=fps,
+        solid=solid,
+        title=label if title is None else title,
+        dpi=dpi,
+        pyplot=pyplot,
     )
     if out is not None:
         animation.save(path, fmt=fmt)

@@ -12,6 +12,7 @@ artists and files.
 """
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,7 +36,9 @@ def solid_faces(body, solid="auto"):
         ``("t-handle", l1, l2, w)``, ``("box", a, b, c)`` (full side
         lengths along the caller's x, y, z), ``("cylinder", a, length, b)``
         (along z, section semi-axes a along x and b along y) or ``("mesh",
-        vertices, faces)`` (caller's axes, centred at the centre of mass).  ``"auto"``
+        vertices, faces)`` (caller's axes, centred at the centre of mass),
+        or the same as a mapping with every part named (``{"kind": "box",
+        "a": 0.15, "b": 0.07, "c": 0.008}``; keys in :data:`SOLID_PARTS`).  ``"auto"``
         uses ``body.shape`` when the body carries one (same tuples: set by
         :meth:`Body.t_handle`, :meth:`Body.box`, :meth:`Body.cylinder` and
         :meth:`Body.from_mesh`), the
@@ -64,8 +67,8 @@ def solid_faces(body, solid="auto"):
             spec = ("t-handle", 8.0, 4.0, 1.0)
         if spec is None:
             spec = "ellipsoid"
-    if isinstance(spec, dict):
-        spec = (spec.get("kind"),) + tuple(v for k, v in spec.items() if k != "kind")
+    if isinstance(spec, Mapping):
+        spec = _from_mapping(spec)
     if isinstance(spec, str):
         spec = (spec,)
     kind = spec[0] if isinstance(spec, (tuple, list)) and spec else None
@@ -96,6 +99,39 @@ def solid_faces(body, solid="auto"):
         )
     # caller's axes -> sorted principal axes: v_principal = frame @ v
     return kind, [face @ frame.T for face in faces]
+
+
+# the named parts of each solid, in the order of its tuple
+SOLID_PARTS = {
+    "ellipsoid": (),
+    "t-handle": ("l1", "l2", "w"),
+    "box": ("a", "b", "c"),
+    "cylinder": ("a", "length", "b"),
+    "mesh": ("vertices", "faces"),
+}
+
+
+def _from_mapping(spec):
+    """The tuple of a solid given as a mapping, ``{"kind": "box", "a": .., "b": .., "c": ..}``.
+
+    Every part is named: a missing or unknown key is refused (values taken
+    in the mapping's order would put a box's ``c`` where its ``a`` goes).
+    """
+    kind = spec.get("kind")
+    parts = SOLID_PARTS.get(kind) if isinstance(kind, str) else None
+    if parts is None:
+        raise InputError(
+            f"unknown solid {spec!r}: a mapping needs 'kind', one of {', '.join(SOLID_PARTS)}"
+        )
+    given, wanted = set(spec) - {"kind"}, set(parts)
+    if given != wanted:
+        missing = ", ".join(sorted(map(str, wanted - given))) or "none"
+        unknown = ", ".join(sorted(map(str, given - wanted))) or "none"
+        raise InputError(
+            f"solid {kind!r} given as a mapping takes the keys "
+            f"{', '.join(('kind', *parts))} (missing: {missing}; unknown: {unknown})"
+        )
+    return (kind, *(spec[name] for name in parts))
 
 
 def _lengths(spec, names):
@@ -374,6 +410,10 @@ class PoinsotScene:
         frame) and the polhode (body frame).
     rotations : ndarray (frames, 3, 3)
         Body -> space at each frame.
+    frame_turns : ndarray (frames - 1,)
+        The angle (radians) the body turns through between consecutive
+        frames, the integral of ``|omega|`` over each interval (trapezoid
+        rule on :attr:`dense_times`).
     frame_rho_space, frame_rho_body : ndarray (frames, 3)
         The contact point at each frame, space and body frame.
     wire : list of ndarray (samples, 3)
@@ -419,6 +459,9 @@ class PoinsotScene:
         state = motion.state(self.dense_times)
         self.rho_space = state.omega_space / math.sqrt(two_e)
         self.rho_body = state.omega / math.sqrt(two_e)
+        speed = np.linalg.norm(state.omega, axis=1)
+        steps = 0.5 * (speed[:-1] + speed[1:]) * np.diff(self.dense_times)
+        self.frame_turns = steps.reshape(len(self.times) - 1, subsamples).sum(axis=1)
         frame_state = motion.state(self.times)
         self.rotations = frame_state.rotation
         self.frame_rho_space = frame_state.omega_space / math.sqrt(two_e)

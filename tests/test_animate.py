@@ -7,6 +7,7 @@ matplotlib.use("Agg")
 import math  # noqa: E402
 import os  # noqa: E402
 import sys  # noqa: E402
+import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -954,3 +955,67 @@ def test_the_clock_tells_fast_frames_apart():
         shown.append(clock.split(" s =")[0])
     assert len(set(shown)) == 4, shown
     assert animate.clock_text(1.5, np.linspace(0.0, 3.0, 10)) == "1.500"
+
+
+def test_a_solid_given_as_a_mapping_names_its_parts():
+    """A dict solid took its values in the mapping's order and ignored the
+    keys: {"kind": "box", "c": .., "a": .., "b": ..} drew a box of sides c, a, b."""
+    phone = Body.box(0.071, 0.147, 0.0078)
+    kind, faces = animate.solid_faces(phone, {"kind": "box", "c": 0.0078, "a": 0.071, "b": 0.147})
+    _, expected = animate.solid_faces(phone, ("box", 0.071, 0.147, 0.0078))
+    assert kind == "box" and len(faces) == len(expected)
+    for got, want in zip(faces, expected):
+        np.testing.assert_array_equal(got, want)
+    for bad, says in [
+        ({"kind": "box", "a": 1.0, "b": 2.0}, "missing: c"),
+        ({"kind": "box", "a": 1.0, "b": 2.0, "c": 3.0, "d": 4.0}, "unknown: d"),
+        ({"kind": "ellipsoid", "a": 1.0}, "unknown: a"),
+        ({"kind": "sphere"}, "needs 'kind'"),
+        ({"a": 1.0}, "needs 'kind'"),
+    ]:
+        with pytest.raises(InputError, match=says):
+            animate.solid_faces(phone, bad)
+
+
+def test_an_empty_title_draws_no_heading():
+    """title="" was replaced by the default heading; None keeps the default."""
+    blank = animate.poinsot_animation(FIG6, 0.5, frames=3, title="", dpi=40)
+    default = animate.poinsot_animation(FIG6, 0.5, frames=3, dpi=40)
+    assert blank.figure._suptitle.get_text() == ""
+    assert default.figure._suptitle.get_text().startswith("fig6: Poinsot construction")
+    row = animate.orbit_row(FIG6, n=3, branch="SAM")
+    assert (
+        animate.poinsot_animation(row, frames=3, title="", dpi=40).figure._suptitle.get_text()
+        == ""
+    )
+
+
+def test_frames_too_far_apart_warn_of_aliasing():
+    """A catalog row of n = 30 over the default 120 frames turned the body
+    105 degrees a frame, with no word; the warning's frame count keeps
+    each turn under 45 degrees, and the turns are the integral of |omega|."""
+    from scipy.integrate import quad
+
+    row = animate.orbit_row(FIG6, n=30, branch="SAM")
+    with pytest.warns(animate.AliasingWarning, match=r"up to 105 degrees") as caught:
+        drawn = animate.poinsot_animation(row, dpi=40)
+    assert len(drawn.times) == 120
+    enough = int(str(caught[0].message).split("about ")[1].split(" frames")[0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", animate.AliasingWarning)
+        smooth = animate.poinsot_animation(row, frames=enough, dpi=40)
+    assert smooth.scene.frame_turns.max() <= animate.SMOOTH_TURN
+    # each interval's turn against quadrature of |omega| (the trapezoid
+    # rule on the 33 steps an interval here: at most 1.3e-5 off, measured)
+    motion, times = drawn.motion, drawn.times
+
+    def speed(t):
+        return float(np.linalg.norm(motion.state(np.array([t])).omega[0]))
+
+    for k in (0, 37, 118):
+        want = quad(speed, times[k], times[k + 1], epsabs=0.0, epsrel=1e-12)[0]
+        assert drawn.scene.frame_turns[k] == pytest.approx(want, rel=2e-4)
+    # a few frames of a slow spin do not warn
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", animate.AliasingWarning)
+        animate.poinsot_animation(animate.orbit_row(FIG6, n=3, branch="SAM"), frames=40, dpi=40)

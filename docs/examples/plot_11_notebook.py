@@ -48,9 +48,11 @@ nearest[["branch", "n", "q", "total_phase", "omega_x", "omega_y", "omega_z", "pe
 orbits.verify(n_bodies=3, n_angles=2)
 
 # %%
-# The throw in motion, one period in real time (frames at 6 per second):
+# The throw in motion, one period in real time at 20 frames per second (at
+# 2 turns a second the phone turns about 36 degrees a frame; at 6 frames a
+# second it would turn 120, and an AliasingWarning would say so):
 # the player below is the animation's own HTML view, shown once.  Its
 # figure is drawn off-screen (the default ``pyplot=False``), so no static
 # copy of it appears; built with ``pyplot=True``, the view closes the
 # figure once the player is made, for the same effect in Jupyter.
-orbits.poinsot_animation(motion, seconds=motion.period, fps=6, dpi=60)
+orbits.poinsot_animation(motion, seconds=motion.period, fps=20, dpi=60)
