@@ -49,7 +49,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._args import caller_stacklevel, flag, integer, path_argument, real_scalar
+from ._args import caller_stacklevel, finite_array, flag, integer, path_argument, real_scalar
 from .animation_scene import (
     FrameData,
     PoinsotScene,
@@ -1045,7 +1045,9 @@ def poinsot_animation(
         more than 2000 frames), ``dpi``, ``solid`` or output path (a
         control character in its name); frames whose memory or drawing
         time would exceed the machine (:func:`orbits.limits.check_animation`;
-        a GIF holds every frame).
+        a GIF holds every frame).  A catalog row whose spin's total phase
+        is not ``2 pi n/q`` (an edited or hand-made row), or whose
+        ``branch`` or ``closes_after`` contradicts it.
     AngleError, SeparatrixError
         Bad spin, as :meth:`Motion.from_spin`.
 
@@ -1145,7 +1147,7 @@ def animation_motion(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0, bod
             )
         return source, 1.0, None
     if row is not None:
-        moments = np.array([row["I1"], row["I2"], row["I3"]], dtype=float)
+        moments = finite_array("the row's I1, I2, I3", [row["I1"], row["I2"], row["I3"]])
         if row_body is None:
             body = Body(moments, name=_row_name(row))
         else:
@@ -1156,15 +1158,15 @@ def animation_motion(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0, bod
                     f"{moments.tolist()} differ from the body's normalised "
                     f"{body.normalized_moments.tolist()}"
                 )
-        motion = Motion.from_spin(body, dtheta=float(row["dtheta"]))
-        p, q = int(row["n"]), int(row["q"])
+        motion = Motion.from_spin(body, dtheta=row["dtheta"])
+        p, q = _row_level(row, motion)
         multiple = f"{p}" if q == 1 else f"{p}/{q}"
         name = literal_text(_row_name(row) or "body")
         label = (
             rf"{name}: closed orbit $\Delta\alpha = 2\pi\cdot{multiple}$, "
-            rf"{row['branch']}, $\theta-\theta_c$ = {float(row['dtheta']):.3e}"
+            rf"{motion.branch}, $\theta-\theta_c$ = {float(row['dtheta']):.3e}"
             + "\n"
-            + _closure_text(row, q)
+            + _closure_text(row, p, q)
         )
         return motion, float(q), label
     body = as_body(source)
@@ -1190,9 +1192,7 @@ def _row_name(row):
     """A row's body name as text, or None: pandas reads the names 7, 1e5 and
     NA of a catalog (``read_csv(comment="#")``) as an int, a float and NaN."""
     name = row.get("body")
-    if name is None or (isinstance(name, float) and math.isnan(name)):
-        return None
-    return str(name)
+    return None if _missing(name) else str(name)
 
 
 def _equals(value, default):
@@ -1203,11 +1203,55 @@ def _equals(value, default):
         return False
 
 
-def _closure_text(row, q):
-    """When the herpolhode and the body come back (closes_after; search.closes_after)."""
-    closes = row.get("closes_after")
+def _row_level(row, motion):
+    """``(p, q)`` of a catalog row, in lowest terms, checked against its motion.
+
+    A row is drawn under the title "closed orbit": its ``n`` and ``q`` must
+    be whole, its ``branch`` (when given) the motion's, and the motion's own
+    total phase must be ``2 pi n/q`` to the search's
+    :data:`~orbits.search.RESIDUAL_TOLERANCE` (ten times it, for the
+    re-evaluation): an edited or hand-made row that does not close is
+    refused, not titled closed.
+    """
+    from .search import RESIDUAL_TOLERANCE, TWO_PI
+
+    n, q = integer("the row's n", row["n"]), integer("the row's q", row["q"])
+    branch = row.get("branch")
+    if branch is not None and not _missing(branch) and branch != motion.branch:
+        raise InputError(
+            f"the row's branch {branch!r} is not its spin's: dtheta = "
+            f"{float(row['dtheta'])!r} is on {motion.branch}"
+        )
+    level = TWO_PI * n / q
+    phase = motion.total_phase()
+    if not abs(phase - level) <= 10.0 * RESIDUAL_TOLERANCE * level:
+        raise InputError(
+            f"the row does not close: its spin's total phase is {phase!r} rad, "
+            f"not 2 pi n/q = {level!r} (n = {n}, q = {q}); an edited row? "
+            "Take rows from orbits.catalog, orbit_row or a catalog file"
+        )
+    common = math.gcd(n, q)
+    return n // common, q // common
+
+
+def _missing(value):
+    """Whether a row's cell is empty (None, or NaN as pandas reads one)."""
+    return value is None or (isinstance(value, float) and math.isnan(value))
+
+
+def _closure_text(row, p, q):
+    """When the herpolhode and the body come back (search.closes_after of p/q).
+
+    A row's own ``closes_after`` must agree (it is derived from p and q).
+    """
+    from .search import closes_after
+
+    closes = closes_after(p, q)
+    given = row.get("closes_after")
+    if not _missing(given) and str(given) != closes:
+        raise InputError(f"the row's closes_after {given!r} is not that of 2 pi {p}/{q}: {closes}")
     body_back = f"the body back at its start after {q} T"
-    if closes is None or str(closes) == str(q):
+    if closes == str(q):
         return f"herpolhode closed and {body_back}"
     return f"herpolhode closed after {closes} T, {body_back}"
 

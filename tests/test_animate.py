@@ -357,7 +357,8 @@ class TestCli:
                 "--frames: must be an integer >= 2, got 1",
             ),
             (
-                ["--preset", "fig6", "--theta", "0.5", "--out", "/nonexistent/a.gif"],
+                # a directory that does not exist (relative: tmp_path is the cwd)
+                ["--preset", "fig6", "--theta", "0.5", "--out", "missing/a.gif"],
                 "does not exist",
             ),
         ],
@@ -1019,3 +1020,34 @@ def test_frames_too_far_apart_warn_of_aliasing():
     with warnings.catch_warnings():
         warnings.simplefilter("error", animate.AliasingWarning)
         animate.poinsot_animation(animate.orbit_row(FIG6, n=3, branch="SAM"), frames=40, dpi=40)
+
+
+def test_a_row_that_does_not_close_is_not_titled_closed():
+    """A hand-made or edited row was drawn under "closed orbit 2 pi 7" at a
+    spin of 2 pi 3, its branch and closes_after taken on trust ("nan T"),
+    and a NaN n was a bare ValueError, a missing branch a KeyError."""
+    row = dict(animate.orbit_row(FIG6, n=3, branch="SAM"))
+    refused = [
+        (dict(row, n=7), r"does not close: its spin's total phase is 18\.849"),
+        (dict(row, dtheta=row["dtheta"] * 1.01), "does not close"),
+        (dict(row, q=2), "does not close"),
+        (dict(row, branch="LAM"), "branch 'LAM' is not its spin's"),
+        (dict(row, closes_after="1"), "closes_after '1' is not that of 2 pi 3/1: 1/2"),
+        (dict(row, n=float("nan")), "the row's n must be an integer"),
+        (dict(row, q=0), "the row's q must be an integer >= 1"),
+        (dict(row, I1="x"), "I1, I2, I3"),
+    ]
+    for edited, says in refused:
+        with pytest.raises(orbits.OrbitsError, match=says):
+            animate.animation_motion(edited)
+    # what a row may leave out is derived from its spin and its n/q
+    for kept in (
+        dict(row, closes_after=float("nan")),
+        {k: v for k, v in row.items() if k not in ("branch", "closes_after")},
+    ):
+        _, periods, label = animate.animation_motion(kept)
+        assert periods == 1.0
+        assert r"2\pi\cdot3$, SAM" in label and "closed after 1/2 T" in label
+    # n/q not in lowest terms: the orbit of 2 pi 3, back after 1 period
+    _, periods, label = animate.animation_motion(dict(row, n=6, q=2, closes_after=None))
+    assert periods == 1.0 and r"2\pi\cdot3$" in label

@@ -191,11 +191,12 @@ def test_cli_verify_exit_code_and_table(capsys, tmp_path, monkeypatch):
     assert len(table) == 6 and "montgomery_error" in table
 
 
-def test_cli_verify_bad_arguments(capsys):
+def test_cli_verify_bad_arguments(capsys, tmp_path):
     assert main(["verify", "--bodies", "0"]) == 2
     assert "must be an integer >= 1" in capsys.readouterr().err
-    assert main(["verify", "--bodies", "2", "--table", "/nonexistent/dir/x.csv"]) == 2
+    assert main(["verify", "--bodies", "2", "--table", str(tmp_path / "missing/x.csv")]) == 2
     assert "does not exist" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
 
 
 def _strict_json(text):
