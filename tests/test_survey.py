@@ -619,6 +619,33 @@ def test_a_resumed_run_reports_on_every_chunk(tmp_path):
     assert again.run() == first
 
 
+@pytest.mark.parametrize("kind", ["directory", "fifo"])
+def test_a_part_no_file_can_replace_is_refused_before_the_ledger_changes(tmp_path, capsys, kind):
+    """A part's name held by a directory: the rerun dropped the chunk from
+    the manifest, computed, and only then failed at the chunk (exit 2)."""
+    survey = Survey.grid(tmp_path / "s", 30, 5, chunk=70)
+    survey.run()
+    manifest = (tmp_path / "s" / "manifest.json").read_bytes()
+    part = tmp_path / "s" / "orbits" / "part-00002.parquet"
+    part.unlink()
+    if kind == "directory":
+        part.mkdir()
+    else:
+        os.mkfifo(part)
+    argv = ["survey", "--resolution", "30", "--n-max", "5", "--chunk", "70"]
+    assert main(argv + ["--out", str(tmp_path / "s")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    what = "a directory" if kind == "directory" else "not a file"
+    assert err == [
+        f"orbits: error: {part} is {what}; a survey part is only ever replaced by a "
+        "regular file: remove it and run the survey again"
+    ]
+    assert (tmp_path / "s" / "manifest.json").read_bytes() == manifest
+    part.rmdir() if kind == "directory" else part.unlink()
+    assert main(argv + ["--out", str(tmp_path / "s")]) == 0
+    assert Survey.grid(tmp_path / "s", 30, 5, chunk=70).run() == survey.run()
+
+
 _SMALL = ["survey", "--resolution", "6", "--n-max", "3", "--format", "csv", "--chunk", "3"]
 
 

@@ -539,6 +539,7 @@ class Ledger:
                     f"{where} is not a directory; a survey keeps its parts there"
                 ) from None
             raise InputError(f"cannot create {where}: {error.strerror}") from None
+        self.refuse_blocked_parts()
         if existing is not None:
             self.parts = existing["parts"]
         else:
@@ -580,6 +581,30 @@ class Ledger:
             remove_stale_temporaries(self.out_dir / table, r"part-\d+\.\w+", regex=True)
         remove_stale_temporaries(self.out_dir, MANIFEST)
         remove_stale_temporaries(self.out_dir, REPORT)
+
+    def refuse_blocked_parts(self):
+        """Refuse a part's name held by something no file may replace (a directory, a FIFO).
+
+        Before anything is computed or dropped from the ledger: such a part
+        could never be written, and the run stopped only at its chunk, after
+        :meth:`verify` had taken the entry out of the manifest.
+        """
+        import os
+        import re
+
+        pattern = re.compile(rf"part-\d+\.{re.escape(self.parameters['format'])}")
+        for table in TABLES:
+            try:
+                entries = list(os.scandir(self.out_dir / table))
+            except OSError as error:
+                raise InputError(f"cannot read {self.out_dir / table}: {error.strerror}") from None
+            for entry in entries:
+                if pattern.fullmatch(entry.name) and not entry.is_file(follow_symlinks=False):
+                    what = "a directory" if entry.is_dir(follow_symlinks=False) else "not a file"
+                    raise InputError(
+                        f"{entry.path} is {what}; a survey part is only ever replaced by a "
+                        "regular file: remove it and run the survey again"
+                    )
 
     def verify(self):
         """Check every ledger entry against its chunk and files; drop the bad ones.
