@@ -240,6 +240,14 @@ CLI_CASES = [
     # ------------------------------------------------------- usage, numbers
     ("no-command", [], {}, "required"),
     ("unknown-command", ["nope"], {}, "invalid choice"),
+    # argparse strips an attached "--" and hands the option [] past its checks:
+    # a TypeError traceback (--out=--), an empty table with exit 0 (--theta=--)
+    ("attached-separator-out", [C] + FIG6 + ["--n-max", "2", "--out=--"], {}, "'--' is not"),
+    ("attached-separator-theta", [P] + FIG6 + ["--theta=--"], {}, "--theta: '--' is not"),
+    ("attached-separator-phi", [P] + FIG6 + ["--theta", "0.5", "--phi=--"], {}, "--phi:"),
+    ("attached-separator-flip", [A] + FIG6 + ["--flip=--", "--out", "a.gif"], {}, "--flip:"),
+    ("attached-separator-bench", ["bench", "--only=--"], {}, "--only:"),
+    ("attached-separator-survey", [S, "--resolution", "4", "--chunk=--"], {}, "--chunk:"),
     ("threads-zero", ["--threads", "0", P] + FIG6 + ["--theta", "1"], {}, ">= 1"),
     ("moments-nan", [P, "--moments", "1", "2", "nan", "--theta", "0.3"], {}, "finite"),
     ("moments-inf", [P, "--moments", "1", "2", "inf", "--theta", "0.3"], {}, "finite"),

@@ -458,3 +458,66 @@ def test_point_masses_file_with_a_byte_order_mark(capsys, tmp_path):
     assert masses.tolist() == [1.0, 1.0, 1.0, 1.0]
     assert positions[3].tolist() == [0.0, -2.0, 0.5]
     assert main(["phase", "--point-masses", str(path), "--theta", "0.3"]) == 0
+
+
+def _orbits(tmp_path, env, *argv):
+    """``python -m orbits ARGV`` in ``tmp_path`` with ``env`` added: (code, stdout, stderr)."""
+    import os
+
+    done = subprocess.run(
+        [sys.executable, "-m", "orbits", *argv],
+        cwd=tmp_path,
+        env={**os.environ, **env},
+        capture_output=True,
+        timeout=300,
+    )
+    return done.returncode, done.stdout, done.stderr.decode("ascii", "backslashreplace")
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["figures", "--preset", "fig6", "--n-max", "2", "--out", "f"],
+        ["animate", "--preset", "fig6", "--theta", "0.5", "--out", "a.gif"],
+    ],
+)
+def test_a_bad_matplotlib_backend_is_one_line(tmp_path, argv):
+    """MPLBACKEND=nonsense: import matplotlib raised a ValueError traceback, exit 1."""
+    code, _, err = _orbits(tmp_path, {"MPLBACKEND": "nonsense"}, *argv)
+    assert code == 2, err
+    assert err.splitlines() == [
+        "orbits: error: MPLBACKEND='nonsense' is not a matplotlib backend, and matplotlib "
+        "cannot start; orbits draws off screen with Agg: unset MPLBACKEND or give a "
+        "valid one (e.g. agg)"
+    ]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_ascii_terminal_and_a_name_it_cannot_show(tmp_path):
+    """PYTHONIOENCODING=ascii and --name é: a UnicodeEncodeError traceback, exit 1;
+    a message holding the name is escaped on stderr, not lost."""
+    ascii_io = {"PYTHONIOENCODING": "ascii"}
+    code, out, err = _orbits(
+        tmp_path, ascii_io, "phase", "--preset", "fig6", "--theta", "0.5", "--name", "é"
+    )
+    assert code == 2 and err.splitlines() == [
+        r"orbits: error: cannot write '\xe9' in ascii (standard output's encoding is "
+        "ascii); set PYTHONIOENCODING=utf-8 or a UTF-8 locale"
+    ]
+    code, _, err = _orbits(tmp_path, ascii_io, "phase", "--preset", "fégé", "--theta", "0.5")
+    assert code == 2 and err.splitlines() == [
+        r"orbits: error: orbits phase: argument --preset: invalid choice: 'f\xe9g\xe9' "
+        "(choose from 'fig6', 't-handle')"
+    ]
+    code, out, _ = _orbits(
+        tmp_path,
+        {"PYTHONIOENCODING": "utf-8"},
+        "phase",
+        "--preset",
+        "fig6",
+        "--theta",
+        "0.5",
+        "--name",
+        "é",
+    )
+    assert code == 0 and "é" in out.decode("utf-8")

@@ -315,6 +315,31 @@ _SIZE_OPTIONS = {
 _PRINTING = ("phase", "survey", "verify", "bench")
 
 
+# the commands that draw with matplotlib (off screen, with its Agg canvas)
+_DRAWING = ("figures", "animate")
+
+
+def _check_matplotlib():
+    """Refuse, before any work, an environment in which matplotlib cannot start.
+
+    ``import matplotlib`` raises a ValueError when ``MPLBACKEND`` names no
+    backend; the commands draw off screen with Agg whatever it says.
+    """
+    import os
+
+    try:
+        import matplotlib  # noqa: F401
+    except ValueError as error:
+        backend = os.environ.get("MPLBACKEND")
+        if backend is None:
+            raise InputError(f"matplotlib cannot start: {error}") from None
+        raise InputError(
+            f"MPLBACKEND={backend!r} is not a matplotlib backend, and matplotlib cannot "
+            "start; orbits draws off screen with Agg: unset MPLBACKEND or give a valid "
+            "one (e.g. agg)"
+        ) from None
+
+
 def _check_stdout(args):
     """Refuse, before any work, a run whose results would go to a closed stdout.
 
@@ -355,6 +380,15 @@ class _TolerantStream:
     def write(self, text):
         try:
             return self._stream.write(text)
+        except UnicodeEncodeError:
+            # an ASCII stderr (PYTHONIOENCODING=ascii) and a name such as "é"
+            # in the message: the line escaped, not lost
+            encoding = getattr(self._stream, "encoding", None) or "ascii"
+            try:
+                self._stream.write(text.encode(encoding, "backslashreplace").decode(encoding))
+            except (OSError, ValueError, LookupError):
+                pass
+            return len(text)
         except (OSError, ValueError):
             return len(text)
 
@@ -408,6 +442,25 @@ def main(argv=None):
             tolerant._stream.close()
 
 
+def _refuse_attached_separator(argv):
+    """Refuse ``--OPT=--``: argparse reads the attached ``--`` as its separator.
+
+    Python's argparse strips it and hands the option an empty list, past its
+    type and choices checks (``--out=--`` was a TypeError traceback,
+    ``--theta=--`` an empty table with exit 0).  Tokens after a bare ``--``
+    are positional values and left alone.
+    """
+    for token in argv:
+        if token == "--":
+            return
+        if isinstance(token, str) and token.startswith("-") and token.endswith("=--"):
+            option = token[: -len("=--")]
+            raise InputError(
+                f"{option}: '--' is not a value (argparse reads it as the end of the "
+                f"options); give {option} a value"
+            )
+
+
 def _main(argv, signal, warnings, Terminated):
     """:func:`main` with standard error made tolerant."""
     previous = _install_signal_handlers()
@@ -417,10 +470,13 @@ def _main(argv, signal, warnings, Terminated):
     sys.unraisablehook = _swallowed_stop
     args = None
     try:
+        _refuse_attached_separator(sys.argv[1:] if argv is None else argv)
         args = build_parser().parse_args(argv)
         args.argv = argv
         check_arguments(args)
         _check_stdout(args)
+        if args.command in _DRAWING:
+            _check_matplotlib()
         if args.threads is not None:
             from ..threads import set_num_threads
 
@@ -453,6 +509,16 @@ def _main(argv, signal, warnings, Terminated):
         # the reader (e.g. `head`) closed the pipe: not an error of ours
         sys.stdout = None
         return 0
+    except UnicodeEncodeError as error:
+        # printing results (a body name "é") to a stdout of another encoding
+        text = error.object[error.start : error.end]
+        stream = getattr(sys.stdout, "encoding", None)
+        print(
+            f"orbits: error: cannot write {text!r} in {error.encoding} (standard output's "
+            f"encoding is {stream}); set PYTHONIOENCODING=utf-8 or a UTF-8 locale",
+            file=sys.stderr,
+        )
+        return EXIT_USAGE
     except OSError as error:
         print(
             f"orbits: error: {error.strerror or error}: {error.filename or ''}".rstrip(": "),
