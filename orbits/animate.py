@@ -270,6 +270,12 @@ def check_output(out, name="out", fmt=None):
     if fmt is None:
         fmt = path.suffix.lstrip(".").lower()
         if fmt not in FORMATS:
+            if not path.suffix:
+                # "-" (standard output elsewhere) or a bare name: no format to write
+                raise InputError(
+                    f"{name} {text!r} has no .gif or .mp4 suffix to choose the format "
+                    "(an animation is written to a file, never to standard output)"
+                )
             raise InputError(f"unknown animation format {path.suffix!r}; use .gif or .mp4")
     elif not isinstance(fmt, str) or fmt.lower() not in FORMATS:
         raise InputError(f"unknown animation format {fmt!r}; use {', '.join(FORMATS)}")

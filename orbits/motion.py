@@ -146,7 +146,7 @@ def _scaled(value, power, what):
 
 
 # the largest |t| the motion takes, in periods (see ``Motion._times``)
-_TIME_LIMIT_PERIODS = 2.0**50
+TIME_LIMIT_PERIODS = 2.0**50
 
 
 class Motion:
@@ -400,10 +400,10 @@ class Motion:
             # count exact only below 2^52 quarters: beyond, the place within
             # the period is lost to rounding (and the count's parity with it)
             largest = float(np.max(np.abs(scaled)))
-            if largest > _TIME_LIMIT_PERIODS * period:
+            if largest > TIME_LIMIT_PERIODS * period:
                 raise InputError(
                     f"|t| = {largest / period:.3g} periods is beyond the "
-                    f"{_TIME_LIMIT_PERIODS:.3g} periods (2^50) at which a double still "
+                    f"{TIME_LIMIT_PERIODS:.3g} periods (2^50) at which a double still "
                     "places a time within its period: the orientation there is lost to "
                     "rounding"
                 )

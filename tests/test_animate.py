@@ -635,7 +635,7 @@ def test_subnormal_dtheta_refused_as_phase_refuses_it(tmp_path, capsys, monkeypa
 
 
 def test_smallest_normal_dtheta_offsets_are_drawn(tmp_path, capsys):
-    """Offsets from 4.9e-312 up keep 12 digits: drawn, as phase computes them."""
+    """Offsets from 4.941e-312 up keep 12 digits: drawn, as phase computes them."""
     out = tmp_path / "a.gif"
     argv = ["animate", "--preset", "fig6", "--dtheta", "1e-311", "--frames", "2", "--dpi", "20"]
     assert main([*argv, "--out", str(out)]) == 0

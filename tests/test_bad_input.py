@@ -248,6 +248,19 @@ CLI_CASES = [
     ("attached-separator-flip", [A] + FIG6 + ["--flip=--", "--out", "a.gif"], {}, "--flip:"),
     ("attached-separator-bench", ["bench", "--only=--"], {}, "--only:"),
     ("attached-separator-survey", [S, "--resolution", "4", "--chunk=--"], {}, "--chunk:"),
+    # '' was read as the current directory ("cannot write .: it is a directory")
+    ("empty-out", [C] + FIG6 + ["--n-max", "2", "--out", ""], {}, "--out: an empty path"),
+    ("empty-check", [S, "--check", ""], {}, "--check: an empty path"),
+    ("empty-survey-out", [S, "--resolution", "4", "--out="], {}, "--out: an empty path"),
+    ("empty-table", [V, "--table", ""], {}, "--table: an empty path"),
+    ("animate-stdout", [A] + FIG6 + ["--theta", "0.5", "--out", "-"], {}, "never to standard"),
+    # its remedies (--seconds 0.05, --periods 7.3e147) were both refused in turn
+    (
+        "animate-throw-too-fast",
+        [A] + FIG6 + ["--omega", "1e150", "1e150", "1e150", "--dpi", "10", "--out", "a.gif"],
+        {},
+        "too fast to animate in real time; give a slower --omega",
+    ),
     ("threads-zero", ["--threads", "0", P] + FIG6 + ["--theta", "1"], {}, ">= 1"),
     ("moments-nan", [P, "--moments", "1", "2", "nan", "--theta", "0.3"], {}, "finite"),
     ("moments-inf", [P, "--moments", "1", "2", "inf", "--theta", "0.3"], {}, "finite"),

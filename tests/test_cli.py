@@ -95,13 +95,21 @@ class TestPhase:
             ),
             (
                 ["phase", "--preset", "fig6", "--dtheta", "1e-310", "--degrees"],
-                ["is a subnormal double", "offsets from 4.9e-312 up keep at least 12"],
+                ["is a subnormal double", "offsets from 4.941e-312 up keep at least 12"],
             ),
         ],
     )
     def test_bad_input(self, capsys, argv, fragments):
         code, _, err = run(capsys, *argv)
         assert_usage_error(code, err, *fragments)
+
+    def test_the_smallest_offset_stated_is_accepted(self, capsys):
+        """The help and the refusal named 4.9e-312, itself refused (the bound
+        is 2**-1074 * 1e12 = 4.9407e-312); they state 4.941e-312 now."""
+        code, out, _ = run(capsys, "phase", "--preset", "fig6", "--dtheta", "4.941e-312")
+        assert code == 0 and "4.941e-312" in out
+        code, _, err = run(capsys, "phase", "--preset", "fig6", "--dtheta", "4.94e-312")
+        assert_usage_error(code, err, "offsets from 4.941e-312 up keep at least 12")
 
     def test_name_is_printed_not_ignored(self, capsys):
         """--name was accepted and shown nowhere (exit 0)."""

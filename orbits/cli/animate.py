@@ -193,7 +193,18 @@ def _throw_frames(args, seconds, period, gif):
             f"{(MAX_FRAMES - 2) / (fps * period):.4g}{lower_fps}"
         )
     if frames < 2:
+        from ..motion import TIME_LIMIT_PERIODS
+
         top = max(GIF_FPS) if gif else 100
+        if 1.0 / (top * period) > TIME_LIMIT_PERIODS:
+            # even one frame interval at the highest rate is beyond what the
+            # motion can place: no --seconds, --periods or --fps would do
+            raise InputError(
+                f"{what}, and one frame interval (1/{top} s) is {1.0 / (top * period):.3g} "
+                f"periods, beyond the {TIME_LIMIT_PERIODS:.3g} (2^50) the motion can place: "
+                "too fast to animate in real time; give a slower --omega (the orbit's "
+                "shape does not depend on |omega|)"
+            )
         higher_fps = ", or a higher --fps" if real_time_frames(seconds, top) >= 2 else ""
         raise InputError(
             f"{what}, and an animation needs at least 2: give --seconds of at least "
@@ -245,7 +256,7 @@ def add_parser(subparsers):
         type=finite,
         help="offset theta - theta_crit (rad, not folded: theta_crit + dtheta must lie "
         "in [0, pi/2], i.e. dtheta in [-theta_crit, pi/2 - theta_crit], and not be 0; "
-        "as in orbits phase, subnormal offsets below |dtheta| = 4.9e-312 are refused)",
+        "as in orbits phase, subnormal offsets below |dtheta| = 4.941e-312 are refused)",
     )
     spin.add_argument("--n", type=positive_int, help="the closed orbit Delta alpha = 2 pi n")
     spin.add_argument("--p", type=positive_int, help="the closed orbit 2 pi p/q (with --q)")

@@ -299,7 +299,7 @@ def add_parser(subparsers):
         type=finite,
         help="offset(s) theta - theta_crit from the separatrix, radians, not folded: "
         "in [-theta_crit, pi/2 - theta_crit], nonzero (well conditioned down to "
-        "|dtheta| = 4.9e-312; smaller subnormal offsets are refused)",
+        "|dtheta| = 2**-1074 x 10**12 = 4.941e-312; smaller subnormal offsets are refused)",
     )
     angle.add_argument(
         "--omega",

@@ -289,30 +289,31 @@ def _add_real_body_options(group, exclusive):
         nargs=3,
         type=finite,
         metavar=("A", "B", "C"),
-        help="uniform solid box with edges A, B, C along x, y, z (with --mass; Body.box)",
+        help="uniform solid box with full edges A, B, C along x, y, z, in metres "
+        "(with --mass in kg: moments in kg m^2; Body.box)",
     )
     cylinder = exclusive.add_argument(
         "--cylinder",
         nargs="+",
         type=finite,
         metavar="R L [RY]",
-        help="uniform solid cylinder along z: radius R (along x), "
+        help="uniform solid cylinder along z, in metres: radius R (along x), "
         "length L, optional second semi-axis RY of an "
         "elliptic section (a circular one is a symmetric "
-        "top); with --mass (Body.cylinder)",
+        "top); with --mass in kg (Body.cylinder)",
     )
     cylinder.shown = "R L [RY]"  # two or three numbers (checked after parsing)
     exclusive.add_argument(
         "--point-masses",
         metavar="FILE.csv",
-        help="rigid point masses: a CSV with columns mass, x, y, "
-        "z, about the centre of mass (Body.from_point_masses)",
+        help="rigid point masses: a CSV with columns mass (kg), x, y, "
+        "z (m), about the centre of mass (Body.from_point_masses)",
     )
     exclusive.add_argument(
         "--mesh",
         metavar="FILE",
-        help="uniform solid bounded by a closed STL/OBJ mesh, "
-        "with --density (Body.from_mesh; needs orbits[mesh])",
+        help="uniform solid bounded by a closed STL/OBJ mesh, vertices in "
+        "metres, with --density in kg/m^3 (Body.from_mesh; needs orbits[mesh])",
     )
     exclusive.add_argument(
         "--rotational-constants",
@@ -320,13 +321,21 @@ def _add_real_body_options(group, exclusive):
         type=finite,
         metavar=("A", "B", "C"),
         help="a molecule from its rotational constants, in --constants-unit "
-        "(Body.from_rotational_constants)",
+        "(moments in kg m^2; Body.from_rotational_constants)",
     )
     group.add_argument(
-        "--mass", type=finite, default=1.0, help="mass for --box and --cylinder (default 1)"
+        "--mass",
+        type=finite,
+        default=1.0,
+        help="mass in kg for --box and --cylinder (default 1 kg); only the energy and "
+        "|L| of phase --omega depend on it, every other result on the moments' ratios",
     )
     group.add_argument(
-        "--density", type=finite, default=1.0, help="density for --mesh (default 1)"
+        "--density",
+        type=finite,
+        default=1.0,
+        help="density in kg/m^3 for --mesh (default 1 kg/m^3); as --mass, it scales "
+        "only the energy and |L| of phase --omega",
     )
     group.add_argument(
         "--constants-unit",
@@ -594,13 +603,13 @@ SMALLEST_OFFSET = SUBNORMAL_STEP * 1e12
 def offset_argument(value, args):
     """A ``--dtheta`` in radians (``orbits phase``, ``orbits animate``), refused
     where a double keeps fewer than 12 significant digits of it (subnormal
-    offsets below 4.9e-312)."""
+    offsets below 4.941e-312)."""
     offset = angle_argument(value, args)
     if offset != 0.0 and abs(offset) < SMALLEST_OFFSET:
         digits = max(0, int(math.log10(abs(offset) / SUBNORMAL_STEP)))
         raise InputError(
             f"--dtheta {value!r} is a subnormal double with about {digits} significant "
-            f"digits (computed as {offset:.6g} rad); offsets from {SMALLEST_OFFSET:.2g} "
+            f"digits (computed as {offset:.6g} rad); offsets from {SMALLEST_OFFSET:.4g} "
             "up keep at least 12"
         )
     return offset
@@ -809,6 +818,10 @@ def _selected(args, names):
     return given[0] if len(given) == 1 else None
 
 
+# the options that name a file or a directory (argparse dests)
+PATH_OPTIONS = ("out", "check", "bodies", "point_masses", "mesh", "table", "survey")
+
+
 def check_arguments(args):
     """Refuse options given where they do not apply, and angles beyond a turn.
 
@@ -826,6 +839,10 @@ def check_arguments(args):
         unless ``theta_crit + dtheta`` lies in [0, pi/2].
     """
     command = getattr(args, "command", None)
+    for dest in PATH_OPTIONS:
+        if getattr(args, dest, None) == "":
+            # '' read as the current directory: "cannot write .: it is a directory"
+            raise InputError(f"{option_string(dest)}: an empty path names no file; give a path")
     if command not in SELECTORS:
         return
     given = getattr(args, "given", set())
