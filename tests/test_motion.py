@@ -885,3 +885,57 @@ def test_outputs_are_not_the_callers_arrays():
     assert motion.omega0.tolist() == [0.3, 0.2, 0.9] and frame["w1"].iloc[0] == 0.3
     assert state.t[1] == 0.25 and animation.times[1] == 0.25
     frame.loc[0, "w1"] = 1.0  # a frame of its own, writable (was: read-only ValueError)
+
+
+def _turn_about_momentum(motion, t):
+    """The angle of ``R(t) R(0)^T`` about the space z axis (along L), radians."""
+    rotation = motion.rotation([0.0, t])
+    relative = rotation[1] @ rotation[0].T
+    return math.atan2(relative[1, 0], relative[0, 0]), relative
+
+
+@pytest.mark.parametrize("w3", [1.0, -1.0, -3.0, 2.5])
+def test_a_steady_spin_about_i3_turns_forwards_about_l(w3):
+    """A spin exactly along -I3 (L along the body's -I3) turned the body the
+    wrong way at the wrong rate (psi = -elapsed holds only at theta = 0):
+    1.6 rad off after 2 s on fig6.  R(t) R(0)^T is Rz(|w3| t), exactly."""
+    motion = Motion.from_omega(FIG6, [0.0, 0.0, w3])
+    for t in (0.2, 2.0, 7.5):
+        angle, relative = _turn_about_momentum(motion, t)
+        want = math.remainder(abs(w3) * t, 2.0 * math.pi)
+        assert abs(math.remainder(angle - want, 2.0 * math.pi)) <= 1e-14
+        assert relative[2, 2] == pytest.approx(1.0, abs=1e-15)
+
+
+def test_a_phone_thrown_flat_turns_about_its_momentum():
+    """Body.box's frame maps the phone's thickness axis to -I3: a throw about
+    it was the case above (-2.45 rad instead of +1.0 after 0.2 s)."""
+    phone = Body.box(0.071, 0.147, 0.0078, mass=0.17)
+    motion = Motion.from_omega(phone, [0.0, 0.0, 5.0], axes="body")
+    assert motion.omega0[2] == -5.0
+    angle, _ = _turn_about_momentum(motion, 0.2)
+    assert angle == pytest.approx(1.0, abs=1e-14)
+
+
+@pytest.mark.parametrize("small", [1e-150, 1e-158, 1e-161, 1e-200, 1e-300])
+@pytest.mark.parametrize(
+    "direction", [(1.0, 1.0, 2.0), (-1.0, 1.0, -3.0), (3.0, -2.0, -1.0), (3.0, 2.0, 1.0)]
+)
+def test_tiny_transverse_components_keep_their_digits(small, direction):
+    """Within 1e-154 of I3 (or I1) the squares of the small components are
+    subnormal: omega(0) came back 0.18 off at 1e-161 of |omega|, and the
+    orientation 7.5e-3 rad off.  Now every component within 2 ulps, and the
+    body turns about L at |omega| to rounding (the wobble is far below it)."""
+    a, b, c = direction
+    axis_first = abs(c) > 1.5  # the big component along I1 (LAM) or I3 (SAM)
+    omega = (
+        np.array([a, small * b, small * c]) if axis_first else np.array([small * a, small * b, c])
+    )
+    motion = Motion.from_omega(FIG6, omega)
+    back = motion.state(np.array([0.0])).omega[0]
+    assert np.all(np.abs(back - omega) <= 2 * np.spacing(np.abs(omega)))
+    speed = float(np.linalg.norm(omega))
+    for t in (0.7, 3.0):
+        angle, _ = _turn_about_momentum(motion, t)
+        want = math.remainder(speed * t, 2.0 * math.pi)
+        assert abs(math.remainder(angle - want, 2.0 * math.pi)) <= 1e-14

@@ -259,17 +259,24 @@ def orbit_setup(i1, i2, i3, w1, w2, w3, scale, offset, closing, orbit):
     d21 = i2 - i1
     d31 = i3 - i1
     d32 = i3 - i2
-    a1 = math.sqrt(gap_3m / (i1 * d31))
-    a3 = math.sqrt(gap_m1 / (i3 * d31))
     if branch == BRANCH_SAM:
-        a2 = math.sqrt(gap_3m / (i2 * d32))
+        # near I3 the squares of w1, w2 can fall below the normal doubles
+        # (|w1|, |w2| < 1.5e-154 |w|): 2EI3 - M^2 from scaled components
+        small, undo = scaled_gap(i1, d31, w1, i2, d32, w2)
+        a1 = math.sqrt(small / (i1 * d31)) / undo
+        a2 = math.sqrt(small / (i2 * d32)) / undo
+        a3 = math.sqrt(gap_m1 / (i3 * d31))
         sign = 1.0 if w3 >= 0.0 else -1.0  # w3 ~ dn never vanishes
         amp1, amp2, amp3 = a1, sign * a2, sign * a3
         cos0 = w1 / amp1 if amp1 > 0.0 else 1.0
         sin0 = w2 / amp2 if a2 > 0.0 else 0.0
         n = -i3 * d21 / (i1 * d32)
     else:
-        a2 = math.sqrt(gap_m1 / (i2 * d21))
+        # near I1, M^2 - 2EI1 from scaled w2, w3 (as 2EI3 - M^2 on SAM)
+        small, undo = scaled_gap(i2, d21, w2, i3, d31, w3)
+        a1 = math.sqrt(gap_3m / (i1 * d31))
+        a2 = math.sqrt(small / (i2 * d21)) / undo
+        a3 = math.sqrt(small / (i3 * d31)) / undo
         sign = 1.0 if w1 >= 0.0 else -1.0  # w1 ~ dn never vanishes
         amp1, amp2, amp3 = sign * a1, sign * a2, a3
         cos0 = w3 / amp3 if amp3 > 0.0 else 1.0
@@ -317,8 +324,9 @@ def orbit_setup(i1, i2, i3, w1, w2, w3, scale, offset, closing, orbit):
     orbit[SLOT_PERIOD] = 4.0 * quarter / rate
     orbit[SLOT_M] = m
     orbit[SLOT_GAP_3M] = gap_3m
-    # a steady spin about I3: the Euler angles phi and psi share one axis
-    orbit[SLOT_STILL] = 1.0 if (branch == BRANCH_SAM and gap_3m == 0.0) else 0.0
+    # a steady spin about I3 (w1 = w2 = 0 exactly, not only their squares):
+    # the Euler angles phi and psi share one axis
+    orbit[SLOT_STILL] = 1.0 if (branch == BRANCH_SAM and a1 == 0.0 and a2 == 0.0) else 0.0
     orbit[SLOT_LEVELS] = levels
     quarters, tau0 = start_offset(sin0, cos0, kc)
     orbit[SLOT_START_QUARTERS] = quarters
@@ -339,6 +347,32 @@ def whole_periods(orbit, t):
     k = math.floor(t / period + 0.5)
     rest = t - k * period if k != 0.0 else t
     return k, orbit[SLOT_TAU0] + orbit[SLOT_RATE] * rest
+
+
+# omega's components below this (relative to |omega| ~ 1, as the kernels see
+# it) have squares near or below the smallest normal double (2.2e-308)
+_SMALL_COMPONENT = 2.0**-300
+_UNDO = 2.0**600
+# an invariant gap below this lost digits to subnormal squares
+_SMALL_GAP = 2.0**-960
+
+
+@njit(cache=True, nogil=True)
+def scaled_gap(ia, da, wa, ib, db, wb):
+    """``(g, f)`` with ``ia da wa^2 + ib db wb^2 = (g / f^2)`` and g of normal squares.
+
+    For ``2EI3 - M^2`` (or ``M^2 - 2EI1``) of a spin within ~1e-154 of I3
+    (I1): the squares of its small components are subnormal (a few bits,
+    or 0), so the sum is formed from the components times ``f = 2**600``
+    (exact), and ``sqrt(g) / f`` keeps every digit of an amplitude.
+    """
+    if max(abs(wa), abs(wb)) < _SMALL_COMPONENT:
+        wa *= _UNDO
+        wb *= _UNDO
+        undo = _UNDO
+    else:
+        undo = 1.0
+    return ia * da * wa * wa + ib * db * wb * wb, undo
 
 
 @njit(cache=True, nogil=True)
@@ -376,7 +410,10 @@ def _state(orbit, t, gained, sn, cn, dn, j):
         w1 = orbit[SLOT_A1] * cn
         w3 = orbit[SLOT_A3] * dn
         if orbit[SLOT_STILL] != 0.0:
-            psi = -elapsed  # phi + psi = M t / I3, a plain spin
+            # a plain spin about I3: R = Rz(phi + psi) at theta = 0 (w3 > 0)
+            # and Rz(phi - psi) Rx(pi) at theta = pi (w3 < 0, L along -I3);
+            # either way the body turns at M/I3 about L: phi +- psi = M t / I3
+            psi = -elapsed if w3 >= 0.0 else elapsed
         else:
             # chi = atan2(I2 w2, I1 w1) follows +-am; unwrap it against am
             # (sin, cos of am(r), |am(r)| <= pi/2, are (-1)^j sn, (-1)^j cn)
@@ -462,7 +499,14 @@ def _omega_space(orbit, t, gained, sn, cn, dn):
         return 0.0, 0.0, height
     inv_mu = 1.0 / mu
     x_node = (i2 - i1) * w1 * w2 * inv_mu
-    y_node = w3 * (orbit[SLOT_GAP_3M] / momentum) * inv_mu
+    gap = orbit[SLOT_GAP_3M]
+    if gap < _SMALL_GAP and orbit[SLOT_BRANCH] == BRANCH_SAM:
+        # 2EI3 - M^2 = I1 (I3 - I1) a1^2 below the normal doubles: as
+        # a1 (a1 / mu), each factor normal (a spin within 1e-154 of I3)
+        amp1 = orbit[SLOT_A1]
+        y_node = w3 * (i1 * (orbit[SLOT_I3] - i1) * amp1 / momentum) * (amp1 * inv_mu)
+    else:
+        y_node = w3 * (gap / momentum) * inv_mu
     sf, cf = sincos(phi)
     return cf * x_node - sf * y_node, sf * x_node + cf * y_node, height
 
