@@ -570,6 +570,7 @@ def _check_orbit_rows(path, frame):
             "its theta is not theta_crit + dtheta",
         ),
     ]
+    reasons += _identity_problems(frame)
     for bad, why in reasons:
         if bad.any():
             rows = np.flatnonzero(bad)
@@ -578,6 +579,57 @@ def _check_orbit_rows(path, frame):
                 f"{path}, data row {rows[0] + 1}{more}: {why}; not a catalog orbits "
                 "wrote (edited by hand?)"
             )
+
+
+# the identities between a row's columns hold to a few ulps (measured on
+# 7,105 rows of the committed catalogs and of near-symmetric, near-flat and
+# thin bodies: |I| 0.5 ulp, dynamic - geometric 6, 2ET/M 3, M^2/(2E) 4)
+IDENTITY_ULPS = 32
+
+
+def _identity_problems(frame):
+    """``(bad, why)`` for the identities every row holds, whatever its moments' rounding.
+
+    ``I1^2 + I2^2 + I3^2 = 1`` (the unit-norm moments), ``total_phase =
+    dynamic_phase - geometric_phase``, ``dynamic_phase = 2 E T / M``
+    (Montgomery's 2ET/M), ``D = M^2 / (2E)`` and ``closes_after`` of
+    ``n/q`` (:func:`orbits.search.closes_after`): an edited moment, period,
+    energy, |L|, D or phase shows, though the phases are not evaluated again.
+    """
+    from .search import closes_after
+
+    def close(got, want):
+        scale = np.maximum(np.abs(got), np.abs(want))
+        return np.abs(got - want) <= IDENTITY_ULPS * np.spacing(scale)
+
+    column = {
+        name: frame[name].to_numpy(dtype=float)
+        for name in CATALOG_COLUMNS
+        if name not in ("body", "branch", "n", "q", "closes_after")
+    }
+    norm = np.sqrt(column["I1"] ** 2 + column["I2"] ** 2 + column["I3"] ** 2)
+    energy, momentum = column["energy"], column["momentum"]
+    return [
+        (~close(norm, np.ones_like(norm)), "its moments I1, I2, I3 are not of unit norm"),
+        (
+            ~((column["I1"] < column["I2"]) & (column["I2"] < column["I3"])),
+            "its moments are not I1 < I2 < I3",
+        ),
+        (
+            ~close(column["dynamic_phase"] - column["geometric_phase"], column["total_phase"]),
+            "its total_phase is not dynamic_phase - geometric_phase",
+        ),
+        (
+            ~close(2.0 * energy * column["period"] / momentum, column["dynamic_phase"]),
+            "its dynamic_phase is not 2 E T / M (energy, period, momentum)",
+        ),
+        (~close(momentum * momentum / (2.0 * energy), column["D"]), "its D is not M^2 / (2E)"),
+        (
+            frame["closes_after"].astype(str).to_numpy()
+            != np.asarray(closes_after(frame["n"].to_numpy(), frame["q"].to_numpy())),
+            "its closes_after is not that of n/q",
+        ),
+    ]
 
 
 def _one_line(error):

@@ -112,6 +112,15 @@ def test_csv_round_trip_is_bit_exact(tmp_path):
         # residual columns: the theta it no longer matches shows it
         (lambda f: f.assign(dtheta=f["dtheta"] * 1.001), "theta is not theta_crit \\+ dtheta"),
         (lambda f: f.assign(theta=f["theta"] + 1e-9), "theta is not theta_crit \\+ dtheta"),
+        # the identities between columns (an edited moment, period, energy,
+        # D or phase was written and read back before)
+        (lambda f: f.assign(I1=f["I1"] + 0.01), "not of unit norm"),
+        (lambda f: f.assign(I1=f["I2"], I2=f["I1"]), "not I1 < I2 < I3"),
+        (lambda f: f.assign(period=f["period"] * (1 + 1e-12)), "not 2 E T / M"),
+        (lambda f: f.assign(energy=f["energy"] * 1.5), "not 2 E T / M"),
+        (lambda f: f.assign(D=f["D"] * (1 + 1e-12)), "D is not M\\^2 / \\(2E\\)"),
+        (lambda f: f.assign(geometric_phase=5.0), "not dynamic_phase - geometric_phase"),
+        (lambda f: f.assign(closes_after="2"), "closes_after is not that of n/q"),
     ],
 )
 def test_read_catalog_checks_schema(tmp_path, mutate, message):
