@@ -34,6 +34,7 @@ from ._args import (
     below_normal,
     below_normal_message,
     callback,
+    caller_stacklevel,
     flag,
     integer,
     path_argument,
@@ -56,6 +57,7 @@ from .limits import (
     search_estimate,
 )
 from .search import CATALOG_COLUMNS, closed_orbits
+from .tumbling import SPIN_VECTOR_RTOL
 
 VERIFIED_COLUMN = "closure_error"
 #: unit and meaning of the ``--verify`` column, as in :data:`orbits.search.CATALOG_SCHEMA`
@@ -236,22 +238,40 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
     order = np.lexsort((level, distance, other))[:k]
     frame = frame.iloc[order].reset_index(drop=True)
     columns = {name: [] for name in NEAREST_COLUMNS}
-    for dtheta in frame["dtheta"].to_numpy():
+    unheld = []  # (row, relative period error) of starting spins that miss their orbit
+    for theta, dtheta, theta_crit in frame[["theta", "dtheta", "theta_crit"]].to_numpy():
         unit = Motion.from_spin(body, dtheta=float(dtheta))  # |omega0| = 1
         speed = spin.momentum / unit.momentum  # the throw's |L|
         orbit = Motion.from_spin(body, dtheta=float(dtheta), speed=speed)
-        # the unit-speed polhode on the unit moments (2E and M scale by the
-        # same exact power of two), then scaled to the throw: no square of
-        # the moments or of |L| at the caller's scale (they overflowed or
-        # went subnormal beyond 1e+-154)
-        two_e = math.ldexp(2.0 * unit.energy, -body.exponent)
-        momentum = math.ldexp(unit.momentum, -body.exponent)
-        start = _start_near(body.unit_moments, two_e, momentum * momentum, spin.omega0)
+        # the unit-speed polhode on the unit moments (the angles do not depend
+        # on their scale), then scaled to the throw: no square of the moments
+        # or of |L| at the caller's scale (they overflowed or went subnormal
+        # beyond 1e+-154)
+        start = _start_near(body.unit_moments, theta, dtheta, theta_crit, spin.omega0)
         start = body.frame.T @ (start * speed) / factor
+        off = _period_off(body, body.frame @ (start * factor), orbit.period)
+        if not off <= SPIN_VECTOR_RTOL:
+            unheld.append((len(columns["period_s"]), off))
         for name, value in zip(NEAREST_COLUMNS, [*start, orbit.period]):
             columns[name].append(float(value))
     for name in NEAREST_COLUMNS:
         frame[name] = np.array(columns[name])
+    if unheld:
+        import warnings
+
+        from .search import UnresolvedOrbitsWarning
+
+        rows = ", ".join(str(row) for row, _ in unheld[:5]) + (" ..." if len(unheld) > 5 else "")
+        worst = max(off for _, off in unheld)
+        warnings.warn(
+            f"the omega_x, omega_y, omega_z of rows {rows} do not hold their orbits: "
+            f"started from them as doubles, the period is up to "
+            f"{'beyond the separatrix' if math.isinf(worst) else f'{worst:.2g}'} off "
+            "(the orbits lie within a double's rounding of the separatrix); every other "
+            "column is of the orbit of dtheta: start from Motion.from_spin(body, dtheta=...)",
+            UnresolvedOrbitsWarning,
+            stacklevel=caller_stacklevel(),
+        )
     frame.attrs = {
         "total_phase": alpha,
         "branch": spin.branch,
@@ -261,28 +281,55 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
     return frame
 
 
-def _start_near(moments, two_e, m_sq, spin):
-    """The point of the polhode (``2E``, ``M^2`` given) at the azimuth of ``spin`` about I3.
+def _period_off(body, omega, period):
+    """Relative error of the period of the orbit through ``omega`` (principal
+    axes, rad/s) against ``period``; inf where it lies on the separatrix."""
+    from .motion import Motion
 
-    On the orbit ``omega = (r c, r s, z)`` (principal axes, ``c, s`` the
-    cosine and sine of the spin's azimuth) keeps ``2E = omega.I.omega`` and
-    ``M^2 = |I omega|^2`` (eqn:E, eqn:J); linear in ``r^2`` and ``z^2``:
-    ``r^2 = (M^2 - 2E I3) / (I1 (I1 - I3) c^2 + I2 (I2 - I3) s^2)`` and
-    ``z^2 = (2E - r^2 (I1 c^2 + I2 s^2)) / I3``.  A LAM polhode that does
-    not reach that azimuth is started where it crosses ``omega3 = 0``
-    nearest it.  Components keep the signs of the spin's, so the orbit
-    starts close to the throw.
+    try:
+        return abs(Motion(body, omega).period / period - 1.0)
+    except OrbitsError:
+        return math.inf
+
+
+def _start_near(moments, theta, dtheta, theta_crit, spin):
+    """The point of the polhode of the ``phi = 0`` spin at ``theta = theta_crit +
+    dtheta`` (``|omega0| = 1``) at the azimuth of ``spin`` about I3.
+
+    On the orbit, ``omega = (r c, r s, z)`` (principal axes, ``c, s`` the
+    cosine and sine of the spin's azimuth) keeps ``2E`` and ``M^2``
+    (eqn:E, eqn:J), so ``I1 (I3-I1) x^2 + I2 (I3-I2) y^2 = 2EI3 - M^2``,
+    ``I2 (I2-I1) y^2 + I3 (I3-I1) z^2 = M^2 - 2EI1`` and ``I1 (I2-I1) x^2
+    - I3 (I3-I2) z^2 = 2EI2 - M^2``.  The three invariants are taken from
+    the spin in factored form (``2EI2 - M^2 = I1 (I2-I1) sin(dtheta) (sin
+    theta + cos theta tan theta_crit) / cos theta_crit``, no cancellation
+    next to the separatrix; from 2E and M^2 it kept only ~1e-16 / |dtheta|
+    of its digits), and each square is a sum of non-negative terms (on
+    SAM).  A LAM polhode that does not reach that azimuth is started where
+    it crosses ``omega3 = 0`` nearest it.  Components keep the signs of the
+    spin's, so the orbit starts close to the throw.
     """
     i1, i2, i3 = (float(v) for v in moments)
     largest = max(abs(float(v)) for v in spin)  # only its direction counts
     w1, w2, w3 = (math.ldexp(float(v), -math.frexp(largest)[1]) for v in spin)
     norm = math.hypot(w1, w2)
     c, s = (abs(w1) / norm, abs(w2) / norm) if norm > 0.0 else (1.0, 0.0)
-    r_sq = (m_sq - two_e * i3) / (i1 * (i1 - i3) * c * c + i2 * (i2 - i3) * s * s)
-    z_sq = (two_e - r_sq * (i1 * c * c + i2 * s * s)) / i3
+    sin_t, cos_t = math.sin(theta), math.cos(theta)
+    gap_3 = i1 * (i3 - i1) * sin_t * sin_t  # 2EI3 - M^2
+    gap_1 = i3 * (i3 - i1) * cos_t * cos_t  # M^2 - 2EI1
+    gap_2 = (  # 2EI2 - M^2: < 0 on SAM, > 0 on LAM
+        i1
+        * (i2 - i1)
+        * math.sin(dtheta)
+        * (sin_t + cos_t * math.tan(theta_crit))
+        / math.cos(theta_crit)
+    )
+    r_sq = gap_3 / (i1 * (i3 - i1) * c * c + i2 * (i3 - i2) * s * s)
+    z_sq = (i1 * (i2 - i1) * r_sq * c * c - gap_2) / (i3 * (i3 - i2))
     if z_sq < 0.0:  # LAM, azimuth beyond the polhode's reach: its crossing of omega3 = 0
-        y_sq = (m_sq - two_e * i1) / (i2 * (i2 - i1))
-        x, y, z = math.sqrt((two_e - i2 * y_sq) / i1), math.sqrt(y_sq), 0.0
+        x_sq = gap_2 / (i1 * (i2 - i1))
+        y_sq = gap_1 / (i2 * (i2 - i1))
+        x, y, z = math.sqrt(x_sq), math.sqrt(y_sq), 0.0
     else:
         r = math.sqrt(r_sq)
         x, y, z = r * c, r * s, math.sqrt(z_sq)

@@ -2,6 +2,7 @@
 asteroids by their periods, real-time animations, the notebook reprs."""
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -124,6 +125,34 @@ def test_nearest_orbits_at_any_scale_of_doubles(scale, speed):
     for row in frame.itertuples():
         spin = Motion.from_omega(Body(moments * scale), [row.omega_x, row.omega_y, row.omega_z])
         assert spin.total_phase() == pytest.approx(row.total_phase, rel=1e-13)
+
+
+@pytest.mark.parametrize(
+    "moments, omega",
+    [
+        ([0.9, 1.0, 1.9], [1e-9, 1.0, 1e-10]),  # a math domain error (flat body, near I2)
+        ([0.9, 1.0, 1.9], [1e-4, 1.0, 1e-5]),  # starts 2.9e-8 off in period
+        ([0.5, 1.0, 1.5], [1e-9, 1.0, 1e-10]),
+        ([0.26, 0.55, 0.793662], [-1e-7, 1.0, 3e-8]),
+        ([1.0, 1.0 + 1e-6, 1.5], [1e-3, 1.0, 1e-4]),
+    ],
+)
+def test_nearest_orbits_start_on_their_orbits_next_to_the_separatrix(moments, omega):
+    """Next to I2 the start was solved from 2E and M^2, whose difference
+    2EI2 - M^2 kept ~1e-16/|dtheta| of its digits: a square rounded below
+    0 (ValueError), or a start whose orbit was 3e-8 off in period.  The
+    invariants come from the row's angles in factored form now: the motion
+    from each start has the row's period and total phase to rounding."""
+    body = Body(moments)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no UnresolvedOrbitsWarning either
+        frame = orbits.nearest_orbits(body, omega, k=3)
+    for row in frame.itertuples():
+        start = Motion.from_omega(body, [row.omega_x, row.omega_y, row.omega_z])
+        assert start.period == pytest.approx(row.period_s, rel=1e-13)
+        assert start.total_phase() == pytest.approx(row.total_phase, rel=1e-13)
+        assert start.branch == row.branch
+        assert np.sign(row.omega_x) == np.sign(omega[0]) and np.sign(row.omega_y) == 1
 
 
 def test_nearest_orbits_refuses_bad_input():
