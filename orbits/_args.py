@@ -135,10 +135,18 @@ def integer(name, value, minimum=1, maximum=None):
     Integral floats (``3.0``) are accepted; text, booleans and fractions
     are not.
     """
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+    if isinstance(value, (bool, np.bool_, np.timedelta64, np.datetime64)) or not isinstance(
+        value, numbers.Real
+    ):
+        # (NumPy registers timedelta64 as an Integral, which int() refuses)
         raise ArgumentTypeError(f"{name} must be an integer >= {minimum}, got {_describe(value)}")
     if isinstance(value, numbers.Integral):
         number = int(value)
+    elif isinstance(value, numbers.Rational):
+        # a Fraction as itself: float() overflowed beyond 1.8e308 (OverflowError)
+        if value.denominator != 1:
+            raise InputError(f"{name} must be an integer >= {minimum}, got {_describe(value)}")
+        number = int(value.numerator)
     else:
         real = float(value)
         if not real.is_integer():

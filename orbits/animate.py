@@ -176,11 +176,10 @@ def check_fps(fps, fmt=None, name="fps"):
         Naming ``name`` (``--fps`` on the command line).
     """
     if (
-        isinstance(fps, (bool, np.bool_))
+        isinstance(fps, (bool, np.bool_, np.timedelta64))
         or not isinstance(fps, numbers.Real)
-        or not math.isfinite(fps)
+        or not 1 <= fps <= 100  # first: math.isfinite(10**400) overflowed
         or fps != int(fps)
-        or not 1 <= fps <= 100
     ):
         raise InputError(f"{name} must be an integer from 1 to 100, got {fps!r}")
     fps = int(fps)
@@ -363,7 +362,8 @@ def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         if orbits is None:
-            orbits = closed_orbits(body, n_max=max(1, math.ceil(p / q)), q_max=q)
+            # ceil(p/q) in integers: p / q overflowed a double for p = 10**400
+            orbits = closed_orbits(body, n_max=max(1, -(-p // q)), q_max=q)
         else:
             orbits = _rows_of(body, orbits)
     match = orbits[(orbits["n"] == p) & (orbits["q"] == q)]
@@ -1084,7 +1084,8 @@ def poinsot_animation(
         if periods is not None or frames is not None:
             raise InputError("give seconds (real time) or periods and frames, not both")
         frames = check_real_time(seconds, fps)
-        periods = float(seconds) / motion.period
+        # as check_real_time reads it ([3.0] and a 1-element array too)
+        periods = real_scalar("seconds", seconds) / motion.period
     frames = 120 if frames is None else integer("frames", frames, minimum=2)
     periods = default_periods if periods is None else real_scalar("periods", periods)
     if not (np.isfinite(periods) and periods > 0):

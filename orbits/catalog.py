@@ -107,7 +107,11 @@ def catalog(bodies, n_max=10, q_max=1, *, verify=False, progress=None):
 
     if isinstance(bodies, Body):
         bodies = [bodies]
-    if isinstance(bodies, (str, bytes)) or not hasattr(bodies, "__iter__"):
+    if (
+        isinstance(bodies, (str, bytes))
+        or not hasattr(bodies, "__iter__")
+        or (isinstance(bodies, np.ndarray) and bodies.ndim == 0)  # iterating it raises
+    ):
         raise ArgumentTypeError(
             f"bodies must be a Body or an iterable of Body objects "
             f"(or moments), got {type(bodies).__name__}"

@@ -120,8 +120,8 @@ def level_estimate(n_max, q_max):
     lowest terms: about ``(6/pi^2) n_max q_max^2 / 2`` of them, built from
     ``n_max q_max (q_max + 1) / 2`` candidates.  Floats (inf beyond a double).
     """
-    n = _as_float(n_max)
-    candidates = n * q_max * (q_max + 1) / 2.0
+    n, q = _as_float(n_max), _as_float(q_max)
+    candidates = n * q * (q + 1.0) / 2.0
     return candidates, candidates * 6.0 / math.pi**2 + n
 
 

@@ -52,7 +52,7 @@ def set_num_threads(count):
 
     numba = _numba()
     top = numba.config.NUMBA_NUM_THREADS
-    if isinstance(count, (bool, np.bool_)) or not isinstance(count, numbers.Real):
+    if isinstance(count, (bool, np.bool_, np.timedelta64)) or not isinstance(count, numbers.Real):
         raise ArgumentTypeError(
             f"threads must be an integer from 1 to {top}, got {count!r} ({type(count).__name__})"
         )

@@ -59,6 +59,13 @@ junk = st.one_of(
             [1e300, 1e300, 1e300],
             np.bool_(True),
             np.datetime64("2020-01-01"),
+            # beyond a double as a count: OverflowError from float(); NumPy
+            # calls timedelta64 an Integral, which int() refuses; a 0-d array
+            # has __iter__ and raises when iterated
+            Fraction(10**400, 3),
+            10**400,
+            np.timedelta64(3, "s"),
+            np.array(0.5),
             slice(1),
             "3",
             "0.5",
@@ -146,6 +153,15 @@ CALLS = {
     "phase_levels": lambda x: orbits.phase_levels(x, 2),
     "catalog.bodies": lambda x: orbits.catalog(x, 3),
     "catalog.n_max": lambda x: orbits.catalog([BODY], x),
+    "catalog.q_max": lambda x: orbits.catalog([BODY], 3, q_max=x),
+    "orbit_row.n": lambda x: orbits.orbit_row(BODY, n=x, branch="SAM"),
+    "set_num_threads": lambda x: orbits.set_num_threads(x),
+    "poinsot_animation.fps": lambda x: len(
+        orbits.poinsot_animation(BODY, 0.4, frames=2, fps=x, dpi=20).times
+    ),
+    "poinsot_animation.seconds": lambda x: len(
+        orbits.poinsot_animation(BODY, 0.4, seconds=x, fps=4, dpi=20).times
+    ),
     "closure_errors.moments": lambda x: orbits.closure_errors(x, [-0.05], [2]),
     "closure_errors.dtheta": lambda x: orbits.closure_errors(FIG6, x, [1]),
     "closure_errors.periods": lambda x: orbits.closure_errors(FIG6, [-0.05], x),
@@ -377,3 +393,39 @@ def test_huge_level_counts_are_refused_before_any_allocation(n_max, tmp_path):
         with pytest.raises(InputError, match="would need") as error:
             call()
         assert "\n" not in str(error.value) and len(str(error.value)) < 300
+
+
+@pytest.mark.parametrize(
+    "value", [Fraction(10**400, 3), Fraction(10**400, 1), 10**400, np.timedelta64(3, "s")]
+)
+@pytest.mark.parametrize(
+    "name",
+    [
+        "closed_orbits.n_max",
+        "closed_orbits.q_max",
+        "phase_levels",
+        "catalog.q_max",
+        "orbit_row.n",
+        "set_num_threads",
+        "poinsot_animation.fps",
+        "herpolhode.points",
+    ],
+)
+def test_counts_beyond_a_double_are_orbits_errors(name, value, monkeypatch, tmp_path):
+    """float() of such counts overflowed (OverflowError), int() of a
+    timedelta64 (an Integral to NumPy) raised TypeError."""
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(OrbitsError):
+        CALLS[name](value)
+
+
+def test_a_zero_d_array_or_a_one_element_duration():
+    """catalog(np.array(0.5)) iterated a 0-d array (TypeError); seconds=[3.0]
+    reached float() (TypeError) after check_real_time had accepted it."""
+    with pytest.raises(ArgumentTypeError, match="bodies must be"):
+        orbits.catalog(np.array(0.5), 3)
+    with pytest.raises(ArgumentTypeError, match="bodies must be"):
+        Survey.from_bodies("unused-survey-dir", np.array(0.5), 3)
+    for seconds in ([3.0], np.array([3.0]), 3.0):
+        drawn = orbits.poinsot_animation(BODY, 0.4, seconds=seconds, fps=4, dpi=20)
+        assert len(drawn.times) == 13 and drawn.times[-1] == pytest.approx(3.0, rel=1e-12)

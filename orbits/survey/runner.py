@@ -136,7 +136,11 @@ class Survey:
         Names of :class:`~orbits.Body` objects are kept (a ``name`` column
         in the bodies table) unless ``names`` is given.
         """
-        if isinstance(bodies, (str, bytes)) or not hasattr(bodies, "__iter__"):
+        if (
+            isinstance(bodies, (str, bytes))
+            or not hasattr(bodies, "__iter__")
+            or (isinstance(bodies, np.ndarray) and bodies.ndim == 0)  # iterating it raises
+        ):
             raise ArgumentTypeError(
                 f"bodies must be an iterable of Body objects or "
                 f"moments, got {type(bodies).__name__}"
