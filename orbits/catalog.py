@@ -39,6 +39,7 @@ from ._args import (
     integer,
     path_argument,
     real_array,
+    utf8_text,
 )
 from ._version import __version__
 from .atomic import atomic_path, csv_float_options
@@ -387,14 +388,16 @@ def write_catalog(frame, path, command=None, notes=()):
     path : str or Path
         The file, replaced atomically, or ``"-"``.
     command : str, optional
-        The command that made it, for the header.
-    notes : sequence of str
+        The command that made it, for the header (None or ``""``: "(Python
+        API)").
+    notes : str or iterable of str
         Extra header lines.
 
     Raises
     ------
     ArgumentTypeError
-        ``frame`` is not a pandas DataFrame, or ``path`` is not a path (str or os.PathLike).
+        ``frame`` is not a pandas DataFrame, ``path`` is not a path (str or
+        os.PathLike), ``command`` not a str or None, ``notes`` not text.
     InputError
         ``path`` ``"-"`` while standard output is closed; an unwritable
         path; a frame :func:`read_catalog` would refuse (columns not the
@@ -417,8 +420,7 @@ def write_catalog(frame, path, command=None, notes=()):
     # what read_catalog would refuse is not written (columns not the schema,
     # NaN, an edited row): checked on the very text, before the file exists
     _catalog_frame("write_catalog: the frame", data.encode())
-    if isinstance(notes, str):  # one note (iterating it wrote a line per letter)
-        notes = [notes]
+    command, notes = _header_text(command, notes)
     header = [
         f"orbits {__version__} closed-orbit catalog",
         f"command: {command if command else '(Python API)'}",
@@ -442,6 +444,30 @@ def write_catalog(frame, path, command=None, notes=()):
     with atomic_path(path) as temporary:
         with open(temporary, "w", newline="", encoding="utf-8") as handle:
             handle.write(text)
+
+
+def _header_text(command, notes):
+    """``(command, notes)`` of :func:`write_catalog`, checked: text UTF-8 can hold.
+
+    ``command`` None or a str; ``notes`` one str or an iterable of str (a
+    bytes note wrote a line per byte value, ``command=0`` read as none).
+    """
+    if command is not None and not isinstance(command, str):
+        raise ArgumentTypeError(f"command must be a str or None, got {type(command).__name__}")
+    if command is not None:
+        command = utf8_text("command", command)
+    if isinstance(notes, str):  # one note (iterating it wrote a line per letter)
+        notes = [notes]
+    if isinstance(notes, (bytes, bytearray)) or not hasattr(notes, "__iter__"):
+        raise ArgumentTypeError(
+            f"notes must be a str or an iterable of str, got {type(notes).__name__}"
+        )
+    notes = list(notes)
+    for note in notes:
+        if not isinstance(note, str):
+            raise ArgumentTypeError(f"each note must be a str, got {type(note).__name__}")
+        utf8_text("a note", note)
+    return command, notes
 
 
 def _split_header(raw):

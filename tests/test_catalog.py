@@ -393,3 +393,26 @@ def test_write_catalog_writes_only_what_read_catalog_reads(tmp_path):
     write_catalog(frame, out, notes="one note")
     back = read_catalog(out)
     assert back.equals(frame) and back.attrs["header"][3] == "one note"
+
+
+@pytest.mark.parametrize(
+    "keywords, error",
+    [
+        ({"notes": None}, orbits.ArgumentTypeError),
+        ({"notes": 0.5}, orbits.ArgumentTypeError),
+        ({"notes": b"ab"}, orbits.ArgumentTypeError),  # wrote lines "# 97", "# 98"
+        ({"notes": [1]}, orbits.ArgumentTypeError),
+        ({"command": 0}, orbits.ArgumentTypeError),  # recorded "(Python API)"
+        ({"command": ["orbits", "catalog"]}, orbits.ArgumentTypeError),  # the list's repr
+        ({"command": np.array([1, 2])}, orbits.ArgumentTypeError),
+        ({"command": "a\ud800"}, InputError),  # a raw UnicodeEncodeError
+        ({"notes": ["\ud800"]}, InputError),
+    ],
+)
+def test_write_catalog_checks_its_header_text(tmp_path, keywords, error):
+    path = tmp_path / "c.csv"
+    with pytest.raises(error):
+        write_catalog(orbits.closed_orbits(FIG6, n_max=3), path, **keywords)
+    assert list(tmp_path.iterdir()) == []
+    write_catalog(orbits.closed_orbits(FIG6, n_max=3), path, command="x", notes=("a", "b"))
+    assert path.read_text().splitlines()[1:5:3] == ["# command: x", "# b"]
