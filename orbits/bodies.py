@@ -550,7 +550,7 @@ class Body:
         InertialDefectWarning
             With ``defect="flatten"`` when the excess was removed.
         """
-        return _from_tensor(cls, tensor, name, defect, 0.0, "inertia tensor")
+        return _from_tensor(cls, tensor, name, defect, 0.0, "body given by its tensor")
 
     @classmethod
     def from_semi_axes(cls, a, b, c, *, name=None):

@@ -176,14 +176,18 @@ def check_search_bounds(n_max, q_max, bodies=1, what="this search"):
     return memory, seconds
 
 
-def check_resolution(resolution):
-    """Refuse a grid whose construction alone would exceed the machine."""
-    resolution = integer("resolution", resolution, minimum=2)
+def check_resolution(resolution, name="resolution"):
+    """Refuse a grid whose construction alone would exceed the machine.
+
+    ``name``: the argument's name in messages (``--resolution`` on the
+    command line).
+    """
+    resolution = integer(name, resolution, minimum=2)
     # integer arithmetic: float(resolution) ** 2 overflows for absurd grids
     memory = float(min(resolution * resolution * _BYTES_PER_GRID_POINT, 10**300))
     if memory > memory_budget():
         raise InputError(
-            f"--resolution {resolution} would need about {format_bytes(memory)} "
+            f"{name} {resolution} would need about {format_bytes(memory)} "
             f"of memory for the grid alone, more than the "
             f"{format_bytes(memory_budget())} allowed (half of this machine's)"
         )

@@ -73,7 +73,7 @@ def _cmd_survey(args):
         # say it before building the grid, which itself takes seconds when large
         from ..survey import GRID_INSIDE, Ledger, check_survey_bounds
 
-        check_resolution(args.resolution)
+        check_resolution(args.resolution, "--resolution")
         count = max(1, int(GRID_INSIDE * args.resolution**2))
         check_survey_bounds(count, args.n_max, args.q_max, args.chunk)
         # the directory judged on what is known before the grid is built, so
