@@ -25,6 +25,7 @@ import io
 import math
 import os
 import re
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -103,6 +104,13 @@ def catalog(bodies, n_max=10, q_max=1, *, verify=False, progress=None):
         No bodies, ``n_max``/``q_max`` not integers >= 1, or a search whose
         memory or time would exceed the machine (see
         :func:`check_search_bounds`; refused before any work).
+
+    Warns
+    -----
+    UnresolvedOrbitsWarning
+        Per body whose orbits up to ``n_max`` include some closer than
+        ``|dtheta| = 2.2e-308`` to the separatrix (left out), at the
+        caller's line, naming the body (``body k of N``, and its name).
     """
     from .checks import closure_errors
 
@@ -124,8 +132,17 @@ def catalog(bodies, n_max=10, q_max=1, *, verify=False, progress=None):
     verify, progress = flag("verify", verify), callback("progress", progress)
     check_search_bounds(n_max, q_max, len(bodies), "the catalog")
     frames = []
-    for body in bodies:
-        frame = closed_orbits(body, n_max=n_max, q_max=q_max)
+    for index, body in enumerate(bodies):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            frame = closed_orbits(body, n_max=n_max, q_max=q_max)
+        for warning in caught:
+            # which body of the list, at the caller's line (two unnamed
+            # bodies gave two identical lines)
+            where = f"body {index + 1} of {len(bodies)}: " if len(bodies) > 1 else ""
+            warnings.warn(
+                f"{where}{warning.message}", warning.category, stacklevel=caller_stacklevel()
+            )
         if verify:
             frame[VERIFIED_COLUMN] = closure_errors(
                 body.moments, frame["dtheta"].to_numpy(), frame["q"].to_numpy()
@@ -236,7 +253,17 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
             "machine; lower k (--nearest) or --q-max, or take a spin farther from the "
             "separatrix"
         )
-    frame = closed_orbits(body, n_max=n_max, q_max=q_max)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        frame = closed_orbits(body, n_max=n_max, q_max=q_max)
+    for warning in caught:
+        # the search's n_max is ours, not the caller's: say what it was for
+        warnings.warn(
+            f"the {k} closed orbits nearest this spin (total phase {alpha:.6g} rad, a "
+            f"search up to n = {n_max}): {warning.message}",
+            warning.category,
+            stacklevel=caller_stacklevel(),
+        )
     distance = np.abs(frame["total_phase"].to_numpy() - alpha)
     other = (frame["branch"].astype(str) != spin.branch).to_numpy()
     level = np.abs(frame["D"].to_numpy() - d_spin)
@@ -262,8 +289,6 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
     for name in NEAREST_COLUMNS:
         frame[name] = np.array(columns[name])
     if unheld:
-        import warnings
-
         from .search import UnresolvedOrbitsWarning
 
         rows = ", ".join(str(row) for row, _ in unheld[:5]) + (" ..." if len(unheld) > 5 else "")

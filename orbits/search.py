@@ -14,7 +14,7 @@ from fractions import Fraction
 
 import numpy as np
 
-from ._args import integer, real_array
+from ._args import caller_stacklevel, integer, real_array
 from .bodies import Body, canonical_moments, unit_moments
 from .cells import numbers_label
 from .core import search as _kernels
@@ -361,10 +361,16 @@ def closed_orbits(body, n_max=10, q_max=1):
 
     Notes
     -----
-    The search (see :mod:`orbits.core.search`) scans each branch, splits
-    it into pieces on which ``Delta alpha`` is monotone, and solves for
-    every level on every piece, so bodies whose phase is not monotone in
-    theta get all their roots.  Every root is checked:
+    The search (see :mod:`orbits.core.search` and the documentation's
+    Numerics page) first tests that ``Delta alpha`` falls monotonically
+    through 14 fixed points of each branch (log-spaced from 1e-256 of its
+    width to 0.95 of it); where it does, each level between the branch's
+    end values has one root, placed by the separatrix expansion and
+    refined by safeguarded Newton steps.  Only a branch that fails the test
+    is scanned and split into pieces on which ``Delta alpha`` is monotone
+    (a fallback no real body has needed: none of 699,266 audited bodies).
+    The test is a sample, not a proof: a rise narrower than the spacing
+    of its points could pass it.  Every root is checked:
     ``|Delta alpha - 2 pi p/q| <= 1e-10 * 2 pi p/q``.
     """
     n_max, q_max = _count("n_max", n_max), _count("q_max", q_max)
@@ -386,13 +392,15 @@ def closed_orbits(body, n_max=10, q_max=1):
             if len(left) == 1
             else " and ".join(f"{count} on {name}" for name, count in left)
         )
+        name = getattr(body, "name", None)
         warnings.warn(
+            f"{f'{name}: ' if name else ''}"
             f"{plural(unreached, 'closed orbit')} ({where}) with 2 pi p/q <= 2 pi {n_max} "
             f"{'lies' if unreached == 1 else 'lie'} "
             "closer than |dtheta| = 2.2e-308 to the separatrix and cannot be "
             "stored in double precision; they are left out",
             UnresolvedOrbitsWarning,
-            stacklevel=2,
+            stacklevel=caller_stacklevel(),
         )
     order = np.argsort(offset, kind="stable")
     frame = catalog_rows(

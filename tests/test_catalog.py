@@ -416,3 +416,25 @@ def test_write_catalog_checks_its_header_text(tmp_path, keywords, error):
     assert list(tmp_path.iterdir()) == []
     write_catalog(orbits.closed_orbits(FIG6, n_max=3), path, command="x", notes=("a", "b"))
     assert path.read_text().splitlines()[1:5:3] == ["# command: x", "# b"]
+
+
+def test_unresolved_orbit_warnings_name_the_body_at_the_callers_line():
+    """catalog's warning pointed at orbits/catalog.py and did not say which
+    body (two unnamed bodies: two identical lines); nearest_orbits passed on
+    the search's warning naming an n_max the caller never gave."""
+    fig6 = orbits.Body.preset("fig6")
+    with pytest.warns(orbits.UnresolvedOrbitsWarning) as caught:
+        orbits.catalog([fig6, orbits.Body(fig6.moments)], n_max=400)
+    assert [w.filename for w in caught] == [__file__, __file__]
+    texts = [str(w.message) for w in caught]
+    assert texts[0].startswith("body 1 of 2: fig6: 29 closed orbits (15 on SAM and 14 on LAM)")
+    assert texts[1].startswith("body 2 of 2: 29 closed orbits")
+    with pytest.warns(orbits.UnresolvedOrbitsWarning) as caught:
+        orbits.closed_orbits(fig6, n_max=400)
+    assert caught[0].filename == __file__ and str(caught[0].message).startswith("fig6: 29")
+    with pytest.warns(orbits.UnresolvedOrbitsWarning) as caught:
+        orbits.nearest_orbits(fig6, [1e-300, 1.0, 1e-300], 20)
+    assert caught[0].filename == __file__
+    assert str(caught[0].message).startswith(
+        "the 20 closed orbits nearest this spin (total phase 4727.7 rad, a search up to n = 773)"
+    )
