@@ -443,6 +443,16 @@ class Motion:
             A time not finite, or ``|t|`` beyond ``2**50`` periods, where a
             double no longer places a time within its period (the
             orientation there is lost to rounding).
+
+        Notes
+        -----
+        A double time ``t`` is itself rounded by ``eps |t|``, so the
+        orientation at ``t`` cannot be better than about ``eps |omega| t``
+        radians (``eps = 2.2e-16``): the error grows linearly with ``t``,
+        measured at 0.3 to 1.7 ``eps |omega| t`` from 1e3 to 2**50 periods
+        against an independent integration, about 1e-3 rad at 1e12
+        periods and of order 1 rad near 2**49.  No warning says so below
+        the ``2**50`` refusal.
         """
         times, flat = self._times(t)
         n = flat.shape[0]
