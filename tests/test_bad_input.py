@@ -249,10 +249,15 @@ CLI_CASES = [
     ("attached-separator-bench", ["bench", "--only=--"], {}, "--only:"),
     ("attached-separator-survey", [S, "--resolution", "4", "--chunk=--"], {}, "--chunk:"),
     # '' was read as the current directory ("cannot write .: it is a directory")
-    ("empty-out", [C] + FIG6 + ["--n-max", "2", "--out", ""], {}, "--out: an empty path"),
-    ("empty-check", [S, "--check", ""], {}, "--check: an empty path"),
-    ("empty-survey-out", [S, "--resolution", "4", "--out="], {}, "--out: an empty path"),
-    ("empty-table", [V, "--table", ""], {}, "--table: an empty path"),
+    (
+        "empty-out",
+        [C] + FIG6 + ["--n-max", "2", "--out", ""],
+        {},
+        "--out must be a non-empty path",
+    ),
+    ("empty-check", [S, "--check", ""], {}, "--check must be a non-empty path"),
+    ("empty-survey-out", [S, "--resolution", "4", "--out="], {}, "--out must be a non-empty path"),
+    ("empty-table", [V, "--table", ""], {}, "--table must be a non-empty path"),
     ("animate-stdout", [A] + FIG6 + ["--theta", "0.5", "--out", "-"], {}, "never to standard"),
     # its remedies (--seconds 0.05, --periods 7.3e147) were both refused in turn
     (

@@ -842,7 +842,7 @@ def check_arguments(args):
     for dest in PATH_OPTIONS:
         if getattr(args, dest, None) == "":
             # '' read as the current directory: "cannot write .: it is a directory"
-            raise InputError(f"{option_string(dest)}: an empty path names no file; give a path")
+            raise InputError(f"{option_string(dest)} must be a non-empty path, got '' (str)")
     if command not in SELECTORS:
         return
     given = getattr(args, "given", set())
