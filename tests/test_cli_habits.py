@@ -521,3 +521,11 @@ def test_an_ascii_terminal_and_a_name_it_cannot_show(tmp_path):
         "é",
     )
     assert code == 0 and "é" in out.decode("utf-8")
+
+
+def test_an_attached_value_ending_in_the_separator_is_kept(capsys):
+    """--name=a=-- names "a=--" (argparse strips only a value of exactly
+    "--"); the refusal of --OPT=-- took it for one."""
+    code = main(["phase", "--preset", "fig6", "--theta", "0.5", "--name=a=--"])
+    out = capsys.readouterr().out
+    assert code == 0 and out.splitlines()[0].split()[-1] == "a=--"

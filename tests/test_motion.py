@@ -939,3 +939,22 @@ def test_tiny_transverse_components_keep_their_digits(small, direction):
         angle, _ = _turn_about_momentum(motion, t)
         want = math.remainder(speed * t, 2.0 * math.pi)
         assert abs(math.remainder(angle - want, 2.0 * math.pi)) <= 1e-14
+    # the herpolhode point (omega in space, from the node formula) is R omega:
+    # w1 w2 and 2EI3 - M^2 went subnormal in it (0.37 off at 1e-200)
+    state = motion.state(np.array([0.7, 3.0]))
+    turned = np.einsum("kij,kj->ki", state.rotation, state.omega)
+    assert np.all(np.abs(state.omega_space - turned) <= 1e-14 * np.abs(turned))
+
+
+def test_the_herpolhode_of_a_spin_a_subnormal_away_from_i3():
+    """1/mu overflowed for mu below 5.6e-309: an InputError ("does not fit a
+    double") from herpolhode(theta=1e-308); the points are (~0, ~0, 1)."""
+    _, points = orbits.herpolhode(Body([1.0, 2.0, 3.0]), theta=1e-308)
+    assert np.all(np.isfinite(points)) and np.all(np.abs(points[:, :2]) < 1e-307)
+    np.testing.assert_array_equal(points[:, 2], 1.0)
+    # and at 1e-200 of |omega| (w1 w2 = 6e-400 flushed the node's x to 0)
+    for small in (1e-158, 1e-200, 1e-300):
+        motion = Motion.from_omega(Body([1.0, 2.0, 3.0]), [3 * small, 2 * small, 1.0])
+        state = motion.state(np.array([0.7]))
+        turned = state.rotation[0] @ state.omega[0]
+        assert np.all(np.abs(state.omega_space[0] - turned) <= 1e-14 * np.abs(turned))

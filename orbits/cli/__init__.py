@@ -453,8 +453,9 @@ def _refuse_attached_separator(argv):
     for token in argv:
         if token == "--":
             return
-        if isinstance(token, str) and token.startswith("-") and token.endswith("=--"):
-            option = token[: -len("=--")]
+        option, equals, value = token.partition("=") if isinstance(token, str) else ("", "", "")
+        # only an attached value of exactly "--" (--name=a=-- names "a=--")
+        if option.startswith("-") and equals and value == "--":
             raise InputError(
                 f"{option}: '--' is not a value (argparse reads it as the end of the "
                 f"options); give {option} a value"

@@ -353,8 +353,6 @@ def whole_periods(orbit, t):
 # it) have squares near or below the smallest normal double (2.2e-308)
 _SMALL_COMPONENT = 2.0**-300
 _UNDO = 2.0**600
-# an invariant gap below this lost digits to subnormal squares
-_SMALL_GAP = 2.0**-960
 
 
 @njit(cache=True, nogil=True)
@@ -494,19 +492,22 @@ def _omega_space(orbit, t, gained, sn, cn, dn):
     m1 = i1 * w1
     m2 = i2 * w2
     mu_sq = m1 * m1 + m2 * m2
-    mu = math.sqrt(mu_sq) if mu_sq > 1e-280 else math.hypot(m1, m2)
-    if mu == 0.0:  # a steady spin about I3: omega along M
-        return 0.0, 0.0, height
-    inv_mu = 1.0 / mu
-    x_node = (i2 - i1) * w1 * w2 * inv_mu
-    gap = orbit[SLOT_GAP_3M]
-    if gap < _SMALL_GAP and orbit[SLOT_BRANCH] == BRANCH_SAM:
-        # 2EI3 - M^2 = I1 (I3 - I1) a1^2 below the normal doubles: as
-        # a1 (a1 / mu), each factor normal (a spin within 1e-154 of I3)
-        amp1 = orbit[SLOT_A1]
-        y_node = w3 * (i1 * (orbit[SLOT_I3] - i1) * amp1 / momentum) * (amp1 * inv_mu)
+    if mu_sq > 1e-280:
+        inv_mu = 1.0 / math.sqrt(mu_sq)
+        x_node = (i2 - i1) * w1 * w2 * inv_mu
+        y_node = w3 * (orbit[SLOT_GAP_3M] / momentum) * inv_mu
     else:
-        y_node = w3 * (gap / momentum) * inv_mu
+        # a spin within ~1e-140 of I3 (mu is small on SAM only): w1 w2 and
+        # 2EI3 - M^2 = I1 (I3 - I1) a1^2 would fall below the normal
+        # doubles (and 1/mu overflow for mu below 5.6e-309), so each is
+        # formed as a product of normal factors, w1 (w2 / mu) and
+        # a1 (a1 / mu)
+        mu = math.hypot(m1, m2)
+        if mu == 0.0:  # a steady spin about I3: omega along M
+            return 0.0, 0.0, height
+        amp1 = orbit[SLOT_A1]
+        x_node = (i2 - i1) * w1 * (w2 / mu)
+        y_node = w3 * (i1 * (orbit[SLOT_I3] - i1) * amp1 / momentum) * (amp1 / mu)
     sf, cf = sincos(phi)
     return cf * x_node - sf * y_node, sf * x_node + cf * y_node, height
 
