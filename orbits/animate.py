@@ -61,7 +61,7 @@ from .animation_scene import (
 from .atomic import atomic_path, ensure_writable
 from .bodies import Body
 from .cells import literal_text
-from .errors import AngleError, ArgumentTypeError, InputError
+from .errors import AngleError, ArgumentTypeError, InputError, OrbitsError
 from .limits import AGG_MAX_PIXELS, check_animation, short_number
 from .motion import Motion, as_body
 
@@ -1166,7 +1166,7 @@ def animation_motion(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0, bod
                     f"{body.normalized_moments.tolist()}"
                 )
         motion = Motion.from_spin(body, dtheta=row["dtheta"])
-        p, q = _row_level(row, motion)
+        p, q = _row_level(row, motion, rounded=row_body is None)
         multiple = f"{p}" if q == 1 else f"{p}/{q}"
         name = literal_text(_row_name(row) or "body")
         label = (
@@ -1210,7 +1210,7 @@ def _equals(value, default):
         return False
 
 
-def _row_level(row, motion):
+def _row_level(row, motion, rounded=False):
     """``(p, q)`` of a catalog row, in lowest terms, checked against its motion.
 
     A row is drawn under the title "closed orbit": its ``n`` and ``q`` must
@@ -1218,7 +1218,10 @@ def _row_level(row, motion):
     total phase must be ``2 pi n/q`` to the search's
     :data:`~orbits.search.RESIDUAL_TOLERANCE` (ten times it, for the
     re-evaluation): an edited or hand-made row that does not close is
-    refused, not titled closed.
+    refused, not titled closed.  ``rounded``: the motion's moments are the
+    row's ``I/|I|`` rounded to doubles (no ``body`` given), on which a nearly
+    symmetric body's or a thin rod's phase moves beyond that tolerance; the
+    phase's change under that rounding (4 ulps of each moment) is allowed too.
     """
     from .search import RESIDUAL_TOLERANCE, TWO_PI
 
@@ -1231,7 +1234,10 @@ def _row_level(row, motion):
         )
     level = TWO_PI * n / q
     phase = motion.total_phase()
-    if not abs(phase - level) <= 10.0 * RESIDUAL_TOLERANCE * level:
+    allowed = 10.0 * RESIDUAL_TOLERANCE * level
+    if rounded and not abs(phase - level) <= allowed:
+        allowed += _rounding_slack(motion, float(row["dtheta"]), phase)
+    if not abs(phase - level) <= allowed:
         raise InputError(
             f"the row does not close: its spin's total phase is {phase!r} rad, "
             f"not 2 pi n/q = {level!r} (n = {n}, q = {q}); an edited row? "
@@ -1239,6 +1245,24 @@ def _row_level(row, motion):
         )
     common = math.gcd(n, q)
     return n // common, q // common
+
+
+def _rounding_slack(motion, dtheta, phase):
+    """How far the total phase at ``dtheta`` moves when the motion's moments
+    move by 4 ulps each (the rounding of a catalog's ``I/|I|`` columns)."""
+    from .phases import total_phase
+
+    moments = np.asarray(motion.body.normalized_moments, dtype=float)
+    slack = 0.0
+    for k in range(3):
+        for sign in (-1.0, 1.0):
+            moved = moments.copy()
+            moved[k] += sign * 4.0 * np.spacing(moved[k])
+            try:
+                slack = max(slack, abs(float(total_phase(moved, dtheta=dtheta)) - phase))
+            except OrbitsError:  # moved off the body's region or the spin's range
+                return math.inf
+    return 3.0 * slack
 
 
 def _missing(value):

@@ -1051,3 +1051,20 @@ def test_a_row_that_does_not_close_is_not_titled_closed():
     # n/q not in lowest terms: the orbit of 2 pi 3, back after 1 period
     _, periods, label = animate.animation_motion(dict(row, n=6, q=2, closes_after=None))
     assert periods == 1.0 and r"2\pi\cdot3$" in label
+
+
+@pytest.mark.parametrize(
+    "moments", [[1e-8, 1.0, 1.0 + 3e-9], [1.0, 1.0 + 1e-14, 2.0], [1.0, 2.0 - 1e-12, 2.0]]
+)
+def test_rows_of_nearly_symmetric_bodies_and_rods_are_drawn_without_their_body(moments):
+    """Their rows' rounded I/|I| move the phase beyond 1e-9 (571 of 571 rod
+    rows were refused as "does not close"): that rounding is allowed."""
+    frame = orbits.catalog([Body(moments)], n_max=12, q_max=2)
+    assert len(frame) > 10
+    for row in frame.itertuples():
+        motion, periods, label = animate.animation_motion(row)
+        assert periods == row.q and "closed orbit" in label
+    edited = frame.iloc[0].copy()
+    edited["n"] = edited["n"] + 7
+    with pytest.raises(InputError, match="does not close"):
+        animate.animation_motion(edited)
