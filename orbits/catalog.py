@@ -271,7 +271,7 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
     frame = frame.iloc[order].reset_index(drop=True)
     columns = {name: [] for name in NEAREST_COLUMNS}
     unheld = []  # (row, relative period error) of starting spins that miss their orbit
-    for theta, dtheta, theta_crit in frame[["theta", "dtheta", "theta_crit"]].to_numpy():
+    for theta, dtheta in frame[["theta", "dtheta"]].to_numpy():
         unit = Motion.from_spin(body, dtheta=float(dtheta))  # |omega0| = 1
         speed = spin.momentum / unit.momentum  # the throw's |L|
         orbit = Motion.from_spin(body, dtheta=float(dtheta), speed=speed)
@@ -279,9 +279,9 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
         # on their scale), then scaled to the throw: no square of the moments
         # or of |L| at the caller's scale (they overflowed or went subnormal
         # beyond 1e+-154)
-        start = _start_near(body.unit_moments, theta, dtheta, theta_crit, spin.omega0)
+        start = _start_near(body.unit_moments, theta, dtheta, spin.omega0)
         start = body.frame.T @ (start * speed) / factor
-        off = _period_off(body, body.frame @ (start * factor), orbit.period)
+        off = _start_off(body, body.frame @ (start * factor), orbit)
         if not off <= SPIN_VECTOR_RTOL:
             unheld.append((len(columns["period_s"]), off))
         for name, value in zip(NEAREST_COLUMNS, [*start, orbit.period]):
@@ -295,7 +295,7 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
         worst = max(off for _, off in unheld)
         warnings.warn(
             f"the omega_x, omega_y, omega_z of rows {rows} do not hold their orbits: "
-            f"started from them as doubles, the period is up to "
+            f"started from them as doubles, the period or phase is up to "
             f"{'beyond the separatrix' if math.isinf(worst) else f'{worst:.2g}'} off "
             "(the orbits lie within a double's rounding of the separatrix); every other "
             "column is of the orbit of dtheta: start from Motion.from_spin(body, dtheta=...)",
@@ -311,32 +311,39 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
     return frame
 
 
-def _period_off(body, omega, period):
-    """Relative error of the period of the orbit through ``omega`` (principal
-    axes, rad/s) against ``period``; inf where it lies on the separatrix."""
+def _start_off(body, omega, orbit):
+    """Relative error of the period and total phase of the orbit through
+    ``omega`` (principal axes, rad/s) against ``orbit``'s (a Motion), the
+    larger; inf where it lies on the separatrix."""
     from .motion import Motion
 
     try:
-        return abs(Motion(body, omega).period / period - 1.0)
+        start = Motion(body, omega)
+        return max(
+            abs(start.period / orbit.period - 1.0),
+            abs(start.total_phase() / orbit.total_phase() - 1.0),
+        )
     except OrbitsError:
         return math.inf
 
 
-def _start_near(moments, theta, dtheta, theta_crit, spin):
+def _start_near(moments, theta, dtheta, spin):
     """The point of the polhode of the ``phi = 0`` spin at ``theta = theta_crit +
-    dtheta`` (``|omega0| = 1``) at the azimuth of ``spin`` about I3.
+    dtheta`` (``|omega0| = 1``; both angles given) at the azimuth of ``spin`` about I3.
 
     On the orbit, ``omega = (r c, r s, z)`` (principal axes, ``c, s`` the
     cosine and sine of the spin's azimuth) keeps ``2E`` and ``M^2``
     (eqn:E, eqn:J), so ``I1 (I3-I1) x^2 + I2 (I3-I2) y^2 = 2EI3 - M^2``,
     ``I2 (I2-I1) y^2 + I3 (I3-I1) z^2 = M^2 - 2EI1`` and ``I1 (I2-I1) x^2
     - I3 (I3-I2) z^2 = 2EI2 - M^2``.  The three invariants are taken from
-    the spin in factored form (``2EI2 - M^2 = I1 (I2-I1) sin(dtheta) (sin
-    theta + cos theta tan theta_crit) / cos theta_crit``, no cancellation
+    the spin (``2EI2 - M^2 = sin(dtheta) (2 cos(dtheta) sqrt(I1 (I2-I1)
+    I3 (I3-I2)) + sin(dtheta) (I1 (I2-I1) - I3 (I3-I2)))``, no cancellation
     next to the separatrix; from 2E and M^2 it kept only ~1e-16 / |dtheta|
-    of its digits), and each square is a sum of non-negative terms (on
-    SAM).  A LAM polhode that does not reach that azimuth is started where
-    it crosses ``omega3 = 0`` nearest it.  Components keep the signs of the
+    of its digits), and ``z^2`` from the third on SAM (a sum of
+    non-negative terms), on LAM from the second or the third, whichever
+    rounds less (the third divides a difference by ``I3 - I2``).  A LAM polhode
+    that does not reach that azimuth is started where it crosses
+    ``omega3 = 0`` nearest it.  Components keep the signs of the
     spin's, so the orbit starts close to the throw.
     """
     i1, i2, i3 = (float(v) for v in moments)
@@ -345,17 +352,24 @@ def _start_near(moments, theta, dtheta, theta_crit, spin):
     norm = math.hypot(w1, w2)
     c, s = (abs(w1) / norm, abs(w2) / norm) if norm > 0.0 else (1.0, 0.0)
     sin_t, cos_t = math.sin(theta), math.cos(theta)
+    sin_d, cos_d = math.sin(dtheta), math.cos(dtheta)
+    low, high = i1 * (i2 - i1), i3 * (i3 - i2)  # tan(theta_crit)^2 = high / low
     gap_3 = i1 * (i3 - i1) * sin_t * sin_t  # 2EI3 - M^2
     gap_1 = i3 * (i3 - i1) * cos_t * cos_t  # M^2 - 2EI1
-    gap_2 = (  # 2EI2 - M^2: < 0 on SAM, > 0 on LAM
-        i1
-        * (i2 - i1)
-        * math.sin(dtheta)
-        * (sin_t + cos_t * math.tan(theta_crit))
-        / math.cos(theta_crit)
-    )
+    # 2EI2 - M^2 = low sin^2(theta) - high cos^2(theta), < 0 on SAM and > 0 on
+    # LAM, from dtheta and the moments alone (theta_crit rounded to a double
+    # cost ~eps / cos(theta_crit) of it on a body with I1 ~ I2)
+    gap_2 = sin_d * (2.0 * cos_d * math.sqrt(low * high) + sin_d * (low - high))
     r_sq = gap_3 / (i1 * (i3 - i1) * c * c + i2 * (i3 - i2) * s * s)
-    z_sq = (i1 * (i2 - i1) * r_sq * c * c - gap_2) / (i3 * (i3 - i2))
+    x_part, y_part = low * r_sq * c * c, i2 * (i2 - i1) * r_sq * s * s
+    z_sq = (x_part - gap_2) / high  # SAM: a sum of non-negative terms
+    if gap_2 > 0.0:
+        # LAM: a difference either way; from M^2 - 2EI1 where its rounding
+        # is the smaller (I2 ~ I3: the one above divides by I3 - I2; next to
+        # the separatrix near I2: this one cancels)
+        other = (gap_1 - y_part) / (i3 * (i3 - i1))
+        if (gap_1 + y_part) / (i3 * (i3 - i1)) < (x_part + gap_2) / high:
+            z_sq = other
     if z_sq < 0.0:  # LAM, azimuth beyond the polhode's reach: its crossing of omega3 = 0
         x_sq = gap_2 / (i1 * (i2 - i1))
         y_sq = gap_1 / (i2 * (i2 - i1))

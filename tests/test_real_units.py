@@ -135,6 +135,12 @@ def test_nearest_orbits_at_any_scale_of_doubles(scale, speed):
         ([0.5, 1.0, 1.5], [1e-9, 1.0, 1e-10]),
         ([0.26, 0.55, 0.793662], [-1e-7, 1.0, 3e-8]),
         ([1.0, 1.0 + 1e-6, 1.5], [1e-3, 1.0, 1e-4]),
+        # nearly symmetric: z^2 over I3 - I2, and theta_crit next to pi/2
+        # (cos and tan of it rounded), put starts 2.8e-5 off in phase
+        ([1.0, 2.0 - 1e-12, 2.0], [1.0, 8.99e-11, 1.75e-10]),
+        ([1.0, 2.0 - 1e-12, 2.0], [0.3, 0.5, 0.2]),
+        ([1.0, 1.0 + 1e-12, 2.0], [0.3, 0.5, 0.2]),
+        ([1.0, 1.0 + 1e-12, 2.0], [1e-3, 1.0, 1e-3]),
     ],
 )
 def test_nearest_orbits_start_on_their_orbits_next_to_the_separatrix(moments, omega):
@@ -146,7 +152,7 @@ def test_nearest_orbits_start_on_their_orbits_next_to_the_separatrix(moments, om
     body = Body(moments)
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # no UnresolvedOrbitsWarning either
-        frame = orbits.nearest_orbits(body, omega, k=3)
+        frame = orbits.nearest_orbits(body, omega, k=3, q_max=2)
     for row in frame.itertuples():
         start = Motion.from_omega(body, [row.omega_x, row.omega_y, row.omega_z])
         assert start.period == pytest.approx(row.period_s, rel=1e-13)
