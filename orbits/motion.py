@@ -554,6 +554,11 @@ class Motion:
         ``1/P_phi - 1/P_psi`` on SAM and ``1/P_phi + 1/P_psi`` on LAM
         (Pravec et al. 2014's strongest lightcurve period P_1 for Apophis).
 
+        On LAM the ratio ``Delta alpha / 2 pi - 1`` is a difference: with
+        ``Delta alpha`` within ``delta`` of ``2 pi`` (a thin rod spun near its
+        long axis) it keeps about ``eps * 2 pi / delta`` relative accuracy
+        (:func:`orbits.spins_with_periods` warns where that exceeds 1e-9).
+
         Returns
         -------
         TumblingPeriods

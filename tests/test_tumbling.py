@@ -2,6 +2,7 @@
 
 import math
 import re
+import warnings
 
 import numpy as np
 import pytest
@@ -263,3 +264,17 @@ def test_too_near_the_separatrix_speaks_in_the_requests_terms():
     with pytest.warns(orbits.UnresolvedOrbitsWarning, match="with period ratio") as caught:
         orbits.spins_with_periods(orbits.Body.preset("fig6"), 386.0, 1.0)
     assert all(w.filename == __file__ for w in caught)
+
+
+def test_a_rods_long_axis_ratio_that_cancels_is_said():
+    """P_psi / P_phi = Delta alpha / 2 pi - 1 on LAM: at a ratio of 1e-9 on a
+    thin rod the difference kept P_phi only to 1.4e-7 (999992589.84 reported,
+    999992447.02 exact by mpmath), with no word."""
+    rod = (1e-10, 0.5, 0.5 + 1e-10)
+    with pytest.warns(orbits.UnresolvedOrbitsWarning, match="keeps it only to about 9e-07"):
+        table = orbits.spins_with_periods(rod, 1.0, 1e9)
+    assert table["P_phi"].iloc[0] == pytest.approx(999992447.02, rel=1e-6)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        table = orbits.spins_with_periods(rod, 1.0, 1e4)  # ratio 1e-4: 9e-12 at most
+    assert table["P_phi"].iloc[0] == pytest.approx(1e4, rel=1e-9)
