@@ -129,16 +129,28 @@ def positive_finite(name, value, error=InputError):
     return number
 
 
+# registered as numbers.Real (or Integral) but no count or rate: booleans,
+# and NumPy's timedelta64, which int() and float() refuse
+NOT_NUMBERS = (bool, np.bool_, np.timedelta64, np.datetime64)
+
+
+def listlike(value):
+    """Whether ``value`` iterates as a list of items: not text, bytes, a
+    scalar or a 0-d array (which has ``__iter__`` and raises when iterated)."""
+    return (
+        not isinstance(value, (str, bytes))
+        and hasattr(value, "__iter__")
+        and not (isinstance(value, np.ndarray) and value.ndim == 0)
+    )
+
+
 def integer(name, value, minimum=1, maximum=None):
     """A whole number ``>= minimum`` (and ``<= maximum``) as a Python int.
 
     Integral floats (``3.0``) are accepted; text, booleans and fractions
     are not.
     """
-    if isinstance(value, (bool, np.bool_, np.timedelta64, np.datetime64)) or not isinstance(
-        value, numbers.Real
-    ):
-        # (NumPy registers timedelta64 as an Integral, which int() refuses)
+    if isinstance(value, NOT_NUMBERS) or not isinstance(value, numbers.Real):
         raise ArgumentTypeError(f"{name} must be an integer >= {minimum}, got {_describe(value)}")
     if isinstance(value, numbers.Integral):
         number = int(value)

@@ -49,7 +49,15 @@ from pathlib import Path
 
 import numpy as np
 
-from ._args import caller_stacklevel, finite_array, flag, integer, path_argument, real_scalar
+from ._args import (
+    NOT_NUMBERS,
+    caller_stacklevel,
+    finite_array,
+    flag,
+    integer,
+    path_argument,
+    real_scalar,
+)
 from .animation_scene import (
     FrameData,
     PoinsotScene,
@@ -176,7 +184,7 @@ def check_fps(fps, fmt=None, name="fps"):
         Naming ``name`` (``--fps`` on the command line).
     """
     if (
-        isinstance(fps, (bool, np.bool_, np.timedelta64))
+        isinstance(fps, NOT_NUMBERS)
         or not isinstance(fps, numbers.Real)
         or not 1 <= fps <= 100  # first: math.isfinite(10**400) overflowed
         or fps != int(fps)
@@ -572,7 +580,6 @@ class PoinsotAnimation:
         (:func:`orbits.animation_scene.frame_times`); ``fps`` not an
         integer from 1 to 100; ``dpi`` out of :func:`check_dpi`'s range or
         too large for the machine; a bad ``solid``.
-
 
     Warns
     -----

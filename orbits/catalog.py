@@ -38,6 +38,7 @@ from ._args import (
     caller_stacklevel,
     flag,
     integer,
+    listlike,
     path_argument,
     real_array,
     utf8_text,
@@ -116,11 +117,7 @@ def catalog(bodies, n_max=10, q_max=1, *, verify=False, progress=None):
 
     if isinstance(bodies, Body):
         bodies = [bodies]
-    if (
-        isinstance(bodies, (str, bytes))
-        or not hasattr(bodies, "__iter__")
-        or (isinstance(bodies, np.ndarray) and bodies.ndim == 0)  # iterating it raises
-    ):
+    if not listlike(bodies):
         raise ArgumentTypeError(
             f"bodies must be a Body or an iterable of Body objects "
             f"(or moments), got {type(bodies).__name__}"
@@ -133,16 +130,9 @@ def catalog(bodies, n_max=10, q_max=1, *, verify=False, progress=None):
     check_search_bounds(n_max, q_max, len(bodies), "the catalog")
     frames = []
     for index, body in enumerate(bodies):
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            frame = closed_orbits(body, n_max=n_max, q_max=q_max)
-        for warning in caught:
-            # which body of the list, at the caller's line (two unnamed
-            # bodies gave two identical lines)
-            where = f"body {index + 1} of {len(bodies)}: " if len(bodies) > 1 else ""
-            warnings.warn(
-                f"{where}{warning.message}", warning.category, stacklevel=caller_stacklevel()
-            )
+        # which body of the list (two unnamed bodies gave two identical lines)
+        where = f"body {index + 1} of {len(bodies)}: " if len(bodies) > 1 else ""
+        frame = _labelled_search(body, n_max, q_max, where)
         if verify:
             frame[VERIFIED_COLUMN] = closure_errors(
                 body.moments, frame["dtheta"].to_numpy(), frame["q"].to_numpy()
@@ -253,17 +243,14 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
             "machine; lower k (--nearest) or --q-max, or take a spin farther from the "
             "separatrix"
         )
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        frame = closed_orbits(body, n_max=n_max, q_max=q_max)
-    for warning in caught:
-        # the search's n_max is ours, not the caller's: say what it was for
-        warnings.warn(
-            f"the {k} closed orbits nearest this spin (total phase {alpha:.6g} rad, a "
-            f"search up to n = {n_max}): {warning.message}",
-            warning.category,
-            stacklevel=caller_stacklevel(),
-        )
+    # the search's n_max is ours, not the caller's: say what it was for
+    frame = _labelled_search(
+        body,
+        n_max,
+        q_max,
+        f"the {k} closed orbits nearest this spin (total phase {alpha:.6g} rad, a "
+        f"search up to n = {n_max}): ",
+    )
     distance = np.abs(frame["total_phase"].to_numpy() - alpha)
     other = (frame["branch"].astype(str) != spin.branch).to_numpy()
     level = np.abs(frame["D"].to_numpy() - d_spin)
@@ -308,6 +295,19 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
         "momentum": spin.momentum,
         "D": d_spin,
     }
+    return frame
+
+
+def _labelled_search(body, n_max, q_max, label):
+    """:func:`~orbits.search.closed_orbits` with its warnings told at the
+    caller's line, each message after ``label``."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        frame = closed_orbits(body, n_max=n_max, q_max=q_max)
+    for warning in caught:
+        warnings.warn(
+            f"{label}{warning.message}", warning.category, stacklevel=caller_stacklevel()
+        )
     return frame
 
 
@@ -363,13 +363,11 @@ def _start_near(moments, theta, dtheta, spin):
     r_sq = gap_3 / (i1 * (i3 - i1) * c * c + i2 * (i3 - i2) * s * s)
     x_part, y_part = low * r_sq * c * c, i2 * (i2 - i1) * r_sq * s * s
     z_sq = (x_part - gap_2) / high  # SAM: a sum of non-negative terms
-    if gap_2 > 0.0:
-        # LAM: a difference either way; from M^2 - 2EI1 where its rounding
-        # is the smaller (I2 ~ I3: the one above divides by I3 - I2; next to
-        # the separatrix near I2: this one cancels)
-        other = (gap_1 - y_part) / (i3 * (i3 - i1))
-        if (gap_1 + y_part) / (i3 * (i3 - i1)) < (x_part + gap_2) / high:
-            z_sq = other
+    # LAM: a difference either way; from M^2 - 2EI1 where its rounding is the
+    # smaller (I2 ~ I3: the one above divides by I3 - I2; next to the
+    # separatrix near I2: this one cancels)
+    if gap_2 > 0.0 and (gap_1 + y_part) / (i3 * (i3 - i1)) < (x_part + gap_2) / high:
+        z_sq = (gap_1 - y_part) / (i3 * (i3 - i1))
     if z_sq < 0.0:  # LAM, azimuth beyond the polhode's reach: its crossing of omega3 = 0
         x_sq = gap_2 / (i1 * (i2 - i1))
         y_sq = gap_1 / (i2 * (i2 - i1))

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._args import integer, path_argument, real_array, utf8_text
+from .._args import integer, listlike, path_argument, real_array, utf8_text
 from .._version import __version__, source_fingerprint
 from ..atomic import make_directories, refuse_link, remove_directories
 from ..bodies import as_moments, region_grid
@@ -136,11 +136,7 @@ class Survey:
         Names of :class:`~orbits.Body` objects are kept (a ``name`` column
         in the bodies table) unless ``names`` is given.
         """
-        if (
-            isinstance(bodies, (str, bytes))
-            or not hasattr(bodies, "__iter__")
-            or (isinstance(bodies, np.ndarray) and bodies.ndim == 0)  # iterating it raises
-        ):
+        if not listlike(bodies):
             raise ArgumentTypeError(
                 f"bodies must be an iterable of Body objects or "
                 f"moments, got {type(bodies).__name__}"
