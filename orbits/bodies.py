@@ -105,7 +105,8 @@ def canonical_moments(moments):
         ``8 eps I3``; or within that slack with no double-precision body on
         the flat edge that differs from it in one moment by the excess.
     SymmetricTopError
-        Two equal moments (after any move onto the flat edge).
+        Two equal moments (after any move onto the flat edge), or two that
+        round to one value when scaled to ``|I| = 1``.
 
     Notes
     -----
@@ -150,6 +151,18 @@ def canonical_moments(moments):
             f"moments {_row(flat, bad)} describe a symmetric top (two equal "
             "moments): it has no separatrix and its elliptic modulus "
             "degenerates, so the total-phase formula needs I1 < I2 < I3"
+        )
+    # I / |I| as the catalog columns round it (core.rows: (I1^2 + I2^2) + I3^2,
+    # as np.linalg.norm sums): moments an ulp apart can round to one value there
+    norm = np.sqrt((unit[:, 0] * unit[:, 0] + unit[:, 1] * unit[:, 1]) + unit[:, 2] * unit[:, 2])
+    scaled = unit / norm[:, None]
+    bad = (scaled[:, 0] == scaled[:, 1]) | (scaled[:, 1] == scaled[:, 2])
+    if bad.any():
+        raise SymmetricTopError(
+            f"moments {_row(flat, bad)} are a symmetric top within rounding: two "
+            "of them become equal when scaled to |I| = 1 (the catalog's I1, I2, "
+            "I3), so no catalog can tell them apart; give moments that differ by "
+            "more than a few parts in 1e16"
         )
     return unit.reshape(shape + (3,)), exponent.reshape(shape)
 

@@ -217,6 +217,29 @@ class TestValidation:
         with pytest.raises(SymmetricTopError, match="symmetric top.*I1 < I2 < I3"):
             Body(moments)
 
+    @pytest.mark.parametrize(
+        "moments",
+        [
+            (1.0, 2.9999999999999996, 3.0),
+            (1.0, 1.9999999999999998, 2.0),
+            (0.5129825523965297, 0.7650661643592273, 0.7650661643592274),
+        ],
+    )
+    def test_moments_an_ulp_apart_that_normalise_to_one_value(self, moments):
+        # distinct doubles, but I / |I| (the catalog's columns) rounds two of
+        # them to one value: a catalog of the body was refused by its own
+        # writer check, a survey listed I2 == I3
+        assert len(set(moments)) == 3
+        with pytest.raises(SymmetricTopError, match=r"symmetric top within rounding.*\|I\| = 1"):
+            Body(moments)
+
+    def test_moments_an_ulp_apart_that_stay_distinct(self):
+        # the same kind of body whose normalised moments stay sorted is kept,
+        # and its catalog columns are strictly increasing
+        body = Body((1.0, 2.0, 2.0000000000000004))
+        unit = body.normalized_moments
+        assert unit[0] < unit[1] < unit[2]
+
     def test_flat_equality_allowed(self):
         i1, i2 = 0.3, 0.55
         body = Body((i1, i2, i1 + i2))
