@@ -104,26 +104,36 @@ def using_threads(count):
 
 @contextmanager
 def threads_for(size, serial_below=SERIAL_BELOW):
-    """Run the enclosed kernels serially when ``size < serial_below``, else on
-    :func:`get_num_threads` threads.
+    """Run the enclosed kernels serially when ``size < serial_below`` or one
+    thread is wanted, else on :func:`get_num_threads` threads.
 
-    numba's thread count belongs to the Python thread that launches a
-    kernel: :func:`set_num_threads` in the main thread does not reach a
-    kernel launched from another (a survey's pool, a user's thread), so
-    every parallel kernel runs inside this.  Heavy kernels (a search or an
-    integration per element) pass ``serial_below=2``.
+    Serially means the kernels' serial twins (:mod:`orbits.core.launch`):
+    numba's threading layer is neither woken nor, in a fresh process,
+    started (a process that never started it can still be forked by
+    ``multiprocessing``).  numba's thread count belongs to the Python thread
+    that launches a kernel: :func:`set_num_threads` in the main thread does
+    not reach a kernel launched from another (a survey's pool, a user's
+    thread), so every parallel kernel runs inside this.  Heavy kernels (a
+    search or an integration per element) pass ``serial_below=2``.
     """
-    numba = _numba()
+    from .core.launch import serial
+
     wanted = 1 if size < serial_below else get_num_threads()
-    before = numba.get_num_threads()
-    if wanted == before:
-        yield
+    if wanted == 1:
+        with serial():
+            yield
         return
-    numba.set_num_threads(wanted)
-    try:
-        yield
-    finally:
-        numba.set_num_threads(before)
+    numba = _numba()
+    before = numba.get_num_threads()
+    with serial(False):
+        if wanted == before:
+            yield
+            return
+        numba.set_num_threads(wanted)
+        try:
+            yield
+        finally:
+            numba.set_num_threads(before)
 
 
 def _size(value):

@@ -15,6 +15,7 @@ import pytest
 import orbits
 from orbits import ArgumentTypeError, InputError
 from orbits.core import checks as core_checks
+from orbits.core import launch
 from orbits.core import search as core_search
 from orbits.survey import compute_chunk
 
@@ -55,7 +56,8 @@ def _threads_seen(monkeypatch, module, name):
     kernel = getattr(module, name)
 
     def recording(*args):
-        seen.append(numba.get_num_threads())
+        # the serial twin (core.launch) runs on one thread whatever numba's count
+        seen.append(1 if launch.runs_serial() else numba.get_num_threads())
         return kernel(*args)
 
     monkeypatch.setattr(module, name, recording)
@@ -144,3 +146,145 @@ def test_a_plain_ascii_thread_count_reaches_numba(value, count):
     result = _bench_with_numba_threads(value)
     assert result.returncode == 0, result.stderr
     assert json.loads(result.stdout)["machine"]["numba_threads"] == count
+
+
+# ------------------------------------------- serial twins (orbits.core.launch)
+
+
+def _run_script(source, env=None, timeout=240):
+    return subprocess.run(
+        [sys.executable, "-c", source],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=dict(os.environ, **(env or {})),
+    )
+
+
+FORK_SCRIPT = """
+import multiprocessing as mp
+import numba, numpy as np, orbits
+from orbits.core import launch
+
+b = orbits.Body.preset("fig6")
+big = np.linspace(0.01, 1.5, 30_000)  # above SERIAL_BELOW: a parallel launch
+
+
+def work(i):
+    return (
+        launch.serial_only(),
+        orbits.total_phase(b, big).tobytes(),
+        float(orbits.total_phase(b, 0.5)),
+        orbits.catalog(b, n_max=4)["dtheta"].to_numpy().tobytes(),
+    )
+
+
+if __name__ == "__main__":
+    first = orbits.total_phase(b, 0.5), orbits.catalog(b, n_max=4)
+    try:
+        numba.threading_layer()
+        started = True
+    except ValueError:
+        started = False
+    print("small calls started a threading layer:", started)
+    {parent_runs_big}
+    with mp.get_context("fork").Pool(2) as pool:
+        results = pool.map_async(work, range(4)).get(timeout=180)
+    expected = work(0)[1:]  # after the fork, in the parent
+    print("children serial only:", sorted({r[0] for r in results}))
+    print("children agree:", all(r[1:] == expected for r in results))
+"""
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="no fork on this platform")
+@pytest.mark.parametrize("parent_runs_big", [False, True])
+def test_a_forked_pool_works_after_the_parent_computed(parent_runs_big):
+    """GNU OpenMP cannot run in a child forked from a process that used it:
+    after any orbits call in the parent, every child of a fork Pool (Linux's
+    default start method) printed "Terminating: fork() called from a process
+    already using GNU OpenMP" and Pool.map waited forever.  Small calls now
+    never start the threading layer, and a child forked after a parallel
+    launch runs the serial twins, with the same numbers."""
+    source = FORK_SCRIPT.replace(
+        "{parent_runs_big}", "orbits.total_phase(b, big)" if parent_runs_big else "pass"
+    )
+    result = _run_script(source)
+    assert result.returncode == 0, result.stderr
+    assert "Terminating" not in result.stderr
+    lines = result.stdout.splitlines()
+    assert "small calls started a threading layer: False" in lines
+    assert f"children serial only: [{parent_runs_big}]" in lines
+    assert "children agree: True" in lines
+
+
+def test_serial_and_parallel_twins_give_the_same_numbers(restore_threads):
+    """The serial twin (one thread, or a small input) and the parallel kernel
+    are the same source: the same bits for every element."""
+    body = orbits.Body.preset("t-handle")
+    theta = np.concatenate([np.linspace(0.0, np.pi / 2, 25_000), [1e-300, np.pi / 2 - 1e-9]])
+    spins = np.column_stack([np.cos(theta), np.zeros_like(theta), np.sin(theta)])
+    runs = []
+    for count in sorted({1, TOP}):
+        orbits.set_num_threads(count)
+        with launch.serial(False):
+            runs.append(
+                (
+                    orbits.total_phase(body, theta).tobytes(),
+                    orbits.phases(body, theta).select_dtypes(float).to_numpy().tobytes(),
+                    orbits.spin_phases(body, spins)["total_phase"].to_numpy().tobytes(),
+                    orbits.Motion.from_spin(body, 0.7)
+                    .state(np.linspace(0, 50, 25_000))
+                    .omega.tobytes(),
+                )
+            )
+    with launch.serial():  # the twins themselves, below any size threshold
+        assert launch.runs_serial()
+        runs.append(
+            (
+                orbits.total_phase(body, theta).tobytes(),
+                orbits.phases(body, theta).select_dtypes(float).to_numpy().tobytes(),
+                orbits.spin_phases(body, spins)["total_phase"].to_numpy().tobytes(),
+                orbits.Motion.from_spin(body, 0.7)
+                .state(np.linspace(0, 50, 25_000))
+                .omega.tobytes(),
+            )
+        )
+    assert all(run == runs[0] for run in runs)
+
+
+WORKQUEUE_SCRIPT = """
+from concurrent.futures import ThreadPoolExecutor
+import numba, numpy as np, orbits
+
+b = orbits.Body.preset("fig6")
+big = np.linspace(0.01, 1.5, 30_000)
+bodies = [b.moments, (1.0, 2.0, 2.5), (0.3, 0.5, 0.7)]
+
+
+def work(i):
+    branch, level, offset, counts, info = orbits.search_bodies(bodies, [2 * np.pi * 2.5])
+    valid = np.arange(branch.shape[1]) < counts[:, None]  # slots beyond are unset
+    return (
+        orbits.total_phase(b, big).tobytes(),
+        offset[valid].tobytes(),
+        branch[valid].tobytes(),
+        counts.tobytes(),
+    )
+
+
+expected = work(0)
+with ThreadPoolExecutor(8) as pool:
+    results = list(pool.map(work, range(32)))
+print("layer:", numba.threading_layer())
+print("threads agree:", all(r == expected for r in results))
+"""
+
+
+def test_concurrent_calls_under_the_workqueue_layer():
+    """numba's fallback layer aborts the process ("Concurrent access") when two
+    Python threads launch parallel kernels at once; there one launch runs at
+    a time and the others take the serial twin."""
+    result = _run_script(WORKQUEUE_SCRIPT, env={"NUMBA_THREADING_LAYER": "workqueue"})
+    assert result.returncode == 0, result.stderr
+    assert "layer: workqueue" in result.stdout.splitlines()
+    assert "threads agree: True" in result.stdout.splitlines()

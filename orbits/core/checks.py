@@ -20,6 +20,7 @@ from numba import njit, prange
 
 from . import motion as _motion
 from . import phase as _phase
+from .launch import parallel_kernel
 from .ode import STATE_SIZE, euler_rhs, integrate_to_event
 
 TWO_PI = 2.0 * math.pi
@@ -499,7 +500,7 @@ CHECK_COLUMNS = (
 GAP_SLOPE_STEP = 1e-6
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@parallel_kernel(cache=True, nogil=True)
 def check_batch(moments, theta, phi, ode_rtol, ode_atol, quad_rtol, out):
     """The closed form and all three checks for each row.
 
@@ -607,7 +608,7 @@ def check_batch(moments, theta, phi, ode_rtol, ode_atol, quad_rtol, out):
 FULL_INTEGRATION_FROM = 1e-3
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@parallel_kernel(cache=True, nogil=True)
 def closure_batch(moments, dtheta, periods, rtol, out):
     """Angle by which each orbit fails to close after ``periods[k]`` periods.
 

@@ -36,6 +36,7 @@ import numpy as np
 from numba import njit, prange
 
 from .elliptic import AGM_LEVELS, ellipf_kc, jacobi_from_table
+from .launch import parallel_kernel
 from .motion import (
     SLOT_GEOMETRIC,
     SLOT_KC,
@@ -307,7 +308,7 @@ def _fill_state(k, w1, w2, w3, phi, theta, psi, omega, euler, rotation, omega_sp
         omega_space[k, row] = r[row, 0] * w1 + r[row, 1] * w2 + r[row, 2] * w3
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@parallel_kernel(cache=True, nogil=True)
 def motion_on_grid(orbit, times, fast, omega, euler, rotation, omega_space):
     """Evaluate the motion at every time, in parallel.
 
@@ -344,7 +345,7 @@ def motion_on_grid(orbit, times, fast, omega, euler, rotation, omega_space):
     return redone.sum()
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@parallel_kernel(cache=True, nogil=True)
 def omega_space_on_grid(orbit, times, fast, omega_space):
     """Only the space-frame angular velocity (the herpolhode), in parallel.
 

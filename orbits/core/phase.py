@@ -48,6 +48,7 @@ from numba import njit, prange
 from .angles import fold_checked
 from .elliptic import cel, cel_lanes, cel_pair, cel_passes
 from .exact import separatrix_gap_exact
+from .launch import parallel_kernel
 from .trig import cos_small, sin_small
 
 TWO_PI = 2.0 * math.pi
@@ -527,7 +528,7 @@ def _one_body_setup(i1, i2, i3, constants, theta, dtheta, co_theta, work, count)
         work[5, j] = TWO_PI if sam else 0.0
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@parallel_kernel(cache=True, nogil=True)
 def total_phase_one_body(i1, i2, i3, phi, angles, from_offset, fold_limit, out, status):
     """Total phase of one body at many polar angles (scalar ``phi``).
 
@@ -586,7 +587,7 @@ def total_phase_one_body(i1, i2, i3, phi, angles, from_offset, fold_limit, out, 
                 _lane_finish(work, count, out, lo)
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@parallel_kernel(cache=True, nogil=True)
 def total_phase_many(i1, i2, i3, phi, angles, from_offset, fold_limit, out, status):
     """Total phase with every input an array of the same length (SIMD path).
 
@@ -622,7 +623,7 @@ def total_phase_many(i1, i2, i3, phi, angles, from_offset, fold_limit, out, stat
                 _lane_finish(work, count, out, lo)
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@parallel_kernel(cache=True, nogil=True)
 def total_phase_one_body_scalar(i1, i2, i3, phi, angles, from_offset, out, status):
     """The scalar path of :func:`total_phase_one_body` (one looping ``cel`` per
     point, per-body constants once): the reference and the benchmark's
@@ -640,7 +641,7 @@ def total_phase_one_body_scalar(i1, i2, i3, phi, angles, from_offset, out, statu
         )
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@parallel_kernel(cache=True, nogil=True)
 def total_phase_many_scalar(i1, i2, i3, phi, angles, from_offset, out, status):
     """The scalar path of :func:`total_phase_many` (one ``cel`` loop per point).
 
@@ -671,14 +672,14 @@ def _store_parts(out, k, first, parts):
     out[k, first + 6] = total
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@parallel_kernel(cache=True, nogil=True)
 def critical_angle_many(i1, i2, i3, phi, out):
     """Vectorised :func:`critical_angle`."""
     for k in prange(out.shape[0]):
         out[k] = critical_angle(i1[k], i2[k], i3[k], phi[k])
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@parallel_kernel(cache=True, nogil=True)
 def parts_from_vector_array(i1, i2, i3, w1, w2, w3, out):
     """:func:`parts_from_spin` for arbitrary spin vectors; ``out`` (n, 7)."""
     for k in prange(out.shape[0]):

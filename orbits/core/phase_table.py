@@ -11,6 +11,7 @@ import math
 
 from numba import njit, prange
 
+from .launch import parallel_kernel
 from .phase import (
     STATUS_OK,
     at_least_two_pi,
@@ -112,7 +113,7 @@ def phases_row(i1, i2, i3, phi, angle, from_offset):
     return code, 1 if branch < 0.0 else 0, row
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@parallel_kernel(cache=True, nogil=True)
 def phases_columns(i1, i2, i3, phi, angles, from_offset, fold_limit, columns, branch, status):
     """:func:`phases_row` for every angle, ``theta`` folded here.
 

@@ -46,6 +46,7 @@ import numpy as np
 from numba import njit, prange
 
 from .elliptic import cel_dual
+from .launch import parallel_kernel
 from .phase import (
     BRANCH_SAM,
     BRANCH_SEPARATRIX,
@@ -939,7 +940,7 @@ def search_body_bracketing(i1, i2, i3, levels, root_branch, root_level, root_off
     return found
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@parallel_kernel(cache=True, nogil=True)
 def search_many(moments, levels, root_branch, root_level, root_offset, counts, info):
     """:func:`search_body` for every row of ``moments`` (n, 3), in parallel.
 

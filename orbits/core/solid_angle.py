@@ -57,6 +57,7 @@ import math
 from numba import njit, prange
 
 from .elliptic import cel
+from .launch import parallel_kernel
 from .phase import (
     BRANCH_SAM,
     BRANCH_SEPARATRIX,
@@ -128,7 +129,7 @@ def solid_angle_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing):
     return solid_angle_from_invariants(i1, i2, i3, branch, m_sq, gap_m1, gap_3m, kc)
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@parallel_kernel(cache=True, nogil=True)
 def solid_angle_many(i1, i2, i3, phi, angles, from_offset, out):
     """``Omega`` with every input an array of the same length.
 
@@ -147,7 +148,7 @@ def solid_angle_many(i1, i2, i3, phi, angles, from_offset, out):
         out[k] = solid_angle_from_spin(i1[k], i2[k], i3[k], w1, w2, w3, scale, offset, closing)
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@parallel_kernel(cache=True, nogil=True)
 def solid_angle_from_vector_array(i1, i2, i3, w1, w2, w3, out):
     """``Omega`` for arbitrary spin vectors (any magnitude); NaN on the
     separatrix.  The gap is the exact one of ``phase.vector_gap``."""

@@ -26,6 +26,8 @@ from numba import njit, prange, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
+from .launch import parallel_kernel
+
 # workers of a task-pulling prange: at least the threads of any machine
 MAX_WORKERS = 4096
 
@@ -65,7 +67,7 @@ def take_task(counter):
     return _fetch_add(counter, 1)
 
 
-@njit(cache=True, nogil=True, parallel=True)
+@parallel_kernel(cache=True, nogil=True)
 def start_threads(out):
     """Set every element of ``out`` to 1 in a parallel loop.
 
