@@ -11,6 +11,9 @@ import math
 import numbers
 import os
 import sys
+import threading
+import warnings
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -280,6 +283,40 @@ def below_normal_message(text):
         f"{text} is below the smallest normal double (2.2e-308) and would be "
         "stored with reduced precision; give the moments in larger units"
     )
+
+
+# the innermost held_warnings list of each Python thread
+_held = threading.local()
+
+
+@contextmanager
+def held_warnings():
+    """Hold the package's own warnings (those issued by :func:`warn`) raised
+    in this thread inside the block: they are appended, as ``(message,
+    category)``, to the list this yields instead of being issued.
+
+    Unlike ``warnings.catch_warnings`` this touches no global state: that
+    one swaps the process's ``warnings.filters`` and ``showwarning``, so two
+    Python threads inside it at once left the process with a filter list
+    that sent every later warning to a dead list.  Blocks nest; the inner
+    one holds.
+    """
+    before = getattr(_held, "caught", None)
+    _held.caught = caught = []
+    try:
+        yield caught
+    finally:
+        _held.caught = before
+
+
+def warn(message, category):
+    """``warnings.warn`` at the first line outside the package, or held by
+    the innermost :func:`held_warnings` of this thread."""
+    caught = getattr(_held, "caught", None)
+    if caught is not None:
+        caught.append((str(message), category))
+        return
+    warnings.warn(message, category, stacklevel=caller_stacklevel())
 
 
 def caller_stacklevel():

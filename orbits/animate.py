@@ -54,9 +54,11 @@ from ._args import (
     caller_stacklevel,
     finite_array,
     flag,
+    held_warnings,
     integer,
     path_argument,
     real_scalar,
+    warn,
 )
 from .animation_scene import (
     FrameData,
@@ -367,8 +369,7 @@ def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
         raise InputError(f"branch must be SAM or LAM, got {branch!r}")
     # the search's warnings are held back: an error below is one line (an
     # unresolved orbit is said there), a row found gets them as they came
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
+    with held_warnings() as caught:  # not catch_warnings: not thread-safe
         if orbits is None:
             # ceil(p/q) in integers: p / q overflowed a double for p = 10**400
             orbits = closed_orbits(body, n_max=max(1, -(-p // q)), q_max=q)
@@ -378,13 +379,13 @@ def orbit_row(body, *, n=None, p=None, q=1, branch=None, orbits=None):
     if branch is not None:
         match = match[match["branch"] == branch]
     multiple = f"{p}" if q == 1 else f"{p}/{q}"
-    for warning in caught:
+    for message, category in caught:
         # orbits left out are told when the row is missing (below) or when
         # the branch was not chosen (the other branch's may be among them);
         # with the chosen branch's row found they are other orbits than the one drawn
-        unresolved = issubclass(warning.category, UnresolvedOrbitsWarning)
+        unresolved = issubclass(category, UnresolvedOrbitsWarning)
         if not unresolved or (len(match) > 0 and branch is None):
-            warnings.warn(warning.message, warning.category, stacklevel=2)
+            warn(message, category)
     if len(match) == 0:
         _refuse_unresolved(body, p, q, branch, multiple)
         where = f" on {branch}" if branch else ""

@@ -18,13 +18,13 @@ import numpy as np
 
 from ._args import (
     broadcast,
-    caller_stacklevel,
     finite_array,
     flat_broadcast,
     integer,
     real_array,
     real_scalar,
     utf8_text,
+    warn,
 )
 from .cells import numbers_label
 from .errors import (
@@ -198,22 +198,19 @@ def _snap_flat(unit, given):
     # are those of the thin rod still, but not its energy along I1
     grown = np.abs(out[:, 0] - unit[:, 0]) > FLAT_MOVE_WARNING * unit[:, 0]
     if grown.any():
-        import warnings
-
         k = int(np.flatnonzero(grown)[0])
         # in the given units (unit I1 may have underflowed to 0)
         scale = float(given[k, 2]) / float(unit[k, 2])  # a power of two
         new, old = float(out[k, 0]) * scale, float(given[k, 0])
         change = abs(new / old - 1.0)  # Python floats: inf, not a RuntimeWarning
         changed = f"{change:.2g} of itself" if math.isfinite(change) else "by far more"
-        warnings.warn(
+        warn(
             f"moments {_row(given, grown)} lie beyond the flat edge by rounding and "
             f"were moved onto it: I1 {old:.17g} became {new:.17g}, "
             f"{changed} (a thin rod next to the rounding of I3: its "
             "phases are the thin rod's, but energies and momenta are those of the "
             "moved body)",
             InertialDefectWarning,
-            stacklevel=caller_stacklevel(),
         )
     return out
 

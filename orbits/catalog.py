@@ -37,11 +37,13 @@ from ._args import (
     callback,
     caller_stacklevel,
     flag,
+    held_warnings,
     integer,
     listlike,
     path_argument,
     real_array,
     utf8_text,
+    warn,
 )
 from ._version import __version__
 from .atomic import atomic_path, csv_float_options
@@ -301,13 +303,10 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
 def _labelled_search(body, n_max, q_max, label):
     """:func:`~orbits.search.closed_orbits` with its warnings told at the
     caller's line, each message after ``label``."""
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
+    with held_warnings() as caught:  # not catch_warnings: not thread-safe
         frame = closed_orbits(body, n_max=n_max, q_max=q_max)
-    for warning in caught:
-        warnings.warn(
-            f"{label}{warning.message}", warning.category, stacklevel=caller_stacklevel()
-        )
+    for message, category in caught:
+        warn(f"{label}{message}", category)
     return frame
 
 

@@ -34,7 +34,7 @@ import numpy as np
 import pandas as pd
 from scipy.integrate import solve_ivp
 
-from ._args import broadcast, integer, positive_finite, real_array, real_scalar
+from ._args import broadcast, held_warnings, integer, positive_finite, real_array, real_scalar
 from .bodies import region_sample, unit_moments
 from .core import checks as _checks
 from .core import phase as _phase
@@ -505,15 +505,10 @@ def _closure_arguments(moments, dtheta, periods, rtol):
     dtheta = np.atleast_1d(dtheta)
     if not np.all(np.isfinite(dtheta)) or np.any(dtheta == 0.0):
         raise AngleError("dtheta must be finite and nonzero (0 is the separatrix)")
-    import warnings
-
-    from .bodies import InertialDefectWarning
-
-    with warnings.catch_warnings():
+    with held_warnings():  # dropped (not catch_warnings: not thread-safe)
         # a closure depends on the phases only, which a rod moved onto the
         # flat edge keeps (and a catalog's |I| = 1 moments of one moved
         # already would be reported a second time)
-        warnings.simplefilter("ignore", InertialDefectWarning)
         moments, _ = unit_moments(moments)
     periods = real_array("periods", periods)
     scalar = scalar and periods.ndim == 0 and moments.ndim == 1

@@ -8,13 +8,12 @@ angle they accumulate geometrically, so each root is stored as its offset
 ``dtheta = theta - theta_crit`` to full relative precision.
 """
 
-import warnings
 from collections import namedtuple
 from fractions import Fraction
 
 import numpy as np
 
-from ._args import caller_stacklevel, integer, real_array
+from ._args import integer, real_array, warn
 from .bodies import Body, canonical_moments, unit_moments
 from .cells import numbers_label
 from .core import search as _kernels
@@ -393,14 +392,13 @@ def closed_orbits(body, n_max=10, q_max=1):
             else " and ".join(f"{count} on {name}" for name, count in left)
         )
         name = getattr(body, "name", None)
-        warnings.warn(
+        warn(
             f"{f'{name}: ' if name else ''}"
             f"{plural(unreached, 'closed orbit')} ({where}) with 2 pi p/q <= 2 pi {n_max} "
             f"{'lies' if unreached == 1 else 'lie'} "
             "closer than |dtheta| = 2.2e-308 to the separatrix and cannot be "
             "stored in double precision; they are left out",
             UnresolvedOrbitsWarning,
-            stacklevel=caller_stacklevel(),
         )
     order = np.argsort(offset, kind="stable")
     frame = catalog_rows(

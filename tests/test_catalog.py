@@ -438,3 +438,29 @@ def test_unresolved_orbit_warnings_name_the_body_at_the_callers_line():
     assert str(caught[0].message).startswith(
         "the 20 closed orbits nearest this spin (total phase 4727.7 rad, a search up to n = 773)"
     )
+
+
+def test_catalogs_from_threads_leave_the_warning_machinery_alone():
+    """catalog relabelled the search's warnings inside warnings.catch_warnings,
+    which swaps the process's filters and showwarning: from four threads at
+    once it left a filter list that sent every later warning to a dead list
+    (and lost some of the UnresolvedOrbitsWarnings).  Each call's warning is
+    delivered once, and the machinery is as it was."""
+    import warnings
+    from concurrent.futures import ThreadPoolExecutor
+
+    orbits.catalog(FIG6, n_max=3)  # the modules it imports on first use, imported here
+    filters, show = list(warnings.filters), warnings.showwarning
+    calls = [420 if k % 25 == 0 else 3 for k in range(200)]  # 8 calls leave orbits out
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        inside = list(warnings.filters)
+        with ThreadPoolExecutor(4) as pool:
+            frames = list(pool.map(lambda n_max: orbits.catalog(FIG6, n_max=n_max), calls))
+        assert warnings.filters == inside
+    assert warnings.filters == filters and warnings.showwarning is show
+    unresolved = [w for w in caught if issubclass(w.category, orbits.UnresolvedOrbitsWarning)]
+    assert len(unresolved) == calls.count(420)
+    assert all(str(w.message).startswith("fig6: 69 closed orbits") for w in unresolved)
+    assert all(w.filename == __file__ for w in unresolved)  # the user's line
+    assert [len(f) for f in frames] == [len(frames[0]) if n == 420 else len(frames[1]) for n in calls]
