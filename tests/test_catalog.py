@@ -463,4 +463,6 @@ def test_catalogs_from_threads_leave_the_warning_machinery_alone():
     assert len(unresolved) == calls.count(420)
     assert all(str(w.message).startswith("fig6: 69 closed orbits") for w in unresolved)
     assert all(w.filename == __file__ for w in unresolved)  # the user's line
-    assert [len(f) for f in frames] == [len(frames[0]) if n == 420 else len(frames[1]) for n in calls]
+    assert [len(f) for f in frames] == [
+        len(frames[0]) if n == 420 else len(frames[1]) for n in calls
+    ]
