@@ -96,6 +96,12 @@ class _Package(types.ModuleType):
             return
         super().__setattr__(name, value)
 
+    def __reduce__(self):
+        # by reference, as cloudpickle sends a plain module: it looks its
+        # module reducer up by exact type, so a function defined in a notebook
+        # that uses ``orbits.`` could not be sent to dask workers
+        return importlib.import_module, (self.__name__,)
+
 
 sys.modules[__name__].__class__ = _Package
 

@@ -64,6 +64,25 @@ def test_a_submodule_import_keeps_the_function_of_the_same_name():
     loaded_after(code)
 
 
+def test_the_package_pickles_by_reference():
+    """A notebook function that uses ``orbits.`` could not be sent to dask
+    workers: cloudpickle sends a module by reference only when its type is
+    exactly ModuleType ("cannot pickle '_Package' object")."""
+    import pickle
+
+    import orbits
+
+    assert pickle.loads(pickle.dumps(orbits)) is orbits
+    cloudpickle = pytest.importorskip("cloudpickle")
+
+    def user_function():  # as defined in __main__ or a notebook cell
+        return float(orbits.total_phase(orbits.Body((0.26, 0.55, 0.793662)), 0.5))
+
+    sent = cloudpickle.loads(cloudpickle.dumps(user_function))
+    assert sent() == user_function()
+    assert cloudpickle.loads(cloudpickle.dumps(orbits)) is orbits
+
+
 def test_every_public_name_resolves():
     import orbits
 
