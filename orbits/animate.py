@@ -622,6 +622,20 @@ class PoinsotAnimation:
         self._build_figure(title, size, pyplot)
         self._animation = None
 
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        state["_animation"] = None  # a FuncAnimation holds a lambda; built again on use
+        return state
+
+    def __setstate__(self, state):
+        # an unpickled figure has a bare FigureCanvasBase (render() failed
+        # with "no attribute buffer_rgba"): draw it with Agg again
+        self.__dict__.update(state)
+        if not hasattr(self.figure.canvas, "buffer_rgba"):
+            from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+            FigureCanvasAgg(self.figure)
+
     # -- drawing --------------------------------------------------------
     def _build_figure(self, title, size, pyplot):
         from matplotlib.figure import Figure
@@ -806,14 +820,39 @@ class PoinsotAnimation:
     def to_html(self):
         """The animation as an HTML player (matplotlib's ``to_jshtml``), shown once.
 
-        The figure is closed after the HTML is built, so that a notebook
-        (or sphinx-gallery) does not show it a second time as a static image
+        Frames are embedded as JPEG (about 80 kB a frame at the default
+        size and dpi; as PNG they took about 175 kB, and a default
+        120-frame animation passed matplotlib's 20 MB
+        ``animation.embed_limit``, which drops every later frame).  The
+        figure is closed after the HTML is built, so that a notebook (or
+        sphinx-gallery) does not show it a second time as a static image
         under the player.
+
+        Warns
+        -----
+        UserWarning
+            The player holds fewer frames than the animation (matplotlib's
+            ``animation.embed_limit`` reached): fewer frames or a lower
+            ``dpi``, or a larger ``matplotlib.rcParams["animation.embed_limit"]``
+            (MB), show them all.
         """
-        html = self.animation.to_jshtml(fps=self.fps)
+        import re
+
+        import matplotlib
         import matplotlib.pyplot as plt
 
+        with matplotlib.rc_context({"animation.frame_format": "jpeg"}):
+            html = self.animation.to_jshtml(fps=self.fps)
         plt.close(self.figure)
+        held = len(re.findall(r"frames\[\d+\] = \"data:image", html))
+        if 0 < held < len(self.times):
+            limit = matplotlib.rcParams["animation.embed_limit"]
+            warn(
+                f"the HTML player holds {held} of the animation's {len(self.times)} frames: "
+                f"matplotlib's animation.embed_limit ({limit:g} MB) was reached; give fewer "
+                "frames or a lower dpi, or raise matplotlib.rcParams['animation.embed_limit']",
+                UserWarning,
+            )
         return html
 
     def _repr_html_(self):

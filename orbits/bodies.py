@@ -734,7 +734,14 @@ class Body:
 
     def __repr__(self):
         label = f", name={self.name!r}" if self.name else ""
-        return f"Body({numbers_label('', self._moments)}{label})"
+        # the axes too where they are not the caller's: Body([3, 1, 2]) showed
+        # as Body((1, 2, 3)), which it does not equal
+        axes = (
+            ""
+            if np.array_equal(self._frame, np.eye(3))
+            else f", frame={tuple(tuple(row) for row in (self._frame + 0.0).tolist())}"
+        )
+        return f"Body({numbers_label('', self._moments)}{axes}{label})"
 
     def _repr_html_(self):
         """The body in a notebook: moments (with their unit where known) and axes."""
@@ -762,6 +769,13 @@ class Body:
 
     def __hash__(self):
         return hash(self._moments.tobytes())
+
+    def __setstate__(self, state):
+        # pickle and deepcopy rebuild the arrays writeable: an edit to a
+        # copy's moments changed its repr and hash but not its phases
+        self.__dict__.update(state)
+        for array in (self._moments, self._unit, self._frame):
+            array.setflags(write=False)
 
     # -- real bodies (kg m^2 in, kg m^2 out) ---------------------------
     @classmethod

@@ -212,6 +212,7 @@ class Motion:
             )
         self.body = body
         self.omega0 = omega0.copy()  # not the caller's array (an edit there changed it)
+        self.omega0.setflags(write=False)  # nor an edit of this one (repr, not the motion)
         self._orbit = orbit
         self._speed = speed
         self.branch = "SAM" if branch == _phase.BRANCH_SAM else "LAM"
@@ -611,6 +612,10 @@ class Motion:
 
     as_scipy = rotation_object
 
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        self.omega0.setflags(write=False)  # pickle rebuilds it writeable
+
     def __repr__(self):
         return (
             f"Motion({self.body!r}, omega0={self.omega0.tolist()}, "
@@ -621,7 +626,15 @@ class Motion:
         """The motion in a notebook: spin, branch, period, E, |L|, D and the phases."""
         from .units import html_table
 
-        real = self.body.moment_unit is not None  # kg m^2: SI energies and momenta
+        # "kg m^2", or "kg m^2 (lengths in m, mass in kg)" for a solid given
+        # in any units: then the energy is in J only under that condition
+        unit = self.body.moment_unit
+        condition = "" if unit is None else unit[len("kg m^2") :].strip()
+        energy_unit, momentum_unit, moment_unit = (
+            ("I rad^2/s^2", "I rad/s", "I")
+            if unit is None
+            else (f"J {condition}".strip(), f"J s {condition}".strip(), unit)
+        )
         total = self.total_phase()
         periods = self.tumbling_periods()
         w = self.omega0
@@ -634,9 +647,9 @@ class Motion:
             ("branch", self.branch, "SAM: about I3, LAM: about I1"),
             ("period T (eqn:TK)", self.period, "s"),
             ("omega's I2 part reverses (flip) every T/2", 0.5 * self.period, "s"),
-            ("energy E", self.energy, "J" if real else "I rad^2/s^2"),
-            ("angular momentum |L|", self.momentum, "J s" if real else "I rad/s"),
-            ("D = M^2 / (2E)", self.D, "kg m^2" if real else "I"),
+            ("energy E", self.energy, energy_unit),
+            ("angular momentum |L|", self.momentum, momentum_unit),
+            ("D = M^2 / (2E)", self.D, moment_unit),
             ("elliptic parameter m = k^2", float(self.m), ""),
             ("total phase Delta alpha", total, "rad"),
             ("", total / (2.0 * math.pi), "turns (x 2 pi)"),

@@ -15,6 +15,7 @@ from orbits.cli import main
 RPM = 2.0 * math.pi / 60.0
 EPS = np.finfo(float).eps
 PHONE_THROW_RPM = (120.0, 2.0, 1.0)
+FIG6_BODY = Body.preset("fig6")
 
 
 def principal_motion(body, omega):
@@ -381,6 +382,59 @@ def test_animation_html_shown_once():
     )
 
 
+def test_the_notebook_player_holds_every_frame():
+    """The default animation (120 frames) made a 21 MB player that held 68
+    frames: matplotlib drops every frame past its 20 MB embed limit.  JPEG
+    frames fit; past the limit a warning says how many frames are shown."""
+    import re
+
+    import matplotlib
+
+    drawn = orbits.poinsot_animation(FIG6_BODY, 1.2)
+    html = drawn._repr_html_()
+    held = len(re.findall(r'frames\[\d+\] = "data:image/jpeg', html))
+    assert held == len(drawn.times) == 120
+    assert len(html) < 0.75 * matplotlib.rcParams["animation.embed_limit"] * 2**20
+    small = orbits.poinsot_animation(FIG6_BODY, 1.2, frames=12, dpi=60)
+    with matplotlib.rc_context({"animation.embed_limit": 0.05}):
+        with pytest.warns(UserWarning, match=r"holds \d of the animation's 12 frames") as caught:
+            small.to_html()
+    assert caught[0].filename == __file__
+
+
+def test_copies_of_results_stay_read_only_and_draw():
+    """A pickled or deep-copied Body had writeable moments (an edit changed its
+    repr and hash, not its phases); Motion.omega0 was writeable; an
+    unpickled PoinsotAnimation could not render ("no attribute buffer_rgba")."""
+    import copy
+    import pickle
+
+    body = phone()
+    for twin in (pickle.loads(pickle.dumps(body)), copy.deepcopy(body)):
+        assert twin == body and hash(twin) == hash(body)
+        for array in (twin.moments, twin.unit_moments, twin.frame):
+            with pytest.raises(ValueError, match="read-only"):
+                array[0] = 0.7
+    motion = Motion.from_spin(body, 0.3)
+    for one in (motion, pickle.loads(pickle.dumps(motion)), copy.copy(motion)):
+        with pytest.raises(ValueError, match="read-only"):
+            one.omega0[0] = 0.1
+    drawn = orbits.poinsot_animation(FIG6_BODY, 1.2, frames=4, dpi=40)
+    first = drawn.render(2)
+    drawn.to_html()  # its FuncAnimation (a lambda) is not carried along
+    for twin in (pickle.loads(pickle.dumps(drawn)), copy.deepcopy(drawn)):
+        assert np.array_equal(twin.render(2), first)
+
+
+def test_a_body_shows_its_axes_where_they_are_not_the_callers():
+    """Body([3, 1, 2]) showed as Body((1, 2, 3)), which it does not equal."""
+    permuted = Body([3.0, 1.0, 2.0])
+    shown = repr(permuted)
+    assert shown == "Body((1, 2, 3), frame=((0.0, 1.0, 0.0), (0.0, 0.0, 1.0), (1.0, 0.0, 0.0)))"
+    assert eval(shown, {"Body": Body}) == permuted != Body((1.0, 2.0, 3.0))
+    assert repr(Body((1.0, 2.0, 3.0), name="a")) == "Body((1, 2, 3), name='a')"
+
+
 # --------------------------------------------------------------- bodies beyond the doubles
 def _unit_i1(text):
     return float(next(line for line in text.splitlines() if line.startswith("I1")).split()[-1])
@@ -450,11 +504,21 @@ def test_molecules_and_point_masses_show_si_units_in_notebooks():
     assert masses.moment_unit == Body.box(1, 2, 3).moment_unit
     assert masses.moment_unit.startswith("kg m^2")
     assert Body((1.0, 2.0, 2.5)).moment_unit is None
-    for body in (molecule, masses):
+    shown = text(Motion.from_spin(molecule, 0.3, speed=1e3))
+    assert re.search(
+        r"energy E \S+ J angular momentum \|L\| \S+ J s D = M\^2 / \(2E\) \S+ kg m\^2 ", shown
+    ), shown
+    # a solid's moments are in its inputs' units: SI only for lengths in m
+    # and mass in kg (a phone in cm and g was shown with its energy in "J")
+    for body in (masses, Body.box(7.1, 14.7, 0.78, mass=170)):
         shown = text(Motion.from_spin(body, 0.3, speed=1e3))
+        when = r" \(lengths in m, mass in kg\)"
         assert re.search(
-            r"energy E \S+ J angular momentum \|L\| \S+ J s D = M\^2 / \(2E\) \S+ kg m\^2", shown
+            rf"energy E \S+ J{when} angular momentum \|L\| \S+ J s{when} "
+            rf"D = M\^2 / \(2E\) \S+ kg m\^2{when}",
+            shown,
         ), shown
+    for body in (molecule, masses):
         assert "kg m^2" in " ".join(re.sub("<[^>]+>", " ", body._repr_html_()).split())
     plain = text(Motion.from_spin(Body((1.0, 2.0, 2.5)), 0.3))
     assert "I rad^2/s^2" in plain and " J " not in plain
