@@ -554,12 +554,15 @@ def plot_body_space(ax, grid=None, *, resolution=300, levels=None, colorbar=True
         grid = body_space_grid(check_resolution(resolution))
     i1, i2, minimum = grid
     levels = DEFAULT_CONTOURS if levels is None else np.asarray(levels)
-    ceiling = TWO_PI * 8.0
+    # above the top level: the colour bar's "over" triangle (a band up to a
+    # fixed 8 2 pi, clipped there, painted bodies far above it, up to
+    # 200 2 pi near the sphere, in that band's colour and left the triangle
+    # unused); the clip only keeps infinities out of contourf
     filled = ax.contourf(
         i1,
         i2,
-        np.minimum(minimum, ceiling),
-        levels=np.concatenate([[TWO_PI], levels, [ceiling]]),
+        np.minimum(minimum, 2.0 * levels[-1]),
+        levels=np.concatenate([[TWO_PI], levels]),
         cmap="viridis",
         extend="max",
     )
