@@ -844,8 +844,11 @@ class PoinsotAnimation:
         with matplotlib.rc_context({"animation.frame_format": "jpeg"}):
             html = self.animation.to_jshtml(fps=self.fps)
         plt.close(self.figure)
-        held = len(re.findall(r"frames\[\d+\] = \"data:image", html))
-        if 0 < held < len(self.times):
+        # matplotlib's player declares the frames it holds (0 when even the
+        # first passed the limit)
+        declared = re.search(r"var frames = new Array\((\d+)\)", html)
+        held = int(declared.group(1)) if declared else len(self.times)
+        if held < len(self.times):
             limit = matplotlib.rcParams["animation.embed_limit"]
             warn(
                 f"the HTML player holds {held} of the animation's {len(self.times)} frames: "

@@ -453,8 +453,8 @@ class Motion:
         measured at 0.3 to 2.1 ``eps |omega| t`` (the largest entry of the
         rotation matrix's error) from 1e3 to 2**50 periods against an
         independent integration and an mpmath reduction of the double
-        ``t``, about 1e-3 rad at 1e12 periods and of order 1 rad near 2**49.  No warning says so below
-        the ``2**50`` refusal.
+        ``t``, about 1e-3 rad at 1e12 periods and of order 1 rad near
+        2**49.  No warning says so below the ``2**50`` refusal.
         """
         times, flat = self._times(t)
         n = flat.shape[0]

@@ -395,11 +395,15 @@ def test_the_notebook_player_holds_every_frame():
     held = len(re.findall(r'frames\[\d+\] = "data:image/jpeg', html))
     assert held == len(drawn.times) == 120
     assert len(html) < 0.75 * matplotlib.rcParams["animation.embed_limit"] * 2**20
-    small = orbits.poinsot_animation(FIG6_BODY, 1.2, frames=12, dpi=60)
-    with matplotlib.rc_context({"animation.embed_limit": 0.05}):
-        with pytest.warns(UserWarning, match=r"holds \d of the animation's 12 frames") as caught:
-            small.to_html()
-    assert caught[0].filename == __file__
+    # some frames held, then none (the first frame alone past the limit)
+    for limit, held in ((0.05, r"[1-9]"), (0.001, "0")):
+        small = orbits.poinsot_animation(FIG6_BODY, 1.2, frames=12, dpi=60)
+        with matplotlib.rc_context({"animation.embed_limit": limit}):
+            with pytest.warns(
+                UserWarning, match=rf"holds {held} of the animation's 12 frames"
+            ) as caught:
+                small.to_html()
+        assert caught[0].filename == __file__
 
 
 def test_copies_of_results_stay_read_only_and_draw():

@@ -12,8 +12,9 @@ twin when
   does so for small inputs and for one thread, :mod:`orbits.threads`),
   which also spares a small call the cost of waking the pool;
 * the process was forked (``multiprocessing``'s default start method on
-  Linux up to Python 3.13) from one that had already launched a parallel
-  kernel: GNU OpenMP, numba's usual layer, cannot run in such a child
+  Linux up to Python 3.13) from one that had already started numba's
+  threading layer (a parallel kernel, or numba's own ``set_num_threads``
+  or ``get_num_threads``, start it): GNU OpenMP, numba's usual layer, cannot run in such a child
   (numba prints "Terminating: fork() called from a process already using
   GNU OpenMP, this is unsafe." and the child dies, so a ``Pool.map`` waits
   forever);
@@ -46,9 +47,22 @@ _workqueue = None
 _one_launch = threading.Lock()
 
 
+def _layer_started():
+    """Whether numba's threading layer runs in this process: a parallel
+    kernel starts it, and so do ``numba.set_num_threads`` and
+    ``numba.get_num_threads`` (without any kernel)."""
+    import numba
+
+    try:
+        numba.threading_layer()
+    except ValueError:  # "Threading layer is not initialized."
+        return False
+    return True
+
+
 def _after_fork_in_child():
     global _forked_after_launch, _one_launch
-    if _launched:
+    if _launched or _layer_started():
         _forked_after_launch = True
     _one_launch = threading.Lock()  # a lock held by another thread stays held
 
@@ -57,7 +71,8 @@ os.register_at_fork(after_in_child=_after_fork_in_child)
 
 
 def serial_only():
-    """True when this process cannot run parallel kernels (forked after one ran)."""
+    """True when this process cannot run parallel kernels (forked after numba's
+    threading layer started)."""
     return _forked_after_launch
 
 
