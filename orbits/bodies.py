@@ -144,7 +144,7 @@ def canonical_moments(moments):
         )
     near = np.flatnonzero(excess > 0.0)
     if near.size:
-        unit[near] = _snap_flat(unit[near], flat[near])
+        unit[near] = _snap_flat(unit[near], flat[near], near, flat.shape[0])
     bad = (unit[:, 0] == unit[:, 1]) | (unit[:, 1] == unit[:, 2])
     if bad.any():
         raise SymmetricTopError(
@@ -167,12 +167,13 @@ def canonical_moments(moments):
     return unit.reshape(shape + (3,)), exponent.reshape(shape)
 
 
-def _snap_flat(unit, given):
+def _snap_flat(unit, given, rows, total):
     """Move bodies just beyond the flat edge exactly onto it (rows of ``unit``).
 
     Tried in turn, each exact in doubles and keeping ``I1 < I2 < I3``:
     ``I3 <- I1 + I2``, ``I1 <- I3 - I2``, ``I2 <- I3 - I1``.  The moment
-    changed moves by the excess ``I3 - I1 - I2 <= 8 eps I3``.
+    changed moves by the excess ``I3 - I1 - I2 <= 8 eps I3``.  ``rows`` and
+    ``total`` place these rows among all the bodies given, for messages.
     """
     out = unit.copy()
     i1, i2, i3 = unit[:, 0], unit[:, 1], unit[:, 2]
@@ -189,7 +190,7 @@ def _snap_flat(unit, given):
         done |= use
     if not done.all():
         raise NonPhysicalBodyError(
-            f"moments {_row(given, ~done)} exceed the flat edge I3 = I1 + I2 by "
+            f"moments {_row(given, ~done, rows, total)} exceed the flat edge I3 = I1 + I2 by "
             "less than the rounding slack 8 eps I3, but no body on the edge "
             "differs from them in one moment by that excess; give moments with "
             "I3 <= I1 + I2"
@@ -205,7 +206,7 @@ def _snap_flat(unit, given):
         change = abs(new / old - 1.0)  # Python floats: inf, not a RuntimeWarning
         changed = f"{change:.2g} of itself" if math.isfinite(change) else "by far more"
         warn(
-            f"moments {_row(given, grown)} lie beyond the flat edge by rounding and "
+            f"moments {_row(given, grown, rows, total)} lie beyond the flat edge by rounding and "
             f"were moved onto it: I1 {old:.17g} became {new:.17g}, "
             f"{changed} (a thin rod next to the rounding of I3: its "
             "phases are the thin rod's, but energies and momenta are those of the "
@@ -236,9 +237,15 @@ def validate_moments(moments):
     canonical_moments(moments)
 
 
-def _row(flat, bad):
+def _row(flat, bad, rows=None, total=None):
+    """The first bad row of ``flat`` as text; ``rows``/``total``: where the
+    rows of ``flat`` sit among all the bodies given (a subset's own index
+    named the wrong body)."""
     index = int(np.flatnonzero(bad)[0])
-    where = f" (body #{index})" if flat.shape[0] > 1 else ""
+    number = index if rows is None else int(rows[index])
+    total = flat.shape[0] if total is None else total
+    # counted from 1, as catalog's "body k of N" (was "#0" for the first)
+    where = f" (body {number + 1} of {total})" if total > 1 else ""
     return numbers_label("", flat[index]) + where
 
 

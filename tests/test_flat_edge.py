@@ -248,3 +248,16 @@ def test_catalog_verify_of_a_moved_rod_warns_once(tmp_path, capsys):
     err = capsys.readouterr().err
     warned = [line for line in err.splitlines() if "flat edge by rounding" in line]
     assert len(warned) == 1 and "1.1e+04 of itself" in warned[0]
+
+
+def test_a_moved_rod_is_named_by_its_place_among_all_bodies():
+    """The warning counted within the bodies beyond the edge: the third of
+    three bodies was named without any place (it was the only one moved),
+    and the first of several as "#0"."""
+    rods = [[1.0, 2.0, 2.5], [1.0, 2.0, 2.6], [1e-300, 1 - 2**-53, 1.0]]
+    with pytest.warns(
+        orbits.InertialDefectWarning, match=r"\(body 3 of 3\) lie beyond the flat edge"
+    ):
+        orbits.total_phase(rods, 0.3)
+    with pytest.raises(orbits.SymmetricTopError, match=r"\(body 1 of 2\)"):
+        orbits.total_phase([[1.0, 1.0, 1.5], [1.0, 2.0, 2.5]], 0.3)

@@ -550,7 +550,7 @@ def mp_total_phase_from_dtheta_phi(moments, dtheta, phi, dps=60):
 
 
 def test_bad_bodies_through_arrays():
-    with pytest.raises(SymmetricTopError, match=r"body #1"):
+    with pytest.raises(SymmetricTopError, match=r"body 2 of 2"):
         orbits.total_phase([[1, 2, 2.5], [1, 1, 1.5]], 0.3)
     with pytest.raises(NonPhysicalBodyError, match="triangle"):
         orbits.total_phase([1, 1.5, 3.0], 0.3)

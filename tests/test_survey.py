@@ -810,6 +810,16 @@ def test_names_utf8_cannot_hold_are_refused_before_anything_is_written(tmp_path)
     assert not (tmp_path / "s").exists()
 
 
+def test_names_of_some_bodies_are_kept(tmp_path):
+    """One named Body among moments kept no name column at all, silently."""
+    named = orbits.Body((0.26, 0.55, 0.793662), name="x")
+    Survey.from_bodies(tmp_path / "s", [named, [2.0, 3.0, 4.0]], 3).run()
+    bodies, _ = read_survey(tmp_path / "s")
+    assert bodies["name"].tolist() == ["x", ""]
+    Survey.from_bodies(tmp_path / "t", [[2.0, 3.0, 4.0], orbits.Body((1.0, 2.0, 2.5))], 3).run()
+    assert "name" not in read_survey(tmp_path / "t")[0].columns  # no name given: no column
+
+
 def test_min_theta_stays_in_the_quadrant(tmp_path):
     """theta_c + (pi/2 - theta_c) rounded 1 ulp above pi/2 for some bodies."""
     Survey.grid(tmp_path / "s", 40, 3).run()

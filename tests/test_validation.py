@@ -306,7 +306,7 @@ def test_tiny_spin_is_not_called_the_separatrix():
 
 def test_survey_with_an_unusable_body_is_refused_up_front(tmp_path):
     """Main reported the paper's conjecture FAILED from a NaN minimum."""
-    with pytest.raises(orbits.NonPhysicalBodyError, match="body #1"):
+    with pytest.raises(orbits.NonPhysicalBodyError, match="body 2 of 2"):
         Survey.from_bodies(tmp_path / "s", [FIG6, [1.0, 4.0, 8.0]], 3, fmt="csv")
     # a body at 1e150 is usable now, and its row is that of the unscaled body
     survey = Survey.from_bodies(tmp_path / "s", [FIG6, [v * 2.0**500 for v in FIG6]], 3, fmt="csv")

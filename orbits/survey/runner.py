@@ -134,7 +134,8 @@ class Survey:
         """An explicit list of bodies (Body objects or moments).
 
         Names of :class:`~orbits.Body` objects are kept (a ``name`` column
-        in the bodies table) unless ``names`` is given.
+        in the bodies table, empty for items without one) unless ``names``
+        is given.
         """
         if not listlike(bodies):
             raise ArgumentTypeError(
@@ -145,12 +146,9 @@ class Survey:
         if not bodies:
             raise InputError("a survey needs at least one body")
         moments = real_array("bodies", [getattr(b, "moments", b) for b in bodies], InputError)
-        if (
-            "names" not in kwargs
-            and bodies
-            and all(getattr(b, "name", None) is not None for b in bodies)
-        ):
-            kwargs["names"] = [b.name for b in bodies]
+        # one named Body among unnamed items kept no name at all, silently
+        if "names" not in kwargs and any(getattr(b, "name", None) for b in bodies):
+            kwargs["names"] = [getattr(b, "name", None) or "" for b in bodies]
         return cls(out_dir, moments, {"file": str(source)}, n_max, **kwargs)
 
     @property
