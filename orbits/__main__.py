@@ -141,7 +141,8 @@ def run():
             if stream is not None:
                 stream.flush()
         except BrokenPipeError:  # the reader (e.g. `head`) closed the pipe: not ours
-            pass
+            if stream is sys.stdout:
+                sys.stdout = None  # the interpreter's own exit would flush it again
         except OSError as error:
             if stream is sys.stdout and code == 0:
                 # `orbits --help >/dev/full`: what was asked for is not written

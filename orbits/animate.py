@@ -44,6 +44,7 @@ import io
 import math
 import numbers
 import os
+import threading
 import warnings
 from pathlib import Path
 
@@ -621,16 +622,19 @@ class PoinsotAnimation:
         self.solid_scale = self.scene.solid_scale
         self._build_figure(title, size, pyplot)
         self._animation = None
+        self._lock = threading.RLock()
 
     def __getstate__(self):
         state = dict(self.__dict__)
         state["_animation"] = None  # a FuncAnimation holds a lambda; built again on use
+        del state["_lock"]
         return state
 
     def __setstate__(self, state):
         # an unpickled figure has a bare FigureCanvasBase (render() failed
         # with "no attribute buffer_rgba"): draw it with Agg again
         self.__dict__.update(state)
+        self._lock = threading.RLock()
         if not hasattr(self.figure.canvas, "buffer_rgba"):
             from matplotlib.backends.backend_agg import FigureCanvasAgg
 
@@ -778,25 +782,28 @@ class PoinsotAnimation:
 
     def frame(self, k):
         """Draw frame ``k`` and return its :class:`FrameData`."""
-        data = self.scene.frame(k)
-        rotation = data.rotation
-        artists = self.artists
-        for line, points in zip(artists["ellipsoid"], self.scene.ellipsoid_lines(rotation)):
-            line.set_data_3d(points[:, 0], points[:, 1], points[:, 2])
-        artists["solid"].set_verts(self.scene.solid_polygons(rotation))
-        for line, tip in zip(artists["axes"], self.scene.axis_tips(rotation)):
-            line.set_data_3d([-tip[0], tip[0]], [-tip[1], tip[1]], [-tip[2], tip[2]])
-        contact, contact_body = data.contact, data.contact_body
-        artists["omega"].set_data_3d([0.0, contact[0]], [0.0, contact[1]], [0.0, contact[2]])
-        artists["contact"].set_data_3d([contact[0]], [contact[1]], [contact[2]])
-        artists["herpolhode"].set_data_3d(*data.herpolhode.T)
-        artists["polhode"].set_data_3d(*data.polhode.T)
-        artists["body_contact"].set_data_3d(
-            [contact_body[0]], [contact_body[1]], [contact_body[2]]
-        )
-        fraction = data.t / self.motion.period
-        self._clock.set_text(f"t = {clock_text(data.t, self.scene.times)} s = {fraction:.3f} T")
-        return data
+        with self._lock:  # one figure: renders from two threads mixed frames
+            data = self.scene.frame(k)
+            rotation = data.rotation
+            artists = self.artists
+            for line, points in zip(artists["ellipsoid"], self.scene.ellipsoid_lines(rotation)):
+                line.set_data_3d(points[:, 0], points[:, 1], points[:, 2])
+            artists["solid"].set_verts(self.scene.solid_polygons(rotation))
+            for line, tip in zip(artists["axes"], self.scene.axis_tips(rotation)):
+                line.set_data_3d([-tip[0], tip[0]], [-tip[1], tip[1]], [-tip[2], tip[2]])
+            contact, contact_body = data.contact, data.contact_body
+            artists["omega"].set_data_3d([0.0, contact[0]], [0.0, contact[1]], [0.0, contact[2]])
+            artists["contact"].set_data_3d([contact[0]], [contact[1]], [contact[2]])
+            artists["herpolhode"].set_data_3d(*data.herpolhode.T)
+            artists["polhode"].set_data_3d(*data.polhode.T)
+            artists["body_contact"].set_data_3d(
+                [contact_body[0]], [contact_body[1]], [contact_body[2]]
+            )
+            fraction = data.t / self.motion.period
+            self._clock.set_text(
+                f"t = {clock_text(data.t, self.scene.times)} s = {fraction:.3f} T"
+            )
+            return data
 
     @property
     def animation(self):
@@ -836,27 +843,28 @@ class PoinsotAnimation:
             ``dpi``, or a larger ``matplotlib.rcParams["animation.embed_limit"]``
             (MB), show them all.
         """
-        import re
+        with self._lock:  # one figure: renders from two threads mixed frames
+            import re
 
-        import matplotlib
-        import matplotlib.pyplot as plt
+            import matplotlib
+            import matplotlib.pyplot as plt
 
-        with matplotlib.rc_context({"animation.frame_format": "jpeg"}):
-            html = self.animation.to_jshtml(fps=self.fps)
-        plt.close(self.figure)
-        # matplotlib's player declares the frames it holds (0 when even the
-        # first passed the limit)
-        declared = re.search(r"var frames = new Array\((\d+)\)", html)
-        held = int(declared.group(1)) if declared else len(self.times)
-        if held < len(self.times):
-            limit = matplotlib.rcParams["animation.embed_limit"]
-            warn(
-                f"the HTML player holds {held} of the animation's {len(self.times)} frames: "
-                f"matplotlib's animation.embed_limit ({limit:g} MB) was reached; give fewer "
-                "frames or a lower dpi, or raise matplotlib.rcParams['animation.embed_limit']",
-                UserWarning,
-            )
-        return html
+            with matplotlib.rc_context({"animation.frame_format": "jpeg"}):
+                html = self.animation.to_jshtml(fps=self.fps)
+            plt.close(self.figure)
+            # matplotlib's player declares the frames it holds (0 when even the
+            # first passed the limit)
+            declared = re.search(r"var frames = new Array\((\d+)\)", html)
+            held = int(declared.group(1)) if declared else len(self.times)
+            if held < len(self.times):
+                limit = matplotlib.rcParams["animation.embed_limit"]
+                warn(
+                    f"the HTML player holds {held} of the animation's {len(self.times)} frames: "
+                    f"matplotlib's animation.embed_limit ({limit:g} MB) was reached; give fewer "
+                    "frames or a lower dpi, or raise matplotlib.rcParams['animation.embed_limit']",
+                    UserWarning,
+                )
+            return html
 
     def _repr_html_(self):
         return self.to_html()
@@ -871,19 +879,20 @@ class PoinsotAnimation:
             nested sub- or superscripts: :func:`min_dpi` covers the
             frames' own texts).
         """
-        self.frame(k)
-        canvas = self.figure.canvas
-        try:
-            canvas.draw()
-        except RuntimeError as error:
-            if "FT_Set_Char_Size" not in str(error):
-                raise
-            raise InputError(
-                f"dpi {self.dpi:g} is too small for a text of the frames (FreeType cannot "
-                "set a font below 1 pixel; nested sub- or superscripts of the title are "
-                "smallest): give a larger dpi or a simpler title"
-            ) from None
-        return np.asarray(canvas.buffer_rgba())[..., :3].copy()
+        with self._lock:  # one figure: renders from two threads mixed frames
+            self.frame(k)
+            canvas = self.figure.canvas
+            try:
+                canvas.draw()
+            except RuntimeError as error:
+                if "FT_Set_Char_Size" not in str(error):
+                    raise
+                raise InputError(
+                    f"dpi {self.dpi:g} is too small for a text of the frames (FreeType cannot "
+                    "set a font below 1 pixel; nested sub- or superscripts of the title are "
+                    "smallest): give a larger dpi or a simpler title"
+                ) from None
+            return np.asarray(canvas.buffer_rgba())[..., :3].copy()
 
     def save(self, path, *, fmt=None):
         """Write the animation to ``path`` atomically and deterministically.
@@ -907,14 +916,15 @@ class PoinsotAnimation:
             MP4 without an ffmpeg writer, or a GIF at an ``fps`` it cannot
             play (:func:`check_fps`).
         """
-        path, fmt = check_output(path, "path", fmt)
-        check_fps(self.fps, fmt)
-        with atomic_path(path) as temporary:
-            if fmt == "gif":
-                self._write_gif(temporary)
-            else:
-                self._write_mp4(temporary)
-        return path
+        with self._lock:  # one figure: renders from two threads mixed frames
+            path, fmt = check_output(path, "path", fmt)
+            check_fps(self.fps, fmt)
+            with atomic_path(path) as temporary:
+                if fmt == "gif":
+                    self._write_gif(temporary)
+                else:
+                    self._write_mp4(temporary)
+            return path
 
     def _write_gif(self, target):
         from PIL import Image

@@ -36,6 +36,7 @@ import re
 import stat
 import sys
 import tempfile
+import threading
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -171,13 +172,36 @@ def _magic_link(path):
     return ""
 
 
+def _current_umask():
+    """The process's umask, read without changing it where the system can.
+
+    ``os.umask`` can only be read by setting it: for that instant every
+    file another thread created got mode 0666 (an audit saw one world-
+    writable file).  Linux (4.7 and later) states it in
+    ``/proc/self/status``; elsewhere the set-and-restore is the only way,
+    done under a lock so that at least this package's writers never race.
+    """
+    try:
+        with open("/proc/self/status", encoding="ascii", errors="replace") as status:
+            for line in status:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    with _UMASK_LOCK:
+        umask = os.umask(0o077)  # the strictest value for the instant it holds
+        os.umask(umask)
+    return umask
+
+
+_UMASK_LOCK = threading.Lock()
+
+
 def _target_mode(path):
     try:
         return os.stat(path).st_mode & 0o7777
     except FileNotFoundError:
-        umask = os.umask(0)
-        os.umask(umask)
-        return 0o666 & ~umask
+        return 0o666 & ~_current_umask()
 
 
 def _pid_alive(pid):

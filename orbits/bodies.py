@@ -1172,7 +1172,6 @@ class Body:
                 f"inertial defect Delta = I_C - I_A - I_B = "
                 f"{excess / amu_a2:.6g} u A^2 ({excess / i_c:.3%} of I_C)"
             ),
-            stacklevel=2,
         )
         body = cls((i_a, i_b, i_c), name=name)
         body._moment_unit = "kg m^2"
@@ -1195,9 +1194,7 @@ _EPS = float(np.finfo(float).eps)
 _EIGEN_ROUNDING = 32.0
 
 
-def remove_flat_excess(
-    i1, i2, i3, defect, *, what, labels=("I1", "I2", "I3"), describe=None, stacklevel=2
-):
+def remove_flat_excess(i1, i2, i3, defect, *, what, labels=("I1", "I2", "I3"), describe=None):
     """The one rule for bodies a hair past the flat limit ``I3 = I1 + I2``.
 
     Parameters
@@ -1230,10 +1227,9 @@ def remove_flat_excess(
     Warns
     -----
     InertialDefectWarning
-        With ``"flatten"`` when the excess was removed.
+        With ``"flatten"`` when the excess was removed (at the first line
+        outside the package).
     """
-    import warnings
-
     _check_defect(defect)
     excess = i3 - (i1 + i2)
     if not excess > FLAT_SLACK * i3:
@@ -1248,11 +1244,7 @@ def remove_flat_excess(
             f"{what} violate {c} <= {a} + {b} by the {text}; pass defect='flatten' "
             f"(CLI: --defect flatten) to put the body on the flat edge {c} = {a} + {b}"
         )
-    warnings.warn(
-        f"{text} removed: {c} set to {a} + {b} (flat body)",
-        InertialDefectWarning,
-        stacklevel=stacklevel + 1,
-    )
+    warn(f"{text} removed: {c} set to {a} + {b} (flat body)", InertialDefectWarning)
     # fl(i1 + i2) may round below the edge; rounded up instead, the body
     # lies within the slack and Body moves it exactly onto the edge
     # (canonical_moments), so that it is flat in exact arithmetic
@@ -1449,9 +1441,7 @@ def _from_tensor(cls, tensor, name, defect, rounding, what, exponent=0):
     symmetric_within_rounding(
         values, rounding + _EIGEN_ROUNDING * _EPS * float(np.max(np.abs(values))), what
     )
-    values = np.array(
-        remove_flat_excess(*values, defect, what=f"the moments of the {what}", stacklevel=3)
-    )
+    values = np.array(remove_flat_excess(*values, defect, what=f"the moments of the {what}"))
     return cls(values, name=name, frame=vectors.T)
 
 

@@ -15,11 +15,13 @@ One module per subcommand (:mod:`~orbits.cli.phase`,
 arguments, progress, exit codes) is in :mod:`orbits.cli.shared`.
 """
 
+import os
 import signal
 import sys
+import threading
 
 from .._version import __version__
-from ..errors import InputError, OrbitsError
+from ..errors import ArgumentTypeError, InputError, OrbitsError
 from ..startup import release_collector
 from . import animate, bench, catalog, figures, phase, survey, verify
 from .phase import OMEGA_UNITS, format_value
@@ -353,6 +355,23 @@ def _check_stdout(args):
         raise InputError(f"standard output is closed, so {where} has nowhere to write its results")
 
 
+def _warning_shower(thread, previous):
+    """``warnings.showwarning`` for a run in ``thread``: :func:`_show_warning`
+    for the run's warnings (raised in that thread, or of the package's own
+    categories from the run's worker threads); any other thread's warning
+    goes to ``previous``, the handler the run replaced (a command run in a
+    notebook's background thread printed the notebook's own warnings as
+    ``orbits: warning:`` lines)."""
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        ours = getattr(category, "__module__", "").split(".")[0] == "orbits"
+        if threading.get_ident() != thread and not ours:
+            return previous(message, category, filename, lineno, file, line)
+        return _show_warning(message, category, filename, lineno, file, line)
+
+    return show
+
+
 def _show_warning(message, category, filename, lineno, file=None, line=None):
     """A warning as one ``orbits: warning:`` line (no source path, no code line)."""
     stream = sys.stderr if file is None else file
@@ -418,28 +437,51 @@ def _tolerant_stderr():
     return _TolerantStream(stream)
 
 
+# one run at a time in a process: a run swaps process-wide state (stderr,
+# warnings.showwarning, sys.unraisablehook) and gives it back when it ends,
+# which two overlapping runs (threads of a service or a notebook) undid in
+# the wrong order
+_RUN_LOCK = threading.RLock()
+
+
+def _new_run_lock():
+    global _RUN_LOCK
+    _RUN_LOCK = threading.RLock()  # one held by another thread at a fork stays held
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_new_run_lock)
+
+
 def main(argv=None):
     """Entry point of the ``orbits`` console script; returns the exit code.
 
-    Python warnings raised during the run are shown as one ``orbits:
-    warning:`` line each (``warnings.showwarning`` is replaced for the run
-    and restored after).  Standard error is written best effort for the run
+    ``argv`` is a list of str, default ``sys.argv[1:]``; ``--help`` and
+    ``--version`` return 0 after printing, a usage error 2.  Python
+    warnings raised during the run are shown as one ``orbits: warning:``
+    line each (``warnings.showwarning`` is replaced for the run and
+    restored after; warnings of other threads pass to the handler it
+    replaced).  Standard error is written best effort for the run
     (:class:`_TolerantStream`): a closed or full stderr loses the messages,
-    never the exit code.
+    never the exit code.  ``--threads`` holds for the run only.  Runs from
+    several Python threads take turns (one at a time per process).
     """
     import signal
     import warnings
 
     from ..atomic import Terminated
 
-    given_stderr = sys.stderr
-    tolerant = sys.stderr = _tolerant_stderr()
-    try:
-        return _main(argv, signal, warnings, Terminated)
-    finally:
-        sys.stderr = given_stderr
-        if tolerant._stream is not given_stderr:  # the os.devnull opened for a closed one
-            tolerant._stream.close()
+    with _RUN_LOCK:
+        given_stderr = sys.stderr
+        tolerant = sys.stderr = _tolerant_stderr()
+        try:
+            return _main(argv, signal, warnings, Terminated)
+        except SystemExit as done:  # argparse: --help, --version (0) or a usage error (2)
+            return done.code if isinstance(done.code, int) else (0 if done.code is None else 2)
+        finally:
+            sys.stderr = given_stderr
+            if tolerant._stream is not given_stderr:  # the os.devnull opened for a closed one
+                tolerant._stream.close()
 
 
 def _refuse_attached_separator(argv):
@@ -464,13 +506,23 @@ def _refuse_attached_separator(argv):
 
 def _main(argv, signal, warnings, Terminated):
     """:func:`main` with standard error made tolerant."""
+    from contextlib import ExitStack
+
     previous = _install_signal_handlers()
     shown = warnings.showwarning
-    warnings.showwarning = _show_warning
+    warnings.showwarning = _warning_shower(threading.get_ident(), shown)
+    held = ExitStack()
     _PREVIOUS_HOOK.append(sys.unraisablehook)
     sys.unraisablehook = _swallowed_stop
     args = None
     try:
+        if argv is not None and (
+            isinstance(argv, (str, bytes)) or not all(isinstance(token, str) for token in argv)
+        ):
+            # a string was parsed letter by letter, a number ended in a TypeError
+            raise ArgumentTypeError(
+                f"argv must be a list of str (the command line's words), got {argv!r}"
+            )
         _refuse_attached_separator(sys.argv[1:] if argv is None else argv)
         args = build_parser().parse_args(argv)
         args.argv = argv
@@ -479,9 +531,10 @@ def _main(argv, signal, warnings, Terminated):
         if args.command in _DRAWING:
             _check_matplotlib()
         if args.threads is not None:
-            from ..threads import set_num_threads
+            from ..threads import using_threads
 
-            set_num_threads(args.threads)
+            # for this run only (set_num_threads kept it for the whole process)
+            held.enter_context(using_threads(args.threads))
         announce_compilation()
         if not getattr(args, "holds_collector", False):
             # the start-up ends here (orbits.startup); a survey ends it
@@ -508,7 +561,6 @@ def _main(argv, signal, warnings, Terminated):
         return EXIT_USAGE
     except BrokenPipeError:
         # the reader (e.g. `head`) closed the pipe: not an error of ours
-        sys.stdout = None
         return 0
     except UnicodeEncodeError as error:
         # printing results (a body name "é") to a stdout of another encoding
@@ -527,6 +579,7 @@ def _main(argv, signal, warnings, Terminated):
         )
         return EXIT_USAGE
     finally:
+        held.close()
         warnings.showwarning = shown
         sys.unraisablehook = _PREVIOUS_HOOK.pop()
         _end_deferral()

@@ -28,12 +28,11 @@ def _check_out(path):
 
 def _cmd_catalog(args):
     import time
-    import warnings
 
     import numpy as np
 
+    from .._args import held_warnings
     from ..catalog import CLOSURE_TOLERANCE, catalog, write_catalog
-    from ..search import UnresolvedOrbitsWarning
 
     _check_out(args.out)
     if args.nearest is not None or args.omega is not None:
@@ -44,8 +43,7 @@ def _cmd_catalog(args):
     memory, seconds = check_search_bounds(args.n_max, args.q_max, len(bodies), "the catalog")
     announce("catalog", seconds * (3 if args.verify else 1), memory)
     start = time.perf_counter()
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", UnresolvedOrbitsWarning)
+    with held_warnings() as caught:  # told after the catalog is written
         with progress_bar(
             len(bodies), "catalog", None if len(bodies) > 1 else False, unit="body"
         ) as bar:
@@ -53,8 +51,8 @@ def _cmd_catalog(args):
                 bodies, n_max=args.n_max, q_max=args.q_max, verify=args.verify, progress=bar.update
             )
     write_catalog(frame, args.out, command=command_line(args.argv), notes=notes)
-    for warning in caught:
-        print(f"orbits: warning: {warning.message}", file=sys.stderr)
+    for message, _ in caught:
+        print(f"orbits: warning: {message}", file=sys.stderr)
     elapsed = time.perf_counter() - start
     note = ""
     if args.verify:

@@ -492,15 +492,14 @@ def _flattened(constructor, args, *values, **options):
     body on it (the constructor's ``defect="flatten"``) and its warning,
     which gives the excess, is printed as one line.
     """
-    import warnings
+    from .._args import held_warnings
 
     if args.defect != "error":
         options["defect"] = args.defect
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", UserWarning)
+    with held_warnings() as caught:  # not catch_warnings: process-wide
         body = constructor(*values, **options)
-    for warning in caught:
-        print(f"orbits: warning: {warning.message}", file=sys.stderr)
+    for message, _ in caught:
+        print(f"orbits: warning: {message}", file=sys.stderr)
     return body
 
 

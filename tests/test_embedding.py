@@ -1,0 +1,166 @@
+"""The package inside a long-lived process (a notebook kernel, a service, a
+dask worker): ``orbits.cli.main`` called again and from threads, and the
+process-wide state it and the writers touch given back as it was."""
+
+import io
+import os
+import sys
+import threading
+import warnings
+
+import numpy as np
+import pytest
+
+import orbits
+from orbits import Body, poinsot_animation, write_catalog
+from orbits.cli import main
+
+FIG6 = Body.preset("fig6")
+PHASE = ["phase", "--preset", "fig6", "--theta", "0.5"]
+
+
+def _quiet(argv):
+    out, err = io.StringIO(), io.StringIO()
+    stdout, stderr = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = out, err
+    try:
+        return main(argv), out.getvalue(), err.getvalue()
+    finally:
+        sys.stdout, sys.stderr = stdout, stderr
+
+
+def test_threads_hold_for_the_run_only():
+    """--threads 1 left the whole process on one thread for every later call."""
+    before = orbits.get_num_threads()
+    assert _quiet(["--threads", "1", *PHASE])[0] == 0
+    assert orbits.get_num_threads() == before
+
+
+@pytest.mark.parametrize(
+    "argv, code, words",
+    [
+        (["--version"], 0, None),
+        (["--help"], 0, None),
+        ("phase --preset fig6 --theta 0.5", 2, "argv must be a list of str"),
+        (["phase", "--preset", "fig6", "--theta", 0.5], 2, "argv must be a list of str"),
+    ],
+)
+def test_main_returns_its_exit_code(argv, code, words):
+    """--help raised SystemExit; a string was parsed letter by letter
+    ("invalid choice: 'p'"), a number among the words was a TypeError traceback."""
+    got, out, err = _quiet(argv)
+    assert got == code
+    if words:
+        assert err.count("\n") == 1 and words in err, err
+    else:
+        assert out
+
+
+def test_runs_from_threads_take_turns_and_give_the_warnings_back(tmp_path):
+    """Two runs at once swapped warnings.showwarning and the filters back in
+    the wrong order: every later warning of the process went to a dead list."""
+    bodies = tmp_path / "bodies.csv"
+    bodies.write_text("I1,I2,I3\n" + "0.26,0.55,0.793662\n" * 6)
+    main(["catalog", "--preset", "fig6", "--n-max", "3", "--out", str(tmp_path / "warm.csv")])
+    filters, show, stderr = list(warnings.filters), warnings.showwarning, sys.stderr
+    codes = []
+
+    def run(k):
+        argv = ["catalog", "--bodies", str(bodies), "--n-max", "420"]
+        codes.append(main([*argv, "--out", str(tmp_path / f"c{k}.csv")]))
+
+    threads = [threading.Thread(target=run, args=(k,)) for k in range(3)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert codes == [0, 0, 0]
+    assert warnings.filters == filters and warnings.showwarning is show
+    assert sys.stderr is stderr
+    with pytest.warns(UserWarning, match="after the runs"):
+        warnings.warn("after the runs", UserWarning, stacklevel=1)
+
+
+def test_a_run_in_a_thread_leaves_other_threads_warnings_alone(tmp_path):
+    """A command in a background thread printed the main thread's own
+    warnings as 'orbits: warning:' lines, past the user's handler."""
+    seen = []
+    previous = warnings.showwarning
+    warnings.showwarning = lambda message, *rest, **kw: seen.append(str(message))
+    try:
+        done = threading.Event()
+
+        def run():
+            argv = ["survey", "--resolution", "30", "--n-max", "5"]
+            _quiet([*argv, "--out", str(tmp_path / "s")])
+            done.set()
+
+        filters = list(warnings.filters)
+        warnings.simplefilter("always")
+        thread = threading.Thread(target=run)
+        thread.start()
+        sent = 0
+        while True:
+            warnings.warn(f"user warning {sent}", RuntimeWarning, stacklevel=1)
+            sent += 1
+            if done.is_set():
+                break
+        thread.join()
+    finally:
+        warnings.showwarning = previous
+        warnings.filters[:] = filters
+    assert sent and len(seen) == sent
+
+
+def test_a_closed_pipe_keeps_the_callers_stdout():
+    """A reader that closed the pipe set sys.stdout to None for the rest of
+    the process (a kernel's later prints went nowhere)."""
+
+    class ClosedPipe(io.StringIO):
+        def write(self, text):
+            raise BrokenPipeError(32, "Broken pipe")
+
+    pipe, stdout = ClosedPipe(), sys.stdout
+    sys.stdout = pipe
+    try:
+        assert main(PHASE) == 0
+        assert sys.stdout is pipe
+    finally:
+        sys.stdout = stdout
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/status"), reason="Linux's /proc only")
+def test_a_new_file_takes_the_umask_without_setting_it(tmp_path, monkeypatch):
+    """The writers read the umask by setting it to 0 for an instant: a file
+    another thread created then was world-writable."""
+    frame = orbits.catalog(FIG6, n_max=2)
+
+    def refuse(mask):
+        raise AssertionError("os.umask was called")
+
+    old = os.umask(0o027)
+    try:
+        monkeypatch.setattr(os, "umask", refuse)
+        write_catalog(frame, tmp_path / "c.csv")
+    finally:
+        monkeypatch.undo()
+        os.umask(old)
+    assert os.stat(tmp_path / "c.csv").st_mode & 0o777 == 0o640
+
+
+def test_one_animation_saved_from_two_threads(tmp_path):
+    """Both renders drew on the one figure: the two GIFs mixed frames, silently."""
+    drawn = poinsot_animation(FIG6, 0.9, frames=20, dpi=40)
+    reference = drawn.save(tmp_path / "ref.gif").read_bytes()
+    threads = [
+        threading.Thread(target=drawn.save, args=(tmp_path / f"{k}.gif",)) for k in range(2)
+    ]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    for k in range(2):
+        assert (tmp_path / f"{k}.gif").read_bytes() == reference
+    assert np.array_equal(
+        drawn.render(3), poinsot_animation(FIG6, 0.9, frames=20, dpi=40).render(3)
+    )
