@@ -355,17 +355,19 @@ def _check_stdout(args):
         raise InputError(f"standard output is closed, so {where} has nowhere to write its results")
 
 
-def _warning_shower(thread, previous):
-    """``warnings.showwarning`` for a run in ``thread``: :func:`_show_warning`
-    for the run's warnings (raised in that thread, or of the package's own
-    categories from the run's worker threads); any other thread's warning
-    goes to ``previous``, the handler the run replaced (a command run in a
+def _warning_shower(previous):
+    """``warnings.showwarning`` for a run in this thread: :func:`_show_warning`
+    for the run's warnings (raised in this thread, in a thread started
+    after it, such as a survey's workers, or of the package's own
+    categories); a warning of any thread that was already running goes to
+    ``previous``, the handler the run replaced (a command run in a
     notebook's background thread printed the notebook's own warnings as
     ``orbits: warning:`` lines)."""
+    others = {thread.ident for thread in threading.enumerate()} - {threading.get_ident()}
 
     def show(message, category, filename, lineno, file=None, line=None):
         ours = getattr(category, "__module__", "").split(".")[0] == "orbits"
-        if threading.get_ident() != thread and not ours:
+        if threading.get_ident() in others and not ours:
             return previous(message, category, filename, lineno, file, line)
         return _show_warning(message, category, filename, lineno, file, line)
 
@@ -510,7 +512,7 @@ def _main(argv, signal, warnings, Terminated):
 
     previous = _install_signal_handlers()
     shown = warnings.showwarning
-    warnings.showwarning = _warning_shower(threading.get_ident(), shown)
+    warnings.showwarning = _warning_shower(shown)
     held = ExitStack()
     _PREVIOUS_HOOK.append(sys.unraisablehook)
     sys.unraisablehook = _swallowed_stop
