@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from ._args import flag, integer, positive_finite, real_scalar
+from ._args import flag, integer, positive_finite, real_array, real_scalar
 from .bodies import REGION_BOX, Body, region_moments
 from .cells import literal_text
 from .errors import InputError
@@ -541,7 +541,9 @@ def plot_body_space(ax, grid=None, *, resolution=300, levels=None, colorbar=True
         Grid points a side when ``grid`` is omitted, from 2 up to what
         :func:`orbits.limits.check_resolution` allows.
     levels : array_like, optional
-        Contour levels of the minimum total phase (rad).
+        Contour levels of the minimum total phase (rad): finite, increasing,
+        each above ``2 pi`` (the smallest minimum); default
+        :data:`DEFAULT_CONTOURS`.  Empty: the map without contours.
 
     Returns
     -------
@@ -553,7 +555,17 @@ def plot_body_space(ax, grid=None, *, resolution=300, levels=None, colorbar=True
     if grid is None:
         grid = body_space_grid(check_resolution(resolution))
     i1, i2, minimum = grid
-    levels = DEFAULT_CONTOURS if levels is None else np.asarray(levels)
+    if levels is None:
+        levels = DEFAULT_CONTOURS
+    else:
+        levels = np.atleast_1d(real_array("levels", levels))
+        if levels.ndim != 1 or not (
+            np.all(np.isfinite(levels)) and np.all(levels > TWO_PI) and np.all(np.diff(levels) > 0)
+        ):
+            raise InputError(
+                "levels must be finite, increasing and above 2 pi (6.283185...; the "
+                f"smallest minimum total phase), got {levels.tolist()}"
+            )
     # above the top level: the colour bar's "over" triangle (a band up to a
     # fixed 8 2 pi, clipped there, painted bodies far above it, up to
     # 200 2 pi near the sphere, in that band's colour and left the triangle
@@ -561,8 +573,8 @@ def plot_body_space(ax, grid=None, *, resolution=300, levels=None, colorbar=True
     filled = ax.contourf(
         i1,
         i2,
-        np.minimum(minimum, 2.0 * levels[-1]),
-        levels=np.concatenate([[TWO_PI], levels]),
+        np.minimum(minimum, 2.0 * (levels[-1] if levels.size else TWO_PI)),
+        levels=np.concatenate([[TWO_PI], levels]) if levels.size else [TWO_PI, 2.0 * TWO_PI],
         cmap="viridis",
         extend="max",
     )

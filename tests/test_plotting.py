@@ -77,6 +77,22 @@ def test_body_space_map_matches_the_limit_formulas():
     filled = drawn["filled"]
     assert filled.extend == "max" and filled.levels[-1] == plotting.DEFAULT_CONTOURS[-1]
     assert np.nanmax(minimum) > 8 * 2 * np.pi
+    # levels of the caller: none at all is the map without contours; levels
+    # below 2 pi or out of order are refused in words (a ValueError of
+    # matplotlib's, or an IndexError for none)
+    assert (
+        len(
+            plotting.plot_body_space(new_figure().add_subplot(), grid, levels=[])[
+                "contours"
+            ].allsegs
+        )
+        == 0
+    )
+    for bad in ([5.0], [20.0, 10.0], [np.nan]):
+        with pytest.raises(
+            orbits.InputError, match="levels must be finite, increasing and above 2 pi"
+        ):
+            plotting.plot_body_space(new_figure().add_subplot(), grid, levels=bad)
 
 
 def test_phase_curves_are_the_closed_form():

@@ -818,6 +818,10 @@ def test_names_of_some_bodies_are_kept(tmp_path):
     assert bodies["name"].tolist() == ["x", ""]
     Survey.from_bodies(tmp_path / "t", [[2.0, 3.0, 4.0], orbits.Body((1.0, 2.0, 2.5))], 3).run()
     assert "name" not in read_survey(tmp_path / "t")[0].columns  # no name given: no column
+    # a name that is falsy but given (rows of DataFrame.iterrows() are named by
+    # their index labels, the first 0) is kept
+    rows = pd.DataFrame({"I1": [0.3, 0.31], "I2": [0.5, 0.5], "I3": [0.7, 0.7]}).iterrows()
+    assert Survey.from_bodies(tmp_path / "u", [row for _, row in rows], 2).names == ["0", "1"]
 
 
 def test_min_theta_stays_in_the_quadrant(tmp_path):

@@ -363,11 +363,13 @@ def _warning_shower(previous):
     ``previous``, the handler the run replaced (a command run in a
     notebook's background thread printed the notebook's own warnings as
     ``orbits: warning:`` lines)."""
-    others = {thread.ident for thread in threading.enumerate()} - {threading.get_ident()}
+    # the Thread objects, not their idents: an ended thread's ident is
+    # handed to the next thread started (a survey's worker)
+    others = set(threading.enumerate()) - {threading.current_thread()}
 
     def show(message, category, filename, lineno, file=None, line=None):
         ours = getattr(category, "__module__", "").split(".")[0] == "orbits"
-        if threading.get_ident() in others and not ours:
+        if threading.current_thread() in others and not ours:
             return previous(message, category, filename, lineno, file, line)
         return _show_warning(message, category, filename, lineno, file, line)
 

@@ -147,8 +147,9 @@ class Survey:
             raise InputError("a survey needs at least one body")
         moments = real_array("bodies", [getattr(b, "moments", b) for b in bodies], InputError)
         # one named Body among unnamed items kept no name at all, silently
-        if "names" not in kwargs and any(getattr(b, "name", None) for b in bodies):
-            kwargs["names"] = [getattr(b, "name", None) or "" for b in bodies]
+        given = [getattr(b, "name", None) for b in bodies]
+        if "names" not in kwargs and any(name is not None and name != "" for name in given):
+            kwargs["names"] = ["" if name is None else name for name in given]
         return cls(out_dir, moments, {"file": str(source)}, n_max, **kwargs)
 
     @property
