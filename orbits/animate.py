@@ -923,7 +923,7 @@ class PoinsotAnimation:
                 if fmt == "gif":
                     self._write_gif(temporary)
                 else:
-                    self._write_mp4(temporary)
+                    self._write_mp4(temporary, path)
             return path
 
     def _write_gif(self, target):
@@ -953,44 +953,94 @@ class PoinsotAnimation:
         )
         Path(target).write_bytes(buffer.getvalue())
 
-    def _write_mp4(self, target):
+    def _write_mp4(self, target, path):
+        """Frames piped to imageio-ffmpeg's ffmpeg as raw RGB, H.264 in MP4.
+
+        ffmpeg runs as our own child so that its exit status is read: a
+        full disk or a file-size limit ended its run while the MP4 was
+        still called written, exit 0, and the broken file replaced the
+        old one.  Its messages are kept and the last one is said in the
+        error, naming ``path`` (not the temporary ``target``).
+        """
+        import errno
+        import signal
+        import subprocess
+        import tempfile
+
         import imageio_ffmpeg
 
         first = self.render(0)
         height, width = first.shape[:2]
         # libx264 needs even sizes; pad by repeating the last row/column
         pad_h, pad_w = height % 2, width % 2
-        writer = imageio_ffmpeg.write_frames(
+        command = [
+            imageio_ffmpeg.get_ffmpeg_exe(),
+            "-y",
+            "-loglevel",
+            "error",
+            "-f",
+            "rawvideo",
+            "-vcodec",
+            "rawvideo",
+            "-s",
+            f"{width + pad_w}x{height + pad_h}",
+            "-pix_fmt",
+            "rgb24",
+            "-r",
+            f"{self.fps:.02f}",
+            "-i",
+            "-",
+            "-an",
+            "-vcodec",
+            "libx264",
+            "-pix_fmt",
+            "yuv420p",
+            "-crf",
+            "20",
+            "-threads",
+            "1",
+            "-fflags",
+            "+bitexact",
+            "-flags:v",
+            "+bitexact",
+            "-map_metadata",
+            "-1",
+            "-f",
+            "mp4",
             str(target),
-            (width + pad_w, height + pad_h),
-            fps=self.fps,
-            codec="libx264",
-            pix_fmt_out="yuv420p",
-            macro_block_size=1,
-            quality=None,
-            output_params=[
-                "-f",
-                "mp4",
-                "-crf",
-                "20",
-                "-threads",
-                "1",
-                "-fflags",
-                "+bitexact",
-                "-flags:v",
-                "+bitexact",
-                "-map_metadata",
-                "-1",
-            ],
-            ffmpeg_log_level="error",
-        )
-        writer.send(None)
-        for k in range(len(self.times)):
-            image = first if k == 0 else self.render(k)
-            if pad_h or pad_w:
-                image = np.pad(image, ((0, pad_h), (0, pad_w), (0, 0)), mode="edge")
-            writer.send(np.ascontiguousarray(image))
-        writer.close()
+        ]
+        with tempfile.TemporaryFile() as messages:
+            process = subprocess.Popen(
+                command, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=messages
+            )
+            try:
+                for k in range(len(self.times)):
+                    image = first if k == 0 else self.render(k)
+                    if pad_h or pad_w:
+                        image = np.pad(image, ((0, pad_h), (0, pad_w), (0, 0)), mode="edge")
+                    process.stdin.write(np.ascontiguousarray(image).tobytes())
+                process.stdin.close()
+            except BrokenPipeError:
+                pass  # ffmpeg ended early: its status says why
+            except BaseException:
+                process.kill()
+                process.wait()
+                raise
+            code = process.wait()
+            messages.seek(0)
+            said = messages.read().decode("utf-8", "replace").split("\n")
+        if code == 0:
+            return
+        lines = [" ".join(line.split()) for line in said if line.strip()]
+        text = " ".join(lines)
+        if code == -getattr(signal, "SIGXFSZ", 0) or "File too large" in text:
+            raise OSError(errno.EFBIG, os.strerror(errno.EFBIG))
+        if "No space left on device" in text:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+        if "Disk quota exceeded" in text:
+            raise OSError(errno.EDQUOT, os.strerror(errno.EDQUOT))
+        reason = lines[-1] if lines else f"exit status {code}"
+        raise InputError(f"cannot write {path}: ffmpeg failed ({reason})")
 
 
 def _warn_aliasing(turns, times):

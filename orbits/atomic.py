@@ -745,6 +745,43 @@ def read_bytes_nofollow(path):
         return stream.read()
 
 
+def write_stdout(text, what="the results"):
+    """Write ``text`` to standard output whole, or raise.
+
+    Python's buffered stdout drops the rest of a large write silently when
+    the system writes only part of it (a disk that fills, a file-size
+    limit): ``orbits catalog --out - > file`` left a truncated file with
+    exit 0.  Where stdout is a file descriptor the bytes go to it directly
+    until all are written; a failure is an :class:`InputError` naming
+    ``what``.
+    """
+    stream = sys.stdout
+    if stream is None or getattr(stream, "closed", False):
+        raise InputError(f"standard output is closed: give a file to write {what} to")
+    stream.flush()
+    try:
+        descriptor = stream.fileno()
+        encoding = stream.encoding
+    except (AttributeError, OSError, ValueError):  # a StringIO, a notebook's stream
+        descriptor = None
+    if descriptor is None or os.linesep != "\n":
+        stream.write(text)
+        stream.flush()
+        return
+    data = memoryview(
+        text.encode(encoding or "utf-8", getattr(stream, "errors", None) or "strict")
+    )
+    try:
+        while data:
+            data = data[os.write(descriptor, data) :]
+    except BrokenPipeError:  # the reader has gone (`| head`): the command line's to tell
+        raise
+    except OSError as error:
+        raise InputError(
+            f"cannot write {what} to standard output: {error.strerror or error}"
+        ) from None
+
+
 def write_csv_atomic(frame, path, header_lines=()):
     """Write a DataFrame as CSV atomically, floats round-tripping exactly.
 
@@ -753,10 +790,8 @@ def write_csv_atomic(frame, path, header_lines=()):
     to standard output.
     """
     if os.fspath(path) == "-":
-        for line in header_lines:
-            sys.stdout.write(f"# {line}\n")
-        frame.to_csv(sys.stdout, index=False, float_format=FLOAT_FORMAT)
-        sys.stdout.flush()
+        text = "".join(f"# {line}\n" for line in header_lines)
+        write_stdout(text + frame.to_csv(index=False, float_format=FLOAT_FORMAT))
         return
     with atomic_path(path) as temporary:
         with open(temporary, "w", newline="") as handle:

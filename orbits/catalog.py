@@ -46,7 +46,7 @@ from ._args import (
     warn,
 )
 from ._version import __version__
-from .atomic import atomic_path, csv_float_options
+from .atomic import atomic_path, csv_float_options, write_stdout
 from .bodies import FLAT_SLACK, Body, flat_excess, validate_moments
 from .cells import escape_header, neutralize, unescape_header, unneutralize
 from .errors import ArgumentTypeError, InputError, OrbitsError
@@ -470,12 +470,7 @@ def write_catalog(frame, path, command=None, notes=()):
     # one line each, whatever the command or a name holds (read_catalog unescapes)
     text = "".join(f"# {escape_header(line)}\n" for line in header) + data
     if os.fspath(path) == "-":
-        import sys
-
-        if sys.stdout is None or getattr(sys.stdout, "closed", False):
-            raise InputError("standard output is closed: give a file to write the catalog to")
-        sys.stdout.write(text)
-        sys.stdout.flush()
+        write_stdout(text, "the catalog")
         return
     with atomic_path(path) as temporary:
         with open(temporary, "w", newline="", encoding="utf-8") as handle:

@@ -1068,3 +1068,38 @@ def test_rows_of_nearly_symmetric_bodies_and_rods_are_drawn_without_their_body(m
     edited["n"] = edited["n"] + 7
     with pytest.raises(InputError, match="does not close"):
         animate.animation_motion(edited)
+
+
+@pytest.mark.skipif(not animate.mp4_available(), reason="imageio-ffmpeg not installed")
+@pytest.mark.parametrize(
+    "script, words",
+    [
+        (
+            'echo "[out#0/mp4] Error writing trailer: No space left on device" >&2; exit 1',
+            "No space left on device",
+        ),
+        ("kill -XFSZ $$", "File too large"),
+        (
+            'echo "Unknown encoder libx264" >&2; exit 1',
+            r"ffmpeg failed \(Unknown encoder libx264\)",
+        ),
+    ],
+    ids=["disk-full", "file-size-limit", "other"],
+)
+def test_an_mp4_that_ffmpeg_fails_to_write_is_an_error(script, words, tmp_path, monkeypatch):
+    """ffmpeg's exit status was not read: a full disk or a file-size limit
+    ended it while the MP4 was said written (exit 0), and the broken file
+    replaced the old one."""
+    import imageio_ffmpeg
+
+    fake = tmp_path / "ffmpeg"
+    fake.write_text(f"#!/bin/sh\ncat > /dev/null\n{script}\n")
+    fake.chmod(0o755)
+    monkeypatch.setattr(imageio_ffmpeg, "get_ffmpeg_exe", lambda: str(fake))
+    target = tmp_path / "a.mp4"
+    target.write_bytes(b"the old animation")
+    motion = Motion.from_spin(FIG6, 0.5)
+    with pytest.raises(InputError, match=rf"^cannot write {target}: {words}"):
+        animate.poinsot_animation(motion, frames=4, dpi=30, out=target)
+    assert target.read_bytes() == b"the old animation"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.mp4", "ffmpeg"]

@@ -834,3 +834,64 @@ def test_a_failed_write_names_the_target_not_the_stage(tmp_path, monkeypatch):
     assert ".orbits-set" not in str(caught.value)
     assert str(caught.value).startswith("cannot write ")
     assert list((tmp_path / "figs").iterdir()) == []
+
+
+def test_a_catalog_to_standard_output_is_written_whole_or_refused(tmp_path, monkeypatch):
+    """Python's buffered stdout drops the rest of a large write silently when
+    the system takes only part of it: `orbits catalog --out - > file` on a
+    full disk or under a file-size limit left a truncated file, exit 0."""
+    import errno
+
+    frame = orbits.catalog(orbits.Body.preset("fig6"), n_max=10, q_max=3)
+    real_write = os.write
+    calls = []
+
+    def short(descriptor, data):  # the system takes 100 bytes at a time
+        calls.append(len(data))
+        return real_write(descriptor, bytes(data[:100]))
+
+    with open(tmp_path / "out.csv", "w", encoding="utf-8") as stream:
+        monkeypatch.setattr(sys, "stdout", stream)
+        monkeypatch.setattr(os, "write", short)
+        orbits.write_catalog(frame, "-")
+        monkeypatch.undo()
+    assert len(calls) > 10
+    assert orbits.read_catalog(tmp_path / "out.csv")["dtheta"].tolist() == frame["dtheta"].tolist()
+
+    def full(descriptor, data):
+        if calls:
+            calls.clear()
+            return real_write(descriptor, bytes(data[:100]))
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    calls.append(0)
+    with open(tmp_path / "full.csv", "w", encoding="utf-8") as stream:
+        monkeypatch.setattr(sys, "stdout", stream)
+        monkeypatch.setattr(os, "write", full)
+        with pytest.raises(
+            orbits.InputError,
+            match="cannot write the catalog to standard output: No space left on device",
+        ):
+            orbits.write_catalog(frame, "-")
+        monkeypatch.undo()
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="resource limits of POSIX")
+def test_a_catalog_to_standard_output_under_a_file_size_limit(tmp_path):
+    import resource
+
+    argv = [sys.executable, "-m", "orbits", "catalog", "--preset", "fig6", "--n-max", "10"]
+    argv += ["--q-max", "3", "--out", "-"]
+    subprocess.run(argv, capture_output=True, timeout=300, check=True)  # kernels cached
+
+    def limit():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096))
+
+    with open(tmp_path / "c.csv", "wb") as out:
+        done = subprocess.run(
+            argv, stdout=out, stderr=subprocess.PIPE, text=True, timeout=300, preexec_fn=limit
+        )
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().splitlines() == [
+        "orbits: error: cannot write the catalog to standard output: File too large"
+    ]
