@@ -973,8 +973,14 @@ class PoinsotAnimation:
         height, width = first.shape[:2]
         # libx264 needs even sizes; pad by repeating the last row/column
         pad_h, pad_w = height % 2, width % 2
+        try:
+            executable = imageio_ffmpeg.get_ffmpeg_exe()
+        except RuntimeError as error:  # none found (also: no descriptor left to look)
+            raise InputError(
+                f"cannot write {path}: no usable ffmpeg ({' '.join(str(error).split())})"
+            ) from None
         command = [
-            imageio_ffmpeg.get_ffmpeg_exe(),
+            executable,
             "-y",
             "-loglevel",
             "error",

@@ -1103,3 +1103,19 @@ def test_an_mp4_that_ffmpeg_fails_to_write_is_an_error(script, words, tmp_path, 
         animate.poinsot_animation(motion, frames=4, dpi=30, out=target)
     assert target.read_bytes() == b"the old animation"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.mp4", "ffmpeg"]
+
+
+@pytest.mark.skipif(not animate.mp4_available(), reason="imageio-ffmpeg not installed")
+def test_an_ffmpeg_that_cannot_be_found_is_one_line(tmp_path, monkeypatch):
+    """With few file descriptors left imageio-ffmpeg finds no ffmpeg and
+    raised its RuntimeError ("No ffmpeg exe could be found"): a traceback."""
+    import imageio_ffmpeg
+
+    def missing():
+        raise RuntimeError("No ffmpeg exe could be found. Install ffmpeg on your system.")
+
+    monkeypatch.setattr(imageio_ffmpeg, "get_ffmpeg_exe", missing)
+    target = tmp_path / "a.mp4"
+    with pytest.raises(InputError, match=rf"^cannot write {target}: no usable ffmpeg \(No ffmpeg"):
+        animate.poinsot_animation(Motion.from_spin(FIG6, 0.5), frames=4, dpi=30, out=target)
+    assert list(tmp_path.iterdir()) == []

@@ -176,3 +176,25 @@ def test_one_animation_saved_from_two_threads(tmp_path):
     assert np.array_equal(
         drawn.render(3), poinsot_animation(FIG6, 0.9, frames=20, dpi=40).render(3)
     )
+
+
+def test_a_library_that_cannot_load_is_one_line(tmp_path, monkeypatch):
+    """pyarrow's shared objects failing to map under a memory limit ended a
+    survey in a 49-line ImportError traceback, exit 1."""
+    from orbits.survey import runner
+
+    def cannot_load(self, *args, **kwargs):
+        raise ImportError(
+            "libarrow.so.2600: failed to map segment from shared object", name="pyarrow.lib"
+        )
+
+    monkeypatch.setattr(runner.Survey, "run", cannot_load)
+    code, out, err = _quiet(
+        ["survey", "--resolution", "6", "--n-max", "3", "--out", str(tmp_path / "s")]
+    )
+    assert code == 2
+    assert err.strip().splitlines()[-1] == (
+        "orbits: error: cannot load pyarrow.lib: libarrow.so.2600: failed to map segment "
+        "from shared object"
+    )
+    assert "Traceback" not in err

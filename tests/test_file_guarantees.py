@@ -895,3 +895,28 @@ def test_a_catalog_to_standard_output_under_a_file_size_limit(tmp_path):
     assert done.stderr.strip().splitlines() == [
         "orbits: error: cannot write the catalog to standard output: File too large"
     ]
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="resource limits of POSIX")
+def test_a_survey_that_cannot_write_its_lock_names_it(tmp_path):
+    """The lock's pid line failed to write and closing the lock flushed it
+    again, so the error left was a bare "No space left on device"."""
+    import resource
+
+    argv = [sys.executable, "-m", "orbits", "survey", "--resolution", "20", "--n-max", "5"]
+    subprocess.run([*argv, "--out", str(tmp_path / "warm")], capture_output=True, timeout=300)
+
+    def limit():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (0, 0))
+
+    done = subprocess.run(
+        [*argv, "--out", str(tmp_path / "s")],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        preexec_fn=limit,
+    )
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().splitlines() == [
+        f"orbits: error: cannot write {tmp_path / 's' / '.lock'}: File too large"
+    ]

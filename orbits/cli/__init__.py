@@ -563,6 +563,15 @@ def _main(argv, signal, warnings, Terminated):
         sizes = _SIZE_OPTIONS.get(getattr(args, "command", None), _SIZE_OPTIONS[None])
         print(f"orbits: error: out of memory; use smaller sizes ({sizes})", file=sys.stderr)
         return EXIT_USAGE
+    except ImportError as error:
+        # a library that cannot load here, e.g. pyarrow's shared objects under
+        # a memory limit ("failed to map segment"): a traceback of 49 lines
+        name = f" {error.name}" if error.name else ""
+        print(
+            f"orbits: error: cannot load{name}: {' '.join(str(error).split())}",
+            file=sys.stderr,
+        )
+        return EXIT_USAGE
     except BrokenPipeError:
         # the reader (e.g. `head`) closed the pipe: not an error of ours
         return 0

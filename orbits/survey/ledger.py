@@ -409,7 +409,10 @@ class _DirectoryLock:
             self.handle.write(f"{os.getpid()}\n")
             self.handle.flush()
         except OSError as error:  # a file size limit, a full disk
-            self.handle.close()
+            try:
+                self.handle.close()  # flushes the unwritten pid again, and fails again
+            except OSError:
+                pass
             raise InputError(f"cannot write {self.path}: {error.strerror or error}") from None
         return self
 
