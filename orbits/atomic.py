@@ -31,6 +31,7 @@ directory, is flushed and fsync'ed, and then replaces the target with
 """
 
 import errno
+import io
 import os
 import re
 import stat
@@ -759,12 +760,16 @@ def write_stdout(text, what="the results"):
     if stream is None or getattr(stream, "closed", False):
         raise InputError(f"standard output is closed: give a file to write {what} to")
     stream.flush()
-    try:
-        descriptor = stream.fileno()
-        encoding = stream.encoding
-    except (AttributeError, OSError, ValueError):  # a StringIO, a notebook's stream
-        descriptor = None
-    if descriptor is None or os.linesep != "\n":
+    descriptor = None
+    # the console's own stdout only: a notebook kernel's stream can name a
+    # descriptor that leads to the kernel's terminal, not to the notebook
+    if isinstance(stream, io.TextIOWrapper) and os.linesep == "\n":
+        try:
+            descriptor = stream.fileno()
+            encoding = stream.encoding
+        except (AttributeError, OSError, ValueError):  # a capture over BytesIO
+            descriptor = None
+    if descriptor is None:
         stream.write(text)
         stream.flush()
         return
