@@ -232,35 +232,21 @@ def test_a_forked_pool_works_after_the_parent_computed(parent):
 
 
 def test_serial_and_parallel_twins_give_the_same_numbers(restore_threads):
-    """The serial twin (one thread, or a small input) and the parallel kernel
-    are the same source: the same bits for every element."""
+    """The serial twin (one thread: threads_for picks it) and the parallel
+    kernel are the same source: the same bits for every element."""
     body = orbits.Body.preset("t-handle")
     theta = np.concatenate([np.linspace(0.0, np.pi / 2, 25_000), [1e-300, np.pi / 2 - 1e-9]])
     spins = np.column_stack([np.cos(theta), np.zeros_like(theta), np.sin(theta)])
+    times = np.linspace(0, 50, 25_000)
     runs = []
-    for count in sorted({1, TOP}):
+    for count in sorted({1, TOP}):  # on one numba thread both runs are serial
         orbits.set_num_threads(count)
-        with launch.serial(False):
-            runs.append(
-                (
-                    orbits.total_phase(body, theta).tobytes(),
-                    orbits.phases(body, theta).select_dtypes(float).to_numpy().tobytes(),
-                    orbits.spin_phases(body, spins)["total_phase"].to_numpy().tobytes(),
-                    orbits.Motion.from_spin(body, 0.7)
-                    .state(np.linspace(0, 50, 25_000))
-                    .omega.tobytes(),
-                )
-            )
-    with launch.serial():  # the twins themselves, below any size threshold
-        assert launch.runs_serial()
         runs.append(
             (
                 orbits.total_phase(body, theta).tobytes(),
                 orbits.phases(body, theta).select_dtypes(float).to_numpy().tobytes(),
                 orbits.spin_phases(body, spins)["total_phase"].to_numpy().tobytes(),
-                orbits.Motion.from_spin(body, 0.7)
-                .state(np.linspace(0, 50, 25_000))
-                .omega.tobytes(),
+                orbits.Motion.from_spin(body, 0.7).state(times).omega.tobytes(),
             )
         )
     assert all(run == runs[0] for run in runs)
