@@ -965,7 +965,6 @@ class PoinsotAnimation:
         import errno
         import signal
         import subprocess
-        import tempfile
 
         import imageio_ffmpeg
 
@@ -1015,10 +1014,15 @@ class PoinsotAnimation:
             "mp4",
             str(target),
         ]
-        with tempfile.TemporaryFile() as messages:
-            process = subprocess.Popen(
-                command, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=messages
-            )
+        process = subprocess.Popen(
+            command, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+        )
+        # its messages drained beside the frames (a pipe, not a temporary
+        # file: on a full disk that could not hold them either)
+        said = []
+        reader = threading.Thread(target=lambda: said.append(process.stderr.read()), daemon=True)
+        reader.start()
+        try:
             try:
                 for k in range(len(self.times)):
                     image = first if k == 0 else self.render(k)
@@ -1028,22 +1032,30 @@ class PoinsotAnimation:
                 process.stdin.close()
             except BrokenPipeError:
                 pass  # ffmpeg ended early: its status says why
-            except BaseException:
-                process.kill()
-                process.wait()
-                raise
             code = process.wait()
-            messages.seek(0)
-            said = messages.read().decode("utf-8", "replace").split("\n")
+        except BaseException:
+            process.kill()
+            process.wait()
+            raise
+        finally:
+            reader.join()
+            process.stderr.close()
         if code == 0:
             return
-        lines = [" ".join(line.split()) for line in said if line.strip()]
+        text = b"".join(said).decode("utf-8", "replace")
+        lines = [" ".join(line.split()) for line in text.split("\n") if line.strip()]
         text = " ".join(lines)
-        if code == -getattr(signal, "SIGXFSZ", 0) or "File too large" in text:
+        # ffmpeg exits with 256 - errno where a write failed (its AVERROR)
+        failed = 256 - code if 0 < code < 256 else None
+        if (
+            code == -getattr(signal, "SIGXFSZ", 0)
+            or failed == errno.EFBIG
+            or "File too large" in text
+        ):
             raise OSError(errno.EFBIG, os.strerror(errno.EFBIG))
-        if "No space left on device" in text:
+        if failed == errno.ENOSPC or "No space left on device" in text:
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-        if "Disk quota exceeded" in text:
+        if failed == errno.EDQUOT or "Disk quota exceeded" in text:
             raise OSError(errno.EDQUOT, os.strerror(errno.EDQUOT))
         reason = lines[-1] if lines else f"exit status {code}"
         raise InputError(f"cannot write {path}: ffmpeg failed ({reason})")

@@ -1079,12 +1079,14 @@ def test_rows_of_nearly_symmetric_bodies_and_rods_are_drawn_without_their_body(m
             "No space left on device",
         ),
         ("kill -XFSZ $$", "File too large"),
+        # its messages lost (a full disk), the status still says ENOSPC
+        ("exit 228", "No space left on device"),
         (
             'echo "Unknown encoder libx264" >&2; exit 1',
             r"ffmpeg failed \(Unknown encoder libx264\)",
         ),
     ],
-    ids=["disk-full", "file-size-limit", "other"],
+    ids=["disk-full", "file-size-limit", "status-only", "other"],
 )
 def test_an_mp4_that_ffmpeg_fails_to_write_is_an_error(script, words, tmp_path, monkeypatch):
     """ffmpeg's exit status was not read: a full disk or a file-size limit

@@ -198,3 +198,16 @@ def test_a_library_that_cannot_load_is_one_line(tmp_path, monkeypatch):
         "from shared object"
     )
     assert "Traceback" not in err
+
+
+def test_an_import_error_of_orbits_itself_keeps_its_traceback(tmp_path, monkeypatch):
+    """A bug in the package (a name that is not there) is not the machine's
+    fault: it is not turned into a one-line 'cannot load' error."""
+    from orbits.survey import runner
+
+    def broken(self, *args, **kwargs):
+        raise ImportError("cannot import name 'write_stdot'", name="orbits.atomic")
+
+    monkeypatch.setattr(runner.Survey, "run", broken)
+    with pytest.raises(ImportError, match="write_stdot"):
+        _quiet(["survey", "--resolution", "6", "--n-max", "3", "--out", str(tmp_path / "s")])

@@ -565,10 +565,12 @@ def _main(argv, signal, warnings, Terminated):
         return EXIT_USAGE
     except ImportError as error:
         # a library that cannot load here, e.g. pyarrow's shared objects under
-        # a memory limit ("failed to map segment"): a traceback of 49 lines
-        name = f" {error.name}" if error.name else ""
+        # a memory limit ("failed to map segment"): a traceback of 49 lines.
+        # One of orbits' own modules (a bug, not the machine) keeps its traceback
+        if not error.name or error.name.split(".")[0] == "orbits":
+            raise
         print(
-            f"orbits: error: cannot load{name}: {' '.join(str(error).split())}",
+            f"orbits: error: cannot load {error.name}: {' '.join(str(error).split())}",
             file=sys.stderr,
         )
         return EXIT_USAGE
