@@ -132,10 +132,7 @@ def run():
     import os
     import threading
 
-    try:
-        code = entry()
-    except SystemExit as done:  # argparse: --help, --version (0) or a usage error (2)
-        code = done.code if isinstance(done.code, int) else (0 if done.code is None else 2)
+    code = entry()  # main turns argparse's SystemExit (--help, a usage error) into a code
     for stream in (sys.stdout, sys.stderr):
         try:
             if stream is not None:

@@ -152,10 +152,8 @@ def canonical_moments(moments):
             "moments): it has no separatrix and its elliptic modulus "
             "degenerates, so the total-phase formula needs I1 < I2 < I3"
         )
-    # I / |I| as the catalog columns round it (core.rows: (I1^2 + I2^2) + I3^2,
-    # as np.linalg.norm sums): moments an ulp apart can round to one value there
-    norm = np.sqrt((unit[:, 0] * unit[:, 0] + unit[:, 1] * unit[:, 1]) + unit[:, 2] * unit[:, 2])
-    scaled = unit / norm[:, None]
+    # moments an ulp apart can round to one value in I / |I| (the catalog's columns)
+    scaled = unit_norm(unit)
     bad = (scaled[:, 0] == scaled[:, 1]) | (scaled[:, 1] == scaled[:, 2])
     if bad.any():
         raise SymmetricTopError(
@@ -165,6 +163,16 @@ def canonical_moments(moments):
             "more than a few parts in 1e16"
         )
     return unit.reshape(shape + (3,)), exponent.reshape(shape)
+
+
+def unit_norm(unit):
+    """``unit / |unit|`` along the last axis, rounded as the catalog's ``I1,
+    I2, I3`` columns are (:mod:`orbits.core.rows`: ``sqrt((I1^2 + I2^2) +
+    I3^2)``); ``unit`` canonical (:func:`canonical_moments`), so nothing
+    overflows or underflows."""
+    unit = np.asarray(unit, dtype=float)
+    i1, i2, i3 = unit[..., 0], unit[..., 1], unit[..., 2]
+    return unit / np.sqrt((i1 * i1 + i2 * i2) + i3 * i3)[..., None]
 
 
 def _snap_flat(unit, given, rows, total):
@@ -688,7 +696,7 @@ class Body:
     @property
     def normalized_moments(self):
         """Moments scaled to ``|I| = 1`` (the paper's convention)."""
-        return self._unit / np.linalg.norm(self._unit)  # no overflow at any scale
+        return unit_norm(self._unit)  # no overflow at any scale
 
     @property
     def permutation(self):

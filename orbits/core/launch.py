@@ -14,10 +14,10 @@ twin when
 * the process was forked (``multiprocessing``'s default start method on
   Linux up to Python 3.13) from one that had already started numba's
   threading layer (a parallel kernel, or numba's own ``set_num_threads``
-  or ``get_num_threads``, start it): GNU OpenMP, numba's usual layer, cannot run in such a child
-  (numba prints "Terminating: fork() called from a process already using
-  GNU OpenMP, this is unsafe." and the child dies, so a ``Pool.map`` waits
-  forever);
+  or ``get_num_threads``, start it): GNU OpenMP, numba's usual layer,
+  cannot run in such a child (numba prints "Terminating: fork() called
+  from a process already using GNU OpenMP, this is unsafe." and the child
+  dies, so a ``Pool.map`` waits forever);
 * numba's layer is ``workqueue`` (its fallback when neither OpenMP nor TBB
   loads), which aborts the process when two Python threads launch parallel
   kernels at once: there one parallel launch runs at a time, and a call
@@ -38,9 +38,8 @@ from numba import njit
 
 _local = threading.local()
 
-# a parallel kernel has run in this process (its threading layer is started)
-_launched = False
-# forked from a process in which one had: parallel kernels would kill us
+# forked from a process whose threading layer had started: parallel kernels
+# would kill us
 _forked_after_launch = False
 # None until the first parallel launch tells which layer numba loaded
 _workqueue = None
@@ -62,7 +61,7 @@ def _layer_started():
 
 def _after_fork_in_child():
     global _forked_after_launch, _one_launch
-    if _launched or _layer_started():
+    if _layer_started():
         _forked_after_launch = True
     _one_launch = threading.Lock()  # a lock held by another thread stays held
 
@@ -127,7 +126,7 @@ class ParallelKernel:
         functools.update_wrapper(self, py_func)
 
     def __call__(self, *args):
-        if _forked_after_launch or getattr(_local, "serial", False):
+        if runs_serial():
             return self.serial(*args)
         if _workqueue is False:
             return self._launch(args)
@@ -140,8 +139,7 @@ class ParallelKernel:
             _one_launch.release()
 
     def _launch(self, args):
-        global _launched, _workqueue
-        _launched = True
+        global _workqueue
         result = self.parallel(*args)
         if _workqueue is None:
             import numba
