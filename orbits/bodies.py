@@ -565,6 +565,8 @@ class Body:
             Not a finite symmetric 3x3 matrix, or its eigenvalues are not
             the moments of a rigid body (``I3 > I1 + I2`` with
             ``defect="error"``).
+        InputError
+            ``defect`` not one of the two names.
         SymmetricTopError
             Two eigenvalues closer than the eigen-solver's rounding
             (:func:`symmetric_within_rounding`): a symmetric top whose
@@ -632,6 +634,11 @@ class Body:
         ----------
         name : str
             A key of :data:`orbits.PRESETS`.
+
+        Raises
+        ------
+        InputError
+            A name that is not a key (the message lists the known ones).
         """
         try:
             if not isinstance(name, str):
@@ -639,9 +646,7 @@ class Body:
             factory = PRESETS[name]
         except KeyError:
             known = ", ".join(sorted(PRESETS))
-            raise NonPhysicalBodyError(
-                f"unknown preset {name!r}; known presets: {known}"
-            ) from None
+            raise InputError(f"unknown preset {name!r}; known presets: {known}") from None
         return factory()
 
     # -- properties ----------------------------------------------------
@@ -923,6 +928,8 @@ class Body:
             values, a subnormal mass, collinear masses (a zero moment), or
             moments that overflow a double or underflow below the smallest
             normal double (2.2e-308).
+        InputError
+            ``defect`` not one of the two names.
         SymmetricTopError
             Two moments closer than the rounding of the sums that built
             them (e.g. three equal masses on an equilateral triangle).
@@ -1034,8 +1041,9 @@ class Body:
         Raises
         ------
         InputError
-            trimesh missing, the file unreadable, or the mesh not closed
-            (not watertight) or inside out.
+            trimesh missing, the file unreadable, the mesh not closed
+            (not watertight) or inside out, or ``defect`` not one of the two
+            names.
         NonPhysicalBodyError
             ``density`` not finite and positive or subnormal, or moments that
             overflow a double or underflow below the smallest normal double
@@ -1132,10 +1140,11 @@ class Body:
         Raises
         ------
         NonPhysicalBodyError
-            A constant not finite and positive or subnormal, an unknown unit,
-            a moment that overflows a double or underflows below the smallest
-            normal double (2.2e-308), or a positive inertial defect with
-            ``defect="error"``.
+            A constant not finite and positive or subnormal, a moment that
+            overflows a double or underflows below the smallest normal double
+            (2.2e-308), or a positive inertial defect with ``defect="error"``.
+        InputError
+            An unknown ``unit`` or ``defect``.
 
         Warns
         -----
@@ -1146,7 +1155,7 @@ class Body:
 
         factors = {"cm-1": 100.0 * codata.c, "MHz": 1e6, "GHz": 1e9}
         if not isinstance(unit, str) or unit not in factors:
-            raise NonPhysicalBodyError(
+            raise InputError(
                 f"unknown unit {unit!r} for rotational constants; use one of {', '.join(factors)}"
             )
         _check_defect(defect)
@@ -1230,7 +1239,9 @@ def remove_flat_excess(i1, i2, i3, defect, *, what, labels=("I1", "I2", "I3"), d
     Raises
     ------
     NonPhysicalBodyError
-        ``defect`` not one of the two names, or an excess with ``"error"``.
+        An excess with ``"error"``.
+    InputError
+        ``defect`` not one of the two names.
 
     Warns
     -----
@@ -1614,7 +1625,7 @@ def _positive_mass(value, label="mass"):
 
 def _check_defect(defect):
     if not isinstance(defect, str) or defect not in ("error", "flatten"):
-        raise NonPhysicalBodyError(f"defect must be 'error' or 'flatten', got {defect!r}")
+        raise InputError(f"defect must be 'error' or 'flatten', got {defect!r}")
 
 
 _SMALL_LENGTHS = "give the lengths or the mass in smaller units (larger numbers)"

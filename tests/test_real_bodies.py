@@ -403,11 +403,11 @@ def test_water_flatten_warns_with_the_defect():
 
 
 def test_rotational_constants_bad_input():
-    with pytest.raises(NonPhysicalBodyError, match="unknown unit"):
+    with pytest.raises(InputError, match="unknown unit"):
         Body.from_rotational_constants(1.0, 2.0, 3.0, unit="Hz")
     with pytest.raises(NonPhysicalBodyError):
         Body.from_rotational_constants(1.0, -2.0, 3.0)
-    with pytest.raises(NonPhysicalBodyError, match="defect"):
+    with pytest.raises(InputError, match="defect must be"):
         Body.from_rotational_constants(3.0, 2.0, 1.5, defect="ignore")
 
 
