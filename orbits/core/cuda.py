@@ -23,6 +23,7 @@ phase within 2.4e-15 relative, the search's ``dtheta`` within 3.9e-13).
 """
 
 import math
+import threading
 import time
 import warnings
 
@@ -50,13 +51,20 @@ def _blocks(n, per_block):
     return max(1, (n + per_block - 1) // per_block)
 
 
+_CONFIGURE_LOCK = threading.Lock()
+
+
 def _configured(kernel, n, per_block):
     """``kernel[blocks, per_block]`` for ``n`` threads, without numba-cuda's
     low-occupancy warning: a small launch here (a survey's last chunk, the
     one-body check before a survey, a few angles) is what was asked for, and
     the warning offered the user nothing to act on (seen on an H200: "Grid
-    size 1 will likely result in GPU under-utilization", once per launch)."""
-    with warnings.catch_warnings():
+    size 1 will likely result in GPU under-utilization", once per launch).
+
+    ``catch_warnings`` swaps the process's filter list, so two threads
+    configuring at once could restore each other's copy (leaving the filter
+    behind or dropping one added meanwhile): one configuration at a time."""
+    with _CONFIGURE_LOCK, warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=r"Grid size \d+ will likely result in GPU")
         return kernel[_blocks(n, per_block), per_block]
 
