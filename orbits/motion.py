@@ -201,8 +201,11 @@ class Motion:
         unit_omega = np.ldexp(omega0, -speed)
         i1, i2, i3 = body.unit_moments
         if _gap is None:
-            # M^2 - 2 E I2 exactly, in factors free of underflow near the I2 axis
-            _gap = _phase.vector_gap(i1, i2, i3, *(float(w) for w in unit_omega))
+            # M^2 - 2 E I2 of unit_omega exactly, in factors free of underflow
+            # near the I2 axis, from omega0 itself (unit_omega rounds a
+            # subnormal component, and the gap of a nearly symmetric body
+            # can hang on one)
+            _gap = _phase.scaled_vector_gap(i1, i2, i3, float(omega0[0]), float(omega0[2]), speed)
         orbit = np.zeros(_kernels.ORBIT_SIZE)
         branch = _kernels.orbit_setup(i1, i2, i3, *unit_omega, *_gap, orbit)
         if branch == _phase.BRANCH_SEPARATRIX:

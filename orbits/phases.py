@@ -684,13 +684,15 @@ def spin_phases(body_or_moments, omega):
         raise AngleError("omega must be nonzero")
     # |omega| scaled by an exact power of two into [1/2, 1): the phases do not
     # depend on it, and no square under- or overflows (omega = 1e-200 is fine)
+    # (the kernels scale; the separatrix gap from the components as given,
+    # since halving a subnormal component rounds it)
     _, speed = np.frexp(np.maximum(np.maximum(np.abs(w1), np.abs(w2)), np.abs(w3)))
-    u1, u2, u3 = (np.ldexp(w, -speed) for w in (w1, w2, w3))
+    speed = speed.astype(np.int64)
     parts = np.empty((i1.shape[0], 7))
-    _kernels.parts_from_vector_array(i1, i2, i3, u1, u2, u3, parts)
+    _kernels.parts_from_vector_array(i1, i2, i3, w1, w2, w3, speed, parts)
     two_e, m_sq, m_param, branch, period, dynamic, total = parts.T
     geometric = np.empty(i1.shape[0])
-    _solid.solid_angle_from_vector_array(i1, i2, i3, u1, u2, u3, geometric)
+    _solid.solid_angle_from_vector_array(i1, i2, i3, w1, w2, w3, speed, geometric)
     if np.any(branch == 0):
         k = int(np.flatnonzero(branch == 0)[0])
         raise SeparatrixError(

@@ -814,6 +814,37 @@ def test_spin_phases_near_the_intermediate_axis(omega):
 
 
 @pytest.mark.parametrize(
+    "moments, omega",
+    [
+        ((1.0, 1.0 + 1e-12, 1.5), (0.0, 1.0, 1e-317)),
+        ((1.0, 1.0 + 1e-12, 1.5), (0.0, 1.0, 1e-313)),
+        ((1.0, 1.0 + 1e-9, 1.5), (1e-315, 1.0, 1e-315)),
+        ((1.0, 2.0, 2.0 + 1e-9), (1e-315, 1.0, 0.0)),
+        ((1.0, 2.0, 2.0 + 1e-9), (-3e-314, 6.0, 0.0)),
+    ],
+)
+def test_spin_phases_with_subnormal_components(moments, omega):
+    """A subnormal component that sets the separatrix gap of a nearly
+    symmetric body (k_c above the floor, so accepted): the kernels' exact
+    power-of-two scaling of the spin rounded it (halved, 1e-317 keeps ~21
+    bits), and (0, 1, 1e-317) on (1, 1 + 1e-12, 1.5) had a period 6.9e-10
+    off (found by an audit).  Reference: eqn:TK and eqn:GeometricPhase in
+    mpmath at 1000 digits from the exact double spin."""
+    with mp.workdps(1000):
+        i1, i2, i3 = (mp.mpf(v) for v in moments)
+        w = [mp.mpf(v) for v in omega]
+        two_e = i1 * w[0] ** 2 + i2 * w[1] ** 2 + i3 * w[2] ** 2
+        m_sq = (i1 * w[0]) ** 2 + (i2 * w[1]) ** 2 + (i3 * w[2]) ** 2
+        period, total = (float(v) for v in period_and_total_phase(i1, i2, i3, two_e, m_sq))
+    row = orbits.spin_phases(moments, omega).iloc[0]
+    motion = orbits.Motion(Body(moments), omega)
+    for got in (row["period"], motion.period):
+        assert got == pytest.approx(period, rel=4e-15)
+    for got in (row["total_phase"], motion.total_phase()):
+        assert got == pytest.approx(total, rel=4e-15)
+
+
+@pytest.mark.parametrize(
     "moments, theta, phi",
     [
         # the I2 axis reached through phi one ulp above pi/2 (the fold rounds

@@ -279,11 +279,31 @@ def vector_gap(i1, i2, i3, w1, w2, w3):
     :func:`orbit_constants` takes the square roots factor by factor and
     nothing underflows.
     """
+    return scaled_vector_gap(i1, i2, i3, w1, w3, 0)
+
+
+@njit(cache=True, nogil=True)
+def scaled_vector_gap(i1, i2, i3, w1, w3, speed):
+    """:func:`vector_gap` of the spin ``omega / 2**speed``, from ``omega``'s
+    own components ``w1, w3`` (``w2`` does not enter the gap).
+
+    The kernels see a spin scaled by ``2**-speed`` (largest component in
+    [1/2, 1)); that scaling rounds a component it takes below the smallest
+    normal double (2.2e-308), and near a nearly symmetric body such a
+    component sets the gap: (0, 1, 1e-317) on I = (1, 1 + 1e-12, 1.5),
+    halved first, had a period 6.9e-10 off.  The small components are
+    therefore scaled from the given ones, by one exact power of two.
+    """
     small = max(abs(w1), abs(w3))
-    if small == 0.0 or small >= 2.0**-480:
-        return 1.0, -separatrix_gap_exact(i1, i2, i3, w1, w3), 1.0
-    k = -math.frexp(small)[1]
-    offset = -separatrix_gap_exact(i1, i2, i3, math.ldexp(w1, k), math.ldexp(w3, k))
+    # small / 2**speed lies in [2**(top - 1), 2**top)
+    top = math.frexp(small)[1] - speed
+    if small == 0.0 or top >= -479:  # the larger scaled one >= 2^-480: exact
+        gap = separatrix_gap_exact(i1, i2, i3, math.ldexp(w1, -speed), math.ldexp(w3, -speed))
+        return 1.0, -gap, 1.0
+    k = -top  # the scaled pair times 2^k, the larger in [1/2, 1): exact
+    offset = -separatrix_gap_exact(
+        i1, i2, i3, math.ldexp(w1, k - speed), math.ldexp(w3, k - speed)
+    )
     if offset == 0.0:
         return 1.0, 0.0, 1.0
     shift = max(0, math.frexp(offset)[1] + 700)  # |offset| 2^-shift near 2^-700
@@ -680,13 +700,21 @@ def critical_angle_many(i1, i2, i3, phi, out):
 
 
 @parallel_kernel(cache=True, nogil=True)
-def parts_from_vector_array(i1, i2, i3, w1, w2, w3, out):
-    """:func:`parts_from_spin` for arbitrary spin vectors; ``out`` (n, 7)."""
+def parts_from_vector_array(i1, i2, i3, w1, w2, w3, speed, out):
+    """:func:`parts_from_spin` for arbitrary spin vectors; ``out`` (n, 7).
+
+    The spin of row ``k`` is ``(w1, w2, w3) / 2**speed[k]`` (exact scaling
+    into the kernels' range; the gap from the given components,
+    :func:`scaled_vector_gap`)."""
     for k in prange(out.shape[0]):
-        scale, offset, closing = vector_gap(i1[k], i2[k], i3[k], w1[k], w2[k], w3[k])
+        s = speed[k]
+        scale, offset, closing = scaled_vector_gap(i1[k], i2[k], i3[k], w1[k], w3[k], s)
+        u1 = math.ldexp(w1[k], -s)
+        u2 = math.ldexp(w2[k], -s)
+        u3 = math.ldexp(w3[k], -s)
         _store_parts(
             out,
             k,
             0,
-            parts_from_spin(i1[k], i2[k], i3[k], w1[k], w2[k], w3[k], scale, offset, closing),
+            parts_from_spin(i1[k], i2[k], i3[k], u1, u2, u3, scale, offset, closing),
         )
