@@ -195,8 +195,10 @@ def _check_status(status, moments, angle, phi, shape, from_offset):
     if code == _kernels.STATUS_OUT_OF_RANGE:
         raise AngleError(
             f"theta_c + dtheta = {exact_number(theta_c)} + {exact_number(value)} is outside "
-            "[0, pi/2]; dtheta is an offset from theta_c and is not folded "
-            "(pass theta, which is folded by the top's symmetries)"
+            f"[0, pi/2]: dtheta must lie in [-theta_c, pi/2 - theta_c] = "
+            f"[{exact_number(-theta_c)}, {exact_number(constants[3])}]; dtheta is an "
+            "offset from theta_c and is not folded (pass theta, which is folded by the "
+            "top's symmetries)"
         )
     if not from_offset:
         slack = _kernels.side_slack(theta_c, constants[3])

@@ -12,7 +12,14 @@ from hypothesis import strategies as st
 from mp_formulas import period_and_total_phase
 
 import orbits
-from orbits import AngleError, Body, NonPhysicalBodyError, SeparatrixError, SymmetricTopError
+from orbits import (
+    AngleError,
+    Body,
+    Motion,
+    NonPhysicalBodyError,
+    SeparatrixError,
+    SymmetricTopError,
+)
 
 EPS = np.finfo(float).eps
 REFERENCE = Path(__file__).parent / "reference" / "phase_reference.csv"
@@ -811,6 +818,61 @@ def test_spin_phases_near_the_intermediate_axis(omega):
     row = orbits.spin_phases(FIG6, omega).iloc[0]
     assert row["total_phase"] == pytest.approx(expected, rel=1e-13)
     assert orbits.Motion(FIG6, omega).total_phase() == pytest.approx(expected, rel=1e-13)
+
+
+def _mp_total_phase_at(moments, theta, phi):
+    """eqn:GeometricPhase of the unit spin at mpmath angles, folded into
+    [0, pi/2] by the top's symmetries (the reference for offsets near the ends)."""
+    i1, i2, i3 = (mp.mpf(v) for v in moments)
+    if theta > mp.pi / 2:
+        theta = mp.pi - theta
+    w = (mp.sin(theta) * mp.cos(phi), mp.sin(theta) * mp.sin(phi), mp.cos(theta))
+    two_e = i1 * w[0] ** 2 + i2 * w[1] ** 2 + i3 * w[2] ** 2
+    m_sq = (i1 * w[0]) ** 2 + (i2 * w[1]) ** 2 + (i3 * w[2]) ** 2
+    return period_and_total_phase(i1, i2, i3, two_e, m_sq)[1]
+
+
+@pytest.mark.parametrize("moments", [(0.26, 0.55, 0.793662), (1.0, 1.0 + 1e-9, 1.5)])
+@pytest.mark.parametrize("phi", [np.pi / 2, np.nextafter(np.pi / 2, 0.0), 1.5, 0.3])
+def test_offsets_at_the_pi_half_end(moments, phi):
+    """dtheta next to pi/2 - theta_c, where phi near pi/2 brings theta_c
+    within ~1e-16 of pi/2: an offset past pi/2 is refused (AngleError), or,
+    past it by rounding alone (core.phase.end_slack), is the end's value;
+    never the value of no spin.  Before, dtheta = 3e-16 at phi = pi/2 on
+    Fig. 6 was accepted as LAM, 261.85: the spin past pi/2 folds back onto
+    SAM, 249.53 (found by an audit).  Reference: mpmath at 60 digits."""
+    with mp.workdps(60):
+        i1, i2, i3 = (mp.mpf(v) for v in moments)
+        p = mp.mpf(phi)
+        theta_c = mp.atan2(mp.sqrt(i3 * (i3 - i2)), mp.sqrt(i1 * (i2 - i1)) * abs(mp.cos(p)))
+        room = mp.pi / 2 - theta_c
+        offsets = {float(room * f) for f in (0.5, 1 - 1e-6, 1 - 2**-40, 1 + 2**-60)}
+        offsets |= {float(room) + d for d in (1e-16, 3e-16, 1e-15)}
+        offsets |= {float(mp.pi / 2) - float(theta_c)}  # as a caller writes it
+        for dtheta in sorted(offsets - {0.0}):  # 0 (phi = pi/2): the separatrix
+            theta = theta_c + mp.mpf(dtheta)
+            calls = (
+                lambda: orbits.total_phase(moments, dtheta=dtheta, phi=phi),
+                lambda: orbits.phases(moments, dtheta=dtheta, phi=phi).total_phase.iloc[0],
+                lambda: Motion.from_spin(Body(moments), dtheta=dtheta, phi=phi).total_phase(),
+            )
+            past = theta - mp.pi / 2
+            slack = min(4 * 2.0**-52, 2.0**-27 * dtheta)  # core.phase.end_slack
+            expected = float(_mp_total_phase_at(moments, min(theta, mp.pi / 2), p))
+            for call in calls:
+                if past > 1.01 * slack:  # past pi/2: refused
+                    with pytest.raises(
+                        AngleError, match=r"must lie in \[-theta_c, pi/2 - theta_c\]"
+                    ):
+                        call()
+                    continue
+                try:
+                    got = call()
+                except AngleError:
+                    # past pi/2 by about the slack (the computed theta_c rounds)
+                    assert past > 0.99 * slack
+                    continue
+                assert got == pytest.approx(expected, rel=4e-15), (dtheta, phi)
 
 
 @pytest.mark.parametrize(

@@ -157,6 +157,25 @@ def side_slack(theta_c, co_theta_c):
 
 
 @njit(cache=True, nogil=True)
+def end_slack(dtheta):
+    """Radians an offset ``dtheta`` may reach past ``theta = 0`` or ``pi/2``
+    and be taken as that end: the rounding of ``pi/2 - theta_c`` or
+    ``-theta_c`` as a caller writes them (``_END_SLACK``, 4 ulp of pi/2),
+    and at most ``2**-27 |dtheta|``.
+
+    The phase is even about each end (``theta -> -theta`` and ``theta -> pi -
+    theta`` are symmetries of the top), so the end's value differs from the
+    folded spin's by ``~(x / delta)^2`` for an overshoot ``x`` and an end
+    ``delta`` from the separatrix: below 2**-54 with the second bound.  An
+    end within ~1e-7 of the separatrix (``phi`` next to pi/2, where
+    ``theta_c -> pi/2``) takes no slack there: the spin past the end folds
+    back onto the other branch (``dtheta = 3e-16`` at ``phi = pi/2`` on the
+    Fig. 6 body gave 261.85 on LAM; the spin is SAM, 249.53).
+    """
+    return min(_END_SLACK, abs(dtheta) * 2.0**-27)
+
+
+@njit(cache=True, nogil=True)
 def angle_triplet(angle, from_offset, theta_c, co_theta_c):
     """``theta, dtheta, co_theta`` and a status code from the given angle.
 
@@ -164,7 +183,8 @@ def angle_triplet(angle, from_offset, theta_c, co_theta_c):
     three is formed so that it keeps its relative precision where it is
     small: ``pi/2 - theta`` in two parts, and the offset from the smaller
     pair (``pi/2 - theta_c`` is far better known than ``theta_c`` for an
-    oblate body).  Rounding a hair past an end of [0, pi/2] lands on it.
+    oblate body).  An offset a hair past an end of [0, pi/2] (within
+    :func:`end_slack`) lands on the end, with the end's offset.
 
     A ``theta`` within the rounding error of the computed ``theta_c``
     (:func:`side_slack`) is ``STATUS_SEPARATRIX``: the sign of
@@ -177,15 +197,16 @@ def angle_triplet(angle, from_offset, theta_c, co_theta_c):
         dtheta = angle
         theta = theta_c + dtheta
         co_theta = co_theta_c - dtheta
+        # past an end by rounding alone: the end itself, with the end's own
+        # offset (the spin and its separatrix gap must agree)
         if theta < 0.0:
-            if theta < -_END_SLACK:
+            if theta < -end_slack(dtheta):
                 return theta, dtheta, co_theta, STATUS_OUT_OF_RANGE
-            theta = 0.0
+            theta, dtheta, co_theta = 0.0, -theta_c, HALF_PI
         if co_theta < 0.0:
-            if co_theta < -_END_SLACK:
+            if co_theta < -end_slack(dtheta):
                 return theta, dtheta, co_theta, STATUS_OUT_OF_RANGE
-            co_theta = 0.0
-            theta = HALF_PI
+            theta, dtheta, co_theta = HALF_PI, co_theta_c, 0.0
     else:
         theta = angle
         if theta < 0.0 or theta > HALF_PI:
