@@ -182,7 +182,10 @@ class Motion:
         Elliptic parameter k^2 (indices 1 <-> 3 on LAM).
     one_minus_m : float
         ``1 - k^2``, from the factored separatrix gap (accurate where ``m``
-        rounds to 1).
+        rounds to 1, down to the smallest normal double, 2.2e-308; below
+        that a subnormal with fewer digits, or 0 at ``|dtheta| ~ 1e-323``.
+        The motion itself works with ``k_c = sqrt(1 - k^2)``, never below
+        4.9e-312).
     """
 
     def __init__(self, body, omega0, _gap=None):
