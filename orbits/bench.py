@@ -6,18 +6,34 @@ route, ``import numpy``, the same command warm, the bracketing search it
 replaced, a Python loop, one CPU or one numba thread, ``--columns all``, or
 nothing) and its ``timed`` says what each figure is:
 
-* most rows run both sides in this process, best of several runs after an
-  untimed warm-up run (so numba compilation is excluded);
-* ``search_evaluations``, ``survey_threads`` and ``survey_bytes`` time one
-  run of each side, after a warm-up; ``survey_tables`` the best of three
-  passes of each, taken in turns, after a warm-up pass;
-* ``survey``'s baseline is not run on every body: a loop over every k-th
-  body of the grid, ``k = count // 500`` (500 to 999 bodies, or all when
-  fewer), is timed once and scaled to the whole grid;
+* ``phase``, ``motion*``, ``motion_rate`` and ``search``: best of several
+  runs of each side (7, 5, 3, 20; the ``search`` baseline 3) after an
+  untimed warm-up run, in this process (so numba compilation is excluded);
+* ``search_scaling``: best of three runs of each thread count, taken in
+  turns, after a warm-up on 64 bodies; ``survey_tables``: best of three
+  passes of each thread count, taken in turns, after a warm-up pass;
+* ``search_evaluations``, ``survey_threads``, ``survey_bytes`` and
+  ``survey``: one timed run of each side after a warm-up, in this process
+  (``survey``: one run of each format; its baseline is not run on every
+  body: a loop over every k-th body of the grid, ``k = count // 500``
+  (500 to 999 bodies, or all when fewer), is timed once and scaled to the
+  whole grid);
 * ``startup`` (medians), ``cold_compile`` (one cold and one warm run) and
-  ``survey_scaling`` (best of several) time fresh processes; the children
-  import this same package and get the thread count in effect
-  (:func:`orbits.get_num_threads`) as ``--threads``.
+  ``survey_scaling`` (best of several, in turns, after a grid-2 warm-up)
+  time fresh processes; the children import this same package and get the
+  thread count in effect (:func:`orbits.get_num_threads`) as ``--threads``;
+* the GPU rows ``cuda_phase`` and ``cuda_search`` (``--device cuda``): the
+  public call end to end with ``device="cuda"`` (copies included) against
+  ``device="cpu"``, best of several after a warm-up; the kernel alone
+  (inputs already on the GPU) is in the note only, not in the ratio.
+
+Rows that compare results check that both sides agree (``agrees``, and
+``agree`` or ``DISAGREE`` in the note): ``search_evaluations`` (the same
+roots on every body, offsets within :data:`SEARCH_RTOL` relative),
+``survey`` (the loop's orbit count of each sampled body equals the
+survey's) and ``cuda_search`` (equal root counts, offsets within
+:data:`SEARCH_RTOL`); ``orbits bench`` exits 1 after the table when a row
+disagrees (:func:`disagreements`).
 
 With the under-load check (:func:`load_check`) each row's own task is timed
 again beside a CPU-bound process and must slow down by at most
@@ -47,6 +63,21 @@ from .threads import SERIAL_BELOW, get_num_threads
 class BenchError(OrbitsError):
     """A benchmark that cannot run here: a child process failed, or the
     platform lacks what the row needs (the CLI: exit 2, one line)."""
+
+
+def usable_cpus():
+    """``(usable, total)``: the CPUs this process may run on, and the machine's.
+
+    ``usable`` is ``len(os.sched_getaffinity(0))`` where the platform has it
+    (under ``taskset -c 0`` that is 1 on any machine), else
+    ``os.cpu_count()``; ``total`` is ``os.cpu_count()``.
+    """
+    total = os.cpu_count()
+    try:
+        usable = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        usable = total
+    return usable, total
 
 
 def best_time(function, repeats):
@@ -275,8 +306,14 @@ def _roots_by_scipy(body, n_max, points=2000):
     return found
 
 
-def _search_counts(function, bodies, levels):
-    """Kernel time, phase evaluations and roots of a search over ``bodies``."""
+def _search_counts(function, bodies, levels, keep=None):
+    """Kernel time, phase evaluations and roots of a search over ``bodies``.
+
+    With ``keep`` (a list), each body's roots are appended to it as
+    ``(branch, level, offset)`` arrays sorted by branch, level and offset
+    (``None`` for a body the kernel refused): copies made inside the timed
+    loop, so the timed runs pass no ``keep``.
+    """
     from .core import search as kernels
 
     capacity = 4 * levels.size + 16
@@ -288,9 +325,54 @@ def _search_counts(function, bodies, levels):
     roots = 0
     start = time.perf_counter()
     for moments in bodies:
-        roots += function(moments[0], moments[1], moments[2], levels, branch, level, offset, info)
+        found = function(moments[0], moments[1], moments[2], levels, branch, level, offset, info)
+        roots += found
         evaluations += info[kernels.INFO_EVALUATIONS]
+        if keep is not None:
+            if found < 0:
+                keep.append(None)
+            else:
+                order = np.lexsort((offset[:found], level[:found], branch[:found]))
+                keep.append((branch[order], level[order], offset[order]))
     return time.perf_counter() - start, evaluations, roots
+
+
+# two searches agree when they find the same roots (branch and level) on every
+# body, each root's offset from theta_c within this relative difference
+SEARCH_RTOL = 1e-10
+
+
+def roots_agreement(ours, theirs, rtol=SEARCH_RTOL):
+    """Compare two lists of per-body roots (as :func:`_search_counts` keeps them).
+
+    Returns
+    -------
+    tuple of (int, float)
+        How many bodies differ (a body refused by one side only, or another
+        count, branch or level of root, or an offset further than ``rtol``
+        relative), and the largest relative offset difference over the
+        bodies whose roots match in count, branch and level.
+    """
+    differ, worst = 0, 0.0
+    for a, b in zip(ours, theirs, strict=True):
+        if a is None or b is None:
+            differ += (a is None) != (b is None)
+            continue
+        if not (np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])):
+            differ += 1
+            continue
+        if a[2].size:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                gap = float(np.max(np.abs(a[2] / b[2] - 1.0)))
+            if not gap <= rtol:  # NaN too
+                differ += 1
+            worst = max(worst, gap) if math.isfinite(gap) else math.inf
+    return differ, worst
+
+
+def _agreement(agrees, text):
+    """The note's clause for a row's agreement check: ``agree`` or ``DISAGREE``."""
+    return f"{'agree' if agrees else 'DISAGREE'}: {text}"
 
 
 def bench_search(n_max=50, repeats=20):
@@ -335,6 +417,12 @@ def bench_search_evaluations(resolution=60, n_max=10):
     _search_counts(kernels.search_body_bracketing, bodies[:2], levels)
     ours, new_evaluations, roots = _search_counts(kernels.search_body, bodies, levels)
     theirs, old_evaluations, _ = _search_counts(kernels.search_body_bracketing, bodies, levels)
+    # the agreement check: both searches once more, untimed, keeping the roots
+    ours_roots, theirs_roots = [], []
+    _search_counts(kernels.search_body, bodies, levels, ours_roots)
+    _search_counts(kernels.search_body_bracketing, bodies, levels, theirs_roots)
+    differ, worst = roots_agreement(ours_roots, theirs_roots)
+    agrees = differ == 0
     return {
         "task": f"search kernel, {len(bodies)} bodies, n <= {n_max} (one thread)",
         "timed": "one run of each over all the bodies, after a warm-up on two bodies "
@@ -345,9 +433,16 @@ def bench_search_evaluations(resolution=60, n_max=10):
         "speedup": theirs / ours,
         "evaluations_per_root": new_evaluations / roots,
         "baseline_evaluations_per_root": old_evaluations / roots,
+        "agrees": agrees,
         "note": f"{roots} roots; phase evaluations per root {new_evaluations / roots:.2f} "
         f"vs {old_evaluations / roots:.2f} "
-        f"({old_evaluations / new_evaluations:.1f}x fewer)",
+        f"({old_evaluations / new_evaluations:.1f}x fewer); "
+        + _agreement(
+            agrees,
+            f"{len(bodies) - differ} of {len(bodies)} bodies have the same roots "
+            f"(branch, level) in both, offsets within {SEARCH_RTOL:.0e} relative "
+            f"(largest difference {worst:.1e}; both searches run again, untimed)",
+        ),
     }
 
 
@@ -374,29 +469,50 @@ def bench_survey(resolution=400, n_max=10, repeats=1):
     from .search import closed_orbits
     from .survey import Survey
 
-    count = len(region_grid(resolution))
+    grid = region_grid(resolution)
+    count = len(grid)
     times = {}
 
-    def survey_once(fmt):
+    def survey_once(fmt, check=None):
         directory = tempfile.mkdtemp(prefix="orbits-bench-")
         try:
             Survey.grid(directory, resolution, n_max, fmt=fmt).run()
+            if check is not None:
+                return check(directory)
         finally:
             shutil.rmtree(directory, ignore_errors=True)
 
     for fmt in ("csv", "parquet"):
         times[fmt] = best_time(lambda fmt=fmt: survey_once(fmt), repeats)
     step = max(1, count // SURVEY_SAMPLE)
-    sample = region_grid(resolution)[::step]
+    picked = np.arange(0, count, step)
+    sample = grid[picked]
+    loop_counts = []
 
     def loop():
         # the same work as the survey's: each body's orbits and its minimum
         # phase as the search found it (minimum_phase would scan every branch
         # in full, more than the survey does)
+        loop_counts.clear()
         for moments in sample:
-            closed_orbits(moments, n_max=n_max).attrs["minimum_phase"]
+            found = closed_orbits(moments, n_max=n_max)
+            found.attrs["minimum_phase"]
+            loop_counts.append(len(found))
 
     per_body = best_time(loop, 1) / len(sample)
+
+    def survey_counts(directory):
+        from .survey import read_table
+
+        bodies = read_table(directory, "bodies")
+        by_body = dict(zip(bodies["body"].to_numpy().tolist(), bodies["orbits"].to_numpy()))
+        return [by_body.get(int(index), -1) for index in picked]
+
+    # the agreement check: one more survey (untimed), its bodies table read
+    # back; the loop's orbit count of each sampled body must be the survey's
+    survey_side = survey_once("parquet", survey_counts)
+    differ = sum(int(a) != int(b) for a, b in zip(survey_side, loop_counts, strict=True))
+    agrees = differ == 0
     runs = "one run" if repeats == 1 else f"best of {repeats} runs"
     which = "every body" if step == 1 else f"every {_ordinal(step)} body"
     return {
@@ -412,11 +528,18 @@ def bench_survey(resolution=400, n_max=10, repeats=1):
         "speedup": per_body * count / times["parquet"],
         "bodies_per_s": count / times["parquet"],
         "baseline_sample": len(sample),
+        "agrees": agrees,
         "note": f"{count / times['parquet']:.0f} bodies/s to Parquet (the default), "
         f"{count / times['csv']:.0f} bodies/s to CSV (end to end: search, "
         f"tables, atomic files, report); the baseline loop ran on {which} of the "
         f"grid ({len(sample)} bodies, {_seconds(per_body)} per body), scaled by "
-        f"{count}/{len(sample)}",
+        f"{count}/{len(sample)}; "
+        + _agreement(
+            agrees,
+            f"{len(sample) - differ} of the {len(sample)} sampled bodies have as many "
+            "orbits in the survey's bodies table (one more Parquet survey, untimed) "
+            "as in the loop",
+        ),
     }
 
 
@@ -695,11 +818,14 @@ def unavailable(name):
 
 
 def amdahl_bound(one, fixed, cpus):
-    """The most ``cpus`` CPUs can speed up a run of ``one`` s with ``fixed`` s serial.
+    """Amdahl's estimate of the speed-up of ``cpus`` CPUs on a run of ``one`` s
+    with ``fixed`` s serial.
 
     Amdahl's law: the fixed part stays on one core, the rest is shared
     perfectly, ``one / (fixed + (one - fixed) / cpus)``; 1 when the fixed
-    part is the whole run (or more, as measured on a noisy machine).
+    part is the whole run (or more, as measured on a noisy machine).  With
+    ``one`` and ``fixed`` measured (each a best of a few noisy runs) this is
+    an estimate, not a limit: a measured ratio can exceed it.
     """
     if not one > fixed:
         return 1.0
@@ -716,7 +842,9 @@ def bench_survey_scaling(resolution=500, n_max=30, repeats=3):
     warm-up: kernels and files into the caches), the speedup column is one
     CPU's time over all CPUs' time, each the best of ``repeats`` fresh
     processes taken in turns (one CPU, all CPUs, the fixed cost), so that a
-    drift of the machine's speed touches all three alike.
+    drift of the machine's speed touches all three alike.  The note gives
+    :func:`amdahl_bound` of those figures as an estimate (``bound`` in the
+    row), not as a limit.
 
     Raises :class:`BenchError` where :func:`unavailable` gives a reason
     (no CPU-affinity API, one CPU).
@@ -758,7 +886,9 @@ def bench_survey_scaling(resolution=500, n_max=30, repeats=3):
         "(whole command: start-up, search, tables, files, report); "
         f"a grid-2 survey takes {fixed:.2f} s on one CPU ({fixed / one:.0%} of the "
         "one-CPU run), a fixed cost that more CPUs cannot shorten: with it, "
-        f"{len(cpus)} CPUs can be at most {bound:.2f}x one (Amdahl)" + _bytecode_note(),
+        f"{len(cpus)} CPUs give about {bound:.2f}x one (an Amdahl estimate from the "
+        "best grid-2 and one-CPU runs, not a limit: measured ratios scatter around "
+        "it)" + _bytecode_note(),
     }
 
 
@@ -996,9 +1126,19 @@ BENCHMARKS = {
 
 
 # ------------------------------------------------------------------ GPU rows
+def _best_of(count, singular, many=None):
+    """``one run`` or ``best of 7 runs``."""
+    return f"one {singular}" if count == 1 else f"best of {plural(count, singular, many)}"
+
+
 def bench_cuda_total_phase(points=100_000_000, repeats=7, seed=0):
-    """Total phase of the Fig. 6 body on the GPU, angles/s: the kernel alone and
-    ``total_phase(..., device="cuda")`` end to end, against the CPU path.
+    """Total phase of the Fig. 6 body on the GPU against the CPU, end to end.
+
+    The ratio compares the same call on both sides: ``total_phase(body,
+    theta, device="cuda")`` against ``total_phase(body, theta,
+    device="cpu")`` (argument checks, folds, copies to and from the GPU
+    included on the GPU side).  The kernel alone (angles already on the GPU,
+    no copies) is timed too and given in the note, labelled as such.
 
     Raises DeviceError (one line) without a usable GPU or numba-cuda.
     """
@@ -1012,43 +1152,55 @@ def bench_cuda_total_phase(points=100_000_000, repeats=7, seed=0):
     kernel = run_cuda(gpu.total_phase_kernel_seconds, *moments, theta, repeats)
     end_to_end = best_time(lambda: total_phase(body, theta, device="cuda"), repeats)
     cpu_points = min(points, 10_000_000)
-    cpu = best_time(lambda: total_phase(body, theta[:cpu_points]), max(1, repeats // 2))
+    cpu_runs = max(1, repeats // 2)
+    cpu = best_time(lambda: total_phase(body, theta[:cpu_points], device="cpu"), cpu_runs)
     cpu = cpu * points / cpu_points
     sample = theta[:1_000_000]
-    reference = total_phase(body, sample)
+    reference = total_phase(body, sample, device="cpu")
     difference = np.max(np.abs(total_phase(body, sample, device="cuda") / reference - 1.0))
     threads = 1 if cpu_points < SERIAL_BELOW else get_num_threads()
-    cpu_runs = max(1, repeats // 2)
     scaled = (
         f"timed on the first {cpu_points:.0e} angles and scaled by {points / cpu_points:g}"
         if cpu_points < points
         else "timed on all the angles"
     )
     return {
-        "task": f"total phase on the GPU, {points:.0e} random theta (fig6 body)",
-        "timed": f"the kernel alone (angles already on the GPU) and end to end, best "
-        f"of {repeats} runs each after a warm-up run; the CPU best of {cpu_runs} after "
-        f"a warm-up run, {scaled}",
+        "task": f"total phase on the GPU, end to end, {points:.0e} random theta (fig6 body)",
+        "timed": f"end to end, total_phase(..., device='cuda') against device='cpu': the "
+        f"GPU {_best_of(repeats, 'run')} after a warm-up run, the CPU "
+        f"{_best_of(cpu_runs, 'run')} after a warm-up run, {scaled}; the kernel alone "
+        f"(in the note) {_best_of(repeats, 'launch', 'launches')}",
         "device": gpu.device_name(),
-        "ours_s": kernel,
-        "baseline": f"orbits.total_phase on the CPU ({plural(threads, 'thread')}), {scaled}",
+        "ours_s": end_to_end,
+        "baseline": f"orbits.total_phase(..., device='cpu') ({plural(threads, 'thread')}), "
+        f"{scaled}",
         "baseline_s": cpu,
-        "speedup": cpu / kernel,
-        "angles_per_s": points / kernel,
+        "speedup": cpu / end_to_end,
+        "angles_per_s": points / end_to_end,
         "end_to_end_s": end_to_end,
+        "kernel_s": kernel,
+        "kernel_angles_per_s": points / kernel,
+        "kernel_speedup": cpu / kernel,
         "threads": threads,
-        "note": f"kernel {points / kernel:.3g} angles/s on {gpu.device_name()}; "
-        f"end to end {points / end_to_end:.3g} angles/s (total_phase(..., "
-        "device='cuda'): argument checks and the phi fold on the host, theta "
-        "folded and checked in the kernel, copies both ways); "
-        f"CPU {points / cpu:.3g} angles/s; max relative difference "
-        f"GPU vs CPU {difference:.1e}",
+        "note": f"end to end {points / end_to_end:.3g} angles/s on {gpu.device_name()} "
+        "(total_phase(..., device='cuda'): argument checks and the phi fold on the "
+        "host, theta folded and checked in the kernel, copies both ways), "
+        f"CPU {points / cpu:.3g} angles/s; kernel only (angles already on the GPU, "
+        f"no copies; not the ratio column): {_seconds(kernel)}, "
+        f"{points / kernel:.3g} angles/s ({cpu / kernel:.3g}x the CPU call); max "
+        f"relative difference GPU vs CPU {difference:.1e}",
     }
 
 
 def bench_cuda_search(resolution=400, n_max=30, repeats=3):
-    """The survey's search on the GPU, bodies/s: the kernel alone and
-    :func:`orbits.search.search_bodies` end to end, against the CPU search.
+    """The survey's search on the GPU against the CPU, bodies/s, end to end.
+
+    The ratio compares the same call on both sides:
+    :func:`orbits.search.search_bodies` with ``device="cuda"`` (copies
+    included) against ``device="cpu"``.  The kernel alone (inputs already
+    on the GPU, no copies) is timed too and given in the note, labelled as
+    such.  The two sides must find the same number of roots on every body,
+    offsets within :data:`SEARCH_RTOL` relative (``agrees``).
 
     Raises DeviceError (one line) without a usable GPU or numba-cuda.
     """
@@ -1076,8 +1228,9 @@ def bench_cuda_search(resolution=400, n_max=30, repeats=3):
 
     kernel = min(kernel_only() for _ in range(repeats))
     end_to_end = best_time(lambda: search_bodies(moments, levels, device="cuda"), repeats)
-    cpu_rows = search_bodies(moments, levels)
-    cpu = best_time(lambda: search_bodies(moments, levels), max(1, repeats // 2))
+    cpu_rows = search_bodies(moments, levels, device="cpu")
+    cpu_runs = max(1, repeats // 2)
+    cpu = best_time(lambda: search_bodies(moments, levels, device="cpu"), cpu_runs)
     same_counts = bool(np.array_equal(rows.counts, cpu_rows.counts))
     worst = 0.0
     for b in range(count):
@@ -1085,25 +1238,37 @@ def bench_cuda_search(resolution=400, n_max=30, repeats=3):
         if k and rows.counts[b] == cpu_rows.counts[b]:
             ours, theirs = rows.offset[b, :k], cpu_rows.offset[b, :k]
             worst = max(worst, float(np.max(np.abs(ours / theirs - 1.0))))
+    agrees = bool(same_counts and worst <= SEARCH_RTOL)
     threads = get_num_threads()
     return {
-        "task": f"survey search on the GPU, {count} bodies, n <= {n_max} (grid {resolution})",
-        "timed": f"the kernel alone (best of {repeats} launches) and end to end (best "
-        f"of {repeats}), after a warm-up run; the CPU best of {max(1, repeats // 2)} "
-        "after a warm-up run",
+        "task": f"survey search on the GPU, end to end, {count} bodies, n <= {n_max} "
+        f"(grid {resolution})",
+        "timed": f"end to end, search_bodies(..., device='cuda') against device='cpu': "
+        f"the GPU {_best_of(repeats, 'run')}, the CPU {_best_of(cpu_runs, 'run')}, each "
+        f"after a warm-up run; the kernel alone (in the note) "
+        f"{_best_of(repeats, 'launch', 'launches')}",
         "device": gpu.device_name(),
-        "ours_s": kernel,
-        "baseline": f"the same search on the CPU ({plural(threads, 'thread')})",
+        "ours_s": end_to_end,
+        "baseline": f"the same search_bodies call on the CPU ({plural(threads, 'thread')})",
         "baseline_s": cpu,
-        "speedup": cpu / kernel,
-        "bodies_per_s": count / kernel,
+        "speedup": cpu / end_to_end,
+        "bodies_per_s": count / end_to_end,
         "end_to_end_s": end_to_end,
+        "kernel_s": kernel,
+        "kernel_bodies_per_s": count / kernel,
+        "kernel_speedup": cpu / kernel,
         "threads": threads,
-        "note": f"kernel {count / kernel:.3g} bodies/s on {gpu.device_name()}; with "
-        f"the copies {count / end_to_end:.3g} bodies/s; CPU {count / cpu:.3g} "
-        f"bodies/s; {int(cpu_rows.counts.clip(0).sum())} roots, root counts "
-        f"{'equal' if same_counts else 'DIFFER'}, largest relative dtheta "
-        f"difference {worst:.1e}",
+        "agrees": agrees,
+        "note": f"end to end (copies both ways) {count / end_to_end:.3g} bodies/s on "
+        f"{gpu.device_name()}, CPU {count / cpu:.3g} bodies/s; kernel only (inputs "
+        f"already on the GPU, no copies; not the ratio column): {_seconds(kernel)}, "
+        f"{count / kernel:.3g} bodies/s ({cpu / kernel:.3g}x the CPU call); "
+        + _agreement(
+            agrees,
+            f"{int(cpu_rows.counts.clip(0).sum())} roots, root counts "
+            f"{'equal' if same_counts else 'DIFFER'}, largest relative dtheta "
+            f"difference {worst:.1e} (limit {SEARCH_RTOL:.0e})",
+        ),
     }
 
 
@@ -1200,6 +1365,12 @@ def load_failures(report):
     return [row for row in report["results"] if not row.get("load", {}).get("holds", True)]
 
 
+def disagreements(report):
+    """The rows of a :func:`run` report whose two sides disagree (``agrees``
+    false: ``orbits bench`` exits 1 after the table, naming them)."""
+    return [row for row in report["results"] if row.get("agrees", True) is False]
+
+
 def _quick_kwargs(name, gpu):
     """The smaller sizes of ``--quick`` for the row ``name``."""
     if gpu:
@@ -1288,8 +1459,10 @@ def run(names=None, quick=False, load=True, device="cpu"):
         load_check(rows)
     for row in rows:
         row.pop("_ours", None)
+    usable, total = usable_cpus()
     machine = {
-        "cpu_count": os.cpu_count(),
+        "cpus_usable": usable,
+        "cpu_count": total,
         "numba_threads": get_num_threads(),
         "python": platform.python_version(),
         "numpy": np.__version__,
@@ -1299,6 +1472,13 @@ def run(names=None, quick=False, load=True, device="cpu"):
     if gpu:
         machine["gpu"] = gpu.device_name()
     report = {"machine": machine, "results": rows}
+    checked_rows = [row for row in rows if "agrees" in row]
+    if checked_rows:
+        report["agreement"] = {
+            "rows": len(checked_rows),
+            "agree": sum(bool(row["agrees"]) for row in checked_rows),
+            "passed": not disagreements(report),
+        }
     if checked:
         loaded = [row for row in rows if "load" in row]
         report["load_check"] = {
@@ -1320,7 +1500,7 @@ def format_table(report):
     rows = report["results"]
     width = max([TASK_WIDTH] + [len(row["task"]) for row in rows])
     lines = [
-        f"orbits bench: {machine['cpu_count']} cores, "
+        f"orbits bench: {_cpus_label(machine)}, "
         f"{machine['numba_threads']} numba threads, Python "
         f"{machine['python']}, NumPy {machine['numpy']}, SciPy "
         f"{machine['scipy']}, numba {machine['numba']}"
@@ -1338,6 +1518,15 @@ def format_table(report):
             continue
         lines.append(f"    timed: {row['timed']}")
         lines.append(f"    baseline: {row['baseline']}; {row['note']}")
+    checked_rows = [row for row in rows if "agrees" in row]
+    if checked_rows:
+        agree = sum(bool(row["agrees"]) for row in checked_rows)
+        lines += [
+            "",
+            f"agreement check: both sides agree in {agree} of {len(checked_rows)} "
+            "rows that compare results"
+            + ("" if agree == len(checked_rows) else " (NOT ALL: DISAGREE)"),
+        ]
     loaded = [row for row in rows if "load" in row]
     if loaded:
         lines += [
@@ -1362,6 +1551,15 @@ def format_table(report):
             f"{LOAD_LIMIT:g}x" + ("" if held == len(loaded) else " (NOT ALL: FAILED)")
         )
     return "\n".join(lines)
+
+
+def _cpus_label(machine):
+    """``2 CPUs usable of 2`` (a report without ``cpus_usable``: ``2 CPUs``)."""
+    total = machine.get("cpu_count")
+    usable = machine.get("cpus_usable")
+    if usable is None:
+        return plural(total, "CPU") if total is not None else "CPUs unknown"
+    return f"{plural(usable, 'CPU')} usable of {total if total is not None else '?'}"
 
 
 def _finite(value):

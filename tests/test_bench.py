@@ -13,6 +13,7 @@ import subprocess
 import sys
 import time
 
+import numpy as np
 import pytest
 
 from orbits import bench
@@ -187,6 +188,7 @@ def _strict_json(text):
 
 def _machine():
     return {
+        "cpus_usable": 2,
         "cpu_count": 2,
         "numba_threads": 2,
         "python": "3",
@@ -576,6 +578,7 @@ def test_cuda_phase_labels_under_the_simulator():
         import json
         from orbits import bench
         print(json.dumps(bench.bench_cuda_total_phase(points=48, repeats=1)))
+        print(json.dumps(bench.bench_cuda_search(resolution=4, n_max=3, repeats=1)))
     """
     done = subprocess.run(
         [sys.executable, "-c", textwrap.dedent(code)],
@@ -586,11 +589,22 @@ def test_cuda_phase_labels_under_the_simulator():
         timeout=600,
     )
     assert done.returncode == 0, done.stderr[-3000:]
-    row = json.loads(done.stdout.strip().splitlines()[-1])
+    row, search_row = (json.loads(line) for line in done.stdout.strip().splitlines()[-2:])
     assert row["threads"] == 1 and "(1 thread)" in row["baseline"]
     assert "timed on all the angles" in row["timed"]
     assert "theta folded and checked in the kernel" in row["note"]
     assert "fold and checks on the host" not in row["note"]
+    # the ratio compares the same work: the public call end to end on both
+    # sides (it divided the CPU call by the GPU kernel alone: 138.6x printed,
+    # 0.88x end to end); the kernel alone is in the note, labelled
+    for each in (row, search_row):
+        assert each["ours_s"] == each["end_to_end_s"]
+        assert each["speedup"] == pytest.approx(each["baseline_s"] / each["end_to_end_s"])
+        assert each["kernel_speedup"] == pytest.approx(each["baseline_s"] / each["kernel_s"])
+        assert "end to end" in each["task"] and each["timed"].startswith("end to end")
+        assert "kernel only" in each["note"] and "not the ratio column" in each["note"]
+    assert "device='cpu'" in row["baseline"]
+    assert search_row["agrees"] is True and "agree: " in search_row["note"]
 
 
 def test_survey_tables_times_the_table_work_of_real_chunks(monkeypatch, tmp_path):
@@ -682,3 +696,184 @@ def test_quick_changes_every_row_it_can():
         signature = inspect.signature(bench.BENCHMARKS[name])
         if not any(p.kind is p.VAR_KEYWORD for p in signature.parameters.values()):
             assert set(kwargs) <= set(signature.parameters), name
+
+
+# ------------------------------------------------------------------ audit fixes
+def _row(**extra):
+    row = {
+        "task": "a task",
+        "timed": "t",
+        "ours_s": 1e-3,
+        "baseline": "b",
+        "baseline_s": 2e-3,
+        "speedup": 2.0,
+        "note": "n",
+    }
+    row.update(extra)
+    return row
+
+
+def test_header_counts_the_cpus_this_process_may_use(monkeypatch):
+    """Under ``taskset -c 0`` the header said "2 cores" while one was usable."""
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0}, raising=False)
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    assert bench.usable_cpus() == (1, 2)
+    monkeypatch.setattr(bench, "BENCHMARKS", {"r": lambda **kw: _row()})
+    report = bench.run(["r"], load=False)
+    assert report["machine"]["cpus_usable"] == 1 and report["machine"]["cpu_count"] == 2
+    header = bench.format_table(report).splitlines()[0]
+    assert header.startswith("orbits bench: 1 CPU usable of 2, ")
+    assert "cores" not in header
+    # no affinity API (macOS, Windows): the machine's count
+    monkeypatch.delattr(os, "sched_getaffinity", raising=False)
+    assert bench.usable_cpus() == (2, 2)
+    # a report from before the field: the machine's count, not "usable"
+    old = {k: v for k, v in _machine().items() if k != "cpus_usable"}
+    assert bench.format_table({"machine": old, "results": []}).startswith("orbits bench: 2 CPUs, ")
+
+
+def test_roots_agreement():
+    def body(branches, levels, offsets):
+        return (np.array(branches, np.int8), np.array(levels), np.array(offsets, float))
+
+    a = [body([1, 1, -1], [0, 1, 0], [0.1, 0.2, 0.3]), None, body([], [], [])]
+    same = [body([1, 1, -1], [0, 1, 0], [0.1, 0.2 * (1 + 1e-13), 0.3]), None, body([], [], [])]
+    differ, worst = bench.roots_agreement(a, same)
+    assert differ == 0 and 0 < worst < bench.SEARCH_RTOL
+    off = [body([1, 1, -1], [0, 1, 0], [0.1, 0.2 * (1 + 1e-6), 0.3]), None, body([], [], [])]
+    assert bench.roots_agreement(a, off)[0] == 1
+    other_level = [body([1, 1, -1], [0, 2, 0], [0.1, 0.2, 0.3]), None, body([], [], [])]
+    assert bench.roots_agreement(a, other_level)[0] == 1
+    fewer = [body([1, 1], [0, 1], [0.1, 0.2]), body([], [], []), body([], [], [])]
+    assert bench.roots_agreement(a, fewer)[0] == 2  # one root missing; refused by one side
+
+
+def test_search_evaluations_checks_both_searches_agree(monkeypatch):
+    """The row discarded the baseline's roots: a fast wrong search would win."""
+    from orbits.core import search as kernels
+
+    row = bench.bench_search_evaluations(resolution=8, n_max=3)
+    assert row["agrees"] is True
+    assert "agree: " in row["note"] and "DISAGREE" not in row["note"]
+    assert f"offsets within {bench.SEARCH_RTOL:.0e} relative" in row["note"]
+    real = kernels.search_body
+
+    def wrong(i1, i2, i3, levels, branch, level, offset, info):
+        found = real(i1, i2, i3, levels, branch, level, offset, info)
+        offset[:found] *= 1.001
+        return found
+
+    monkeypatch.setattr(kernels, "search_body", wrong)
+    row = bench.bench_search_evaluations(resolution=8, n_max=3)
+    assert row["agrees"] is False and "DISAGREE: " in row["note"]
+
+
+def test_survey_checks_the_loop_against_the_survey(monkeypatch):
+    """The survey row never compared the loop's orbits with the survey's."""
+    from orbits import search
+
+    monkeypatch.setattr(bench, "SURVEY_SAMPLE", 5)
+    row = bench.bench_survey(resolution=12, n_max=2)
+    assert row["agrees"] is True and "agree: " in row["note"]
+    sample = row["baseline_sample"]
+    assert f"{sample} of the {sample} sampled bodies have as many orbits" in row["note"]
+    real = search.closed_orbits
+
+    def one_short(*args, **kwargs):
+        frame = real(*args, **kwargs)
+        shorter = frame.iloc[1:]
+        shorter.attrs.update(frame.attrs)
+        return shorter
+
+    monkeypatch.setattr(search, "closed_orbits", one_short)
+    row = bench.bench_survey(resolution=12, n_max=2)
+    assert row["agrees"] is False and "DISAGREE: " in row["note"]
+
+
+def test_a_row_that_disagrees_exits_1_after_the_table(capsys, monkeypatch):
+    from orbits.cli import main
+
+    rows = [
+        _row(task="search kernel", agrees=False, note="DISAGREE: 3 of 4 bodies"),
+        _row(task="survey", agrees=True, note="agree: all"),
+    ]
+    monkeypatch.setattr(
+        bench, "BENCHMARKS", {"a": lambda **kw: rows[0], "b": lambda **kw: rows[1]}
+    )
+    report = bench.run(load=False)
+    assert report["agreement"] == {"rows": 2, "agree": 1, "passed": False}
+    assert [row["task"] for row in bench.disagreements(report)] == ["search kernel"]
+    assert main(["bench", "--no-load-check"]) == 1
+    captured = capsys.readouterr()
+    assert "agreement check: both sides agree in 1 of 2 rows" in captured.out
+    assert "NOT ALL: DISAGREE" in captured.out
+    assert captured.err.strip().splitlines() == [
+        "orbits: error: the two sides disagree: search kernel"
+    ]
+    rows[0] = _row(task="search kernel", agrees=True)
+    assert main(["bench", "--no-load-check", "--json"]) == 0
+    assert _strict_json(capsys.readouterr().out)["agreement"]["passed"] is True
+
+
+def test_survey_scaling_gives_the_amdahl_figure_as_an_estimate(monkeypatch):
+    """Recorded runs exceeded the "at most" bound (1.76x against 1.71x)."""
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
+    monkeypatch.setattr(os, "sched_setaffinity", lambda pid, cpus: None, raising=False)
+    _fake_subprocess_run(monkeypatch, [])
+    row = bench.bench_survey_scaling(resolution=4, n_max=2, repeats=1)
+    assert "at most" not in row["note"]
+    assert "CPUs give about" in row["note"] and "Amdahl estimate" in row["note"]
+
+
+def test_help_and_docstring_say_how_each_row_is_timed(capsys):
+    """``survey`` is one run of each format, not "best of several"."""
+    from orbits.cli import main
+
+    try:
+        code = main(["bench", "--help"])
+    except SystemExit as exit:
+        code = exit.code
+    assert code in (0, None)
+    text = " ".join(capsys.readouterr().out.split())
+    assert (
+        "search_evaluations, survey_threads, survey_bytes and survey one run of each side" in text
+    )
+    assert "phase, motion*, motion_rate and search the best of several runs" in text
+    assert "search_scaling and survey_tables the best of three" in text
+    doc = " ".join(bench.__doc__.split())
+    assert (
+        "``search_evaluations``, ``survey_threads``, ``survey_bytes`` and ``survey``: one" in doc
+    )
+    assert "most rows" not in doc
+
+
+def test_scale_script_refuses_cpus_outside_its_affinity():
+    """benchmarks/scale.py: a CPU this process may not use is exit 2, one line."""
+    from pathlib import Path
+
+    if not hasattr(os, "sched_getaffinity"):
+        pytest.skip("needs os.sched_getaffinity")
+    script = Path(__file__).resolve().parents[1] / "benchmarks" / "scale.py"
+    outside = max(os.sched_getaffinity(0)) + 1
+    done = subprocess.run(
+        [sys.executable, str(script), "40", "5", "1", "0", f"0-{outside}"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert done.returncode == 2 and done.stdout == ""
+    err = done.stderr.strip().splitlines()
+    assert len(err) == 1 and f"CPU(s) {outside} not available" in err[0], err
+    done = subprocess.run(
+        [sys.executable, str(script), "40", "5"], capture_output=True, text=True, timeout=60
+    )
+    assert done.returncode == 2 and done.stderr.startswith("scale.py: error: usage:")
+
+
+def test_only_help_names_every_row():
+    """--help lists the --only names (the table shows descriptions, not
+    names); the list is the benchmarks' own keys."""
+    from orbits.cli import bench as cli_bench
+
+    assert cli_bench.ROW_NAMES == tuple(bench.BENCHMARKS)
+    assert cli_bench.CUDA_ROW_NAMES == tuple(bench.CUDA_BENCHMARKS)

@@ -3,13 +3,35 @@
 What each row times and compares with is in :mod:`orbits.bench`; most rows
 run in this process, ``startup``, ``cold_compile`` and ``survey_scaling``
 run fresh processes.  Exit 1 (after the table) when a row fails the
-under-load check.
+under-load check or its two sides disagree.
 """
 
 import sys
 
 from ..errors import InputError
 from .shared import EXIT_CHECK_FAILED
+
+# the --only names, without importing orbits.bench for --help (the same keys
+# as orbits.bench.BENCHMARKS and CUDA_BENCHMARKS; tests/test_bench.py)
+ROW_NAMES = (
+    "startup",
+    "cold_compile",
+    "phase",
+    "motion",
+    "motion_near_separatrix",
+    "motion_20001",
+    "motion_near_separatrix_20001",
+    "motion_rate",
+    "search",
+    "search_evaluations",
+    "survey",
+    "survey_scaling",
+    "survey_threads",
+    "search_scaling",
+    "survey_bytes",
+    "survey_tables",
+)
+CUDA_ROW_NAMES = ("cuda_phase", "cuda_search")
 
 
 def _cmd_bench(args):
@@ -23,6 +45,12 @@ def _cmd_bench(args):
         args.only, quick=args.quick, load=not args.no_load_check, device=args.device
     )
     print(bench.to_json(report) if args.json else bench.format_table(report), flush=True)
+    status = 0
+    differ = bench.disagreements(report)
+    if differ:
+        rows = "; ".join(row["task"] for row in differ)
+        print(f"orbits: error: the two sides disagree: {rows}", file=sys.stderr)
+        status = EXIT_CHECK_FAILED
     failed = bench.load_failures(report)
     if failed:
         rows = "; ".join(f"{row['task']} slowed {row['load']['slowdown']:.2f}x" for row in failed)
@@ -30,8 +58,8 @@ def _cmd_bench(args):
             f"orbits: error: under-load check failed (limit {bench.LOAD_LIMIT:g}x): {rows}",
             file=sys.stderr,
         )
-        return EXIT_CHECK_FAILED
-    return 0
+        status = EXIT_CHECK_FAILED
+    return status
 
 
 def add_parser(subparsers):
@@ -42,14 +70,21 @@ def add_parser(subparsers):
         "baseline's time over ours).  Each row names its baseline (the SciPy "
         "route, import numpy, the same command warm, the search it replaced, a "
         "Python loop, one CPU or one numba thread, --columns all, or none) and "
-        "says what was timed: most rows the best of several runs after a "
-        "warm-up run, in this process; search_evaluations, survey_threads and "
-        "survey_bytes one run of each side after a warm-up; startup, "
-        "cold_compile and survey_scaling fresh processes (medians; one cold and "
-        "one warm run; best of several).  The survey row's baseline is timed on "
-        "a sample of the grid's bodies (the row says how many) and scaled to all "
-        "of them.  Rows that "
-        "compare threads use the count in effect (orbits --threads N).  Then, "
+        "says what was timed: phase, motion*, motion_rate and search the best of "
+        "several runs after a warm-up run, in this process; search_scaling and "
+        "survey_tables the best of three of each side, in turns, after a "
+        "warm-up; search_evaluations, survey_threads, survey_bytes and survey "
+        "one run of each side after a warm-up (survey: one run of each format; "
+        "its baseline is timed on a sample of the grid's bodies, the row says "
+        "how many, and scaled to all of them); startup, cold_compile and "
+        "survey_scaling fresh processes (medians; one cold and one warm run; "
+        "best of several).  The GPU rows (--device cuda) compare the public "
+        "call end to end on the GPU and on the CPU; the kernel alone is in "
+        "their note.  Rows that "
+        "compare threads use the count in effect (orbits --threads N).  Rows "
+        "that compare results (search_evaluations, survey, cuda_search) check "
+        "that both sides agree; when one does not, the command exits 1 after "
+        "the table, naming it.  Then, "
         "on the CPU, the under-load check: each row's own task again beside a "
         "CPU-bound process; when a row slows down more than 2x the command "
         "exits 1 after the table, naming it.",
@@ -59,8 +94,11 @@ def add_parser(subparsers):
         "--only",
         nargs="+",
         metavar="NAME",
-        help="run only these benchmarks, each named once (names as in the table; a "
-        "wrong name lists them)",
+        help="run only these rows, each named once: "
+        + ", ".join(ROW_NAMES)
+        + " (CPU); "
+        + ", ".join(CUDA_ROW_NAMES)
+        + " (--device cuda); the name field of --json",
     )
     parser.add_argument(
         "--quick",
@@ -72,9 +110,10 @@ def add_parser(subparsers):
         "--device",
         choices=["cpu", "cuda"],
         default="cpu",
-        help="cpu (default): the CPU rows; cuda: our kernels on an NVIDIA GPU "
-        "(needs orbits[cuda]) against the same kernels on the CPU, in angles/s "
-        "and bodies/s, the GPU named (no under-load check)",
+        help="cpu (default): the CPU rows; cuda: total_phase and the survey's "
+        "search on an NVIDIA GPU (needs orbits[cuda]) against the same calls on "
+        "the CPU, end to end (copies included), in angles/s and bodies/s, the "
+        "kernel alone in the note, the GPU named (no under-load check)",
     )
     parser.add_argument(
         "--no-load-check",
