@@ -189,7 +189,8 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
     q_max : int
         Also the orbits closing after up to ``q_max`` periods (``2 pi p/q``).
     units : {"rad/s", "deg/s", "rpm", "Hz"}
-        Unit of ``omega`` and of the ``omega_*`` columns.
+        Unit of ``omega`` and of the ``omega_*`` columns; ``rpm`` and
+        ``Hz`` are revolutions per minute and per second (1 Hz = 2 pi rad/s).
 
     Returns
     -------

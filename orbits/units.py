@@ -8,7 +8,11 @@ import math
 
 from .errors import InputError
 
-# angular-velocity units -> rad/s
+# what --units says of the revolution units (the CLI's help)
+REVOLUTIONS_NOTE = "rpm and Hz are revolutions per minute and per second: 1 Hz = 2 pi rad/s"
+
+# angular-velocity units -> rad/s; rpm and Hz count revolutions (turns of
+# 2 pi rad) per minute and per second, as a tachometer does: 1 Hz = 2 pi rad/s
 OMEGA_UNITS = {
     "rad/s": 1.0,
     "deg/s": math.pi / 180.0,

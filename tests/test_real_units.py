@@ -237,6 +237,26 @@ def test_constants_unit_and_deprecated_unit(capsys):
     ]
 
 
+def test_deprecated_unit_with_a_spin_unit_names_units(capsys):
+    """``--unit rad/s`` (meant as ``--units``) reached the hidden old name of
+    --constants-unit and was refused as a choice of cm-1, MHz, GHz alone."""
+    argv = ["animate", "--preset", "fig6", "--theta", "0.5", "--unit", "rad/s"]
+    assert main([*argv, "--out", "never.gif"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert "--unit is the old name of --constants-unit" in err[0]
+    assert "the unit of a spin is --units" in err[0]
+
+
+@pytest.mark.parametrize("command", ["phase", "catalog", "animate"])
+def test_units_help_says_what_hz_is(command, capsys):
+    """1 Hz as an angular velocity is one revolution per second (2 pi rad/s),
+    which --help did not say (an audit: it could read as 1/s = 1 rad/s)."""
+    assert main([command, "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "rpm and Hz are revolutions per minute and per second: 1 Hz = 2 pi rad/s" in text
+
+
 def test_phase_omega_prints_units_frame_and_flip(capsys):
     argv = ["phase", "--box", "0.071", "0.147", "0.0078", "--mass", "0.17"]
     assert main([*argv, "--omega", "120", "2", "1", "--units", "rpm"]) == 0

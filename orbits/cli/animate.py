@@ -7,7 +7,7 @@ import sys
 from ..cells import literal_text
 from ..errors import InputError
 from ..limits import check_animation, short_number
-from ..units import OMEGA_UNITS
+from ..units import OMEGA_UNITS, REVOLUTIONS_NOTE
 from .shared import (
     add_body_options,
     announce,
@@ -259,7 +259,9 @@ def add_parser(subparsers):
         "as in orbits phase, subnormal offsets below |dtheta| = 4.941e-312 are refused)",
     )
     spin.add_argument("--n", type=positive_int, help="the closed orbit Delta alpha = 2 pi n")
-    spin.add_argument("--p", type=positive_int, help="the closed orbit 2 pi p/q (with --q)")
+    spin.add_argument(
+        "--p", type=positive_int, help="the closed orbit 2 pi p/q (with --q; default q = 1)"
+    )
     spin.add_argument("--q", type=positive_int, help="see --p")
     spin.add_argument(
         "--omega",
@@ -284,7 +286,8 @@ def add_parser(subparsers):
         "--phi",
         type=finite,
         default=0.0,
-        help="azimuth of omega0 from I1 with --theta/--dtheta (rad, within [-2 pi, 2 pi])",
+        help="azimuth of omega0 from I1 with --theta/--dtheta (rad, within "
+        "[-2 pi, 2 pi]; default 0)",
     )
     parser.add_argument(
         "--branch",
@@ -295,7 +298,8 @@ def add_parser(subparsers):
         "--units",
         choices=list(OMEGA_UNITS),
         default="rad/s",
-        help="unit of --omega and --speed (default rad/s); times are then in s",
+        help="unit of --omega and --speed (default rad/s); times are then in s; "
+        + REVOLUTIONS_NOTE,
     )
     parser.add_argument(
         "--speed",
@@ -337,7 +341,7 @@ def add_parser(subparsers):
         "--solid",
         choices=["auto", "ellipsoid"],
         default="auto",
-        help="the solid drawn: auto (the body's shape when known, "
+        help="the solid drawn: auto (default: the body's shape when known, "
         "else its equivalent ellipsoid) or ellipsoid",
     )
     parser.add_argument(

@@ -4,7 +4,7 @@ import sys
 
 from ..errors import InputError
 from ..limits import check_search_bounds, plural
-from ..units import OMEGA_UNITS
+from ..units import OMEGA_UNITS, REVOLUTIONS_NOTE
 from .shared import (
     EXIT_CHECK_FAILED,
     add_body_options,
@@ -186,7 +186,7 @@ def add_parser(subparsers):
         "--units",
         choices=list(OMEGA_UNITS),
         default="rad/s",
-        help="unit of --omega and of the omega_x/y/z columns (default rad/s)",
+        help="unit of --omega and of the omega_x/y/z columns (default rad/s); " + REVOLUTIONS_NOTE,
     )
     nearest.add_argument(
         "--nearest",

@@ -178,10 +178,15 @@ def add_parser(subparsers):
     parser._mutually_exclusive_groups[-1].required = False
     parser.add_argument("--paper", action="store_true", help="draw the paper's six figures")
     parser.add_argument(
-        "--survey", metavar="DIR", help="draw Fig. 2 from the survey in DIR (orbits survey)"
+        "--survey",
+        metavar="DIR",
+        help="draw Fig. 2 from the survey in DIR (orbits survey --resolution; "
+        "a --bodies survey has no grid to draw)",
     )
     parser.add_argument(
-        "--n-max", type=positive_int, help="with a body: largest multiple n (or p/q) of 2 pi"
+        "--n-max",
+        type=positive_int,
+        help="with a body (required there): largest multiple n (or p/q) of 2 pi",
     )
     parser.add_argument(
         "--q-max",

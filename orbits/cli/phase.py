@@ -10,7 +10,7 @@ import math
 import sys
 
 from ..errors import InputError
-from ..units import OMEGA_UNITS, TIME_UNITS
+from ..units import OMEGA_UNITS, REVOLUTIONS_NOTE, TIME_UNITS
 from .shared import add_body_options, angle_argument, body_from_args, finite, offset_argument
 
 
@@ -350,7 +350,7 @@ def add_parser(subparsers):
         "--units",
         choices=list(OMEGA_UNITS),
         default="rad/s",
-        help="unit of --omega (default rad/s)",
+        help="unit of --omega (default rad/s); " + REVOLUTIONS_NOTE,
     )
     parser.add_argument(
         "--degrees",

@@ -261,7 +261,9 @@ def add_body_options(parser, many=False):
             "and in the output) instead of stopping",
         )
     group.add_argument(
-        "--name", help="name of the single body (catalog and figure labels); not with --bodies"
+        "--name",
+        help="name of the single body (its label in catalogs, figures and "
+        "printed tables; default: the moments or the preset)",
     )
     _add_real_body_options(group, exclusive)
     return group
@@ -327,15 +329,16 @@ def _add_real_body_options(group, exclusive):
         "--mass",
         type=finite,
         default=1.0,
-        help="mass in kg for --box and --cylinder (default 1 kg); only the energy and "
-        "|L| of phase --omega depend on it, every other result on the moments' ratios",
+        help="mass in kg for --box and --cylinder (default 1 kg): it scales the moments "
+        "(kg m^2) and with them the E, |L| and D that phase --omega prints; the motion, "
+        "periods and phases depend only on the moments' ratios",
     )
     group.add_argument(
         "--density",
         type=finite,
         default=1.0,
         help="density in kg/m^3 for --mesh (default 1 kg/m^3); as --mass, it scales "
-        "only the energy and |L| of phase --omega",
+        "the moments, not the motion, periods or phases",
     )
     group.add_argument(
         "--constants-unit",
@@ -347,7 +350,6 @@ def _add_real_body_options(group, exclusive):
     group.add_argument(
         "--unit",
         dest="constants_unit",
-        choices=CONSTANTS_UNITS,
         action=_DeprecatedUnit,
         help=argparse.SUPPRESS,
     )
@@ -374,6 +376,12 @@ class _DeprecatedUnit(argparse.Action):
     """
 
     def __call__(self, parser, namespace, values, option_string=None):
+        if values not in CONSTANTS_UNITS:  # e.g. --unit rad/s, meant as --units
+            parser.error(
+                f"argument --unit: invalid choice: {values!r} (--unit is the old name of "
+                f"--constants-unit, the unit of --rotational-constants: "
+                f"{', '.join(CONSTANTS_UNITS)}; the unit of a spin is --units)"
+            )
         notes = list(getattr(namespace, "notes", ()))
         notes.append(
             "--unit is deprecated; use --constants-unit (the unit of "

@@ -261,7 +261,10 @@ def add_parser(subparsers):
         "in the manifest) instead of stopping",
     )
     parser.add_argument(
-        "--n-max", type=positive_int, help="largest multiple n (or p/q) of 2 pi searched per body"
+        "--n-max",
+        type=positive_int,
+        help="largest multiple n (or p/q) of 2 pi searched per body "
+        "(required, except with --check)",
     )
     parser.add_argument(
         "--q-max", type=positive_int, default=1, help="also p/q orbits with q up to Q (default 1)"
