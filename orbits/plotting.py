@@ -595,8 +595,8 @@ def plot_body_space(ax, grid=None, *, resolution=300, levels=None, colorbar=True
         linewidth=1.0,
         label=r"kinks: $\Delta\alpha_{\theta\to0} = \Delta\alpha_{\theta\to\pi/2}$",
     )
-    ax.set_xlabel(r"$I_1$ (J s$^2$, $|I| = 1$)")
-    ax.set_ylabel(r"$I_2$ (J s$^2$)")
+    ax.set_xlabel(r"$I_1\,/\,|I|$")
+    ax.set_ylabel(r"$I_2\,/\,|I|$")
     ax.set_aspect("equal")
     (lo1, hi1), (lo2, hi2) = REGION_BOX
     ax.set_xlim(lo1, hi1 + 0.01)

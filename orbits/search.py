@@ -26,12 +26,14 @@ from .threads import threads_for
 #: The catalog's columns, in order: name -> (unit, meaning).  The one
 #: definition of the schema: :data:`CATALOG_COLUMNS` is its keys, and the
 #: documentation's schema table is generated from it.  Units are those of
-#: the normalised body (``|I| = 1``, ``|omega0| = 1``); meanings are reST.
+#: the normalised body (``|I| = 1``, ``|omega0| = 1``): a value times the
+#: unit's |I| (kg m^2) and |omega0| (rad/s) is the SI value (J, J s, s);
+#: meanings are reST.
 CATALOG_SCHEMA = {
     "body": ("", "the body's name (``fig6``, ``t-handle``, a ``--bodies`` name, or the moments)"),
-    "I1": ("J s²", r"smallest principal moment, normalised to :math:`|\mathbf I| = 1`"),
-    "I2": ("J s²", r"intermediate principal moment, normalised to :math:`|\mathbf I| = 1`"),
-    "I3": ("J s²", r"largest principal moment, normalised to :math:`|\mathbf I| = 1`"),
+    "I1": ("|I|", r"smallest principal moment, normalised to :math:`|\mathbf I| = 1`"),
+    "I2": ("|I|", r"intermediate principal moment, normalised to :math:`|\mathbf I| = 1`"),
+    "I3": ("|I|", r"largest principal moment, normalised to :math:`|\mathbf I| = 1`"),
     "theta_crit": ("rad", r"critical angle :math:`\theta_c`, where :math:`M^2 = 2EI_2` (Eq. 27)"),
     "branch": (
         "",
@@ -68,17 +70,17 @@ CATALOG_SCHEMA = {
         "of the polhode, from its own closed form (not the difference)",
     ),
     "period": (
-        "s",
+        "1/|ω₀|",
         r"period :math:`T` of :math:`\boldsymbol\omega` in the body (Eq. 16a), "
         r"in units of :math:`1/|\boldsymbol\omega_0|`",
     ),
     "energy": (
-        "J",
+        "|I| |ω₀|²",
         r":math:`E = \tfrac12\boldsymbol\omega_0\cdot\mathbf I\boldsymbol\omega_0` (Eq. 11)",
     ),
-    "momentum": ("J s", r":math:`M = |\mathbf I\boldsymbol\omega_0|` (Eq. 10)"),
+    "momentum": ("|I| |ω₀|", r":math:`M = |\mathbf I\boldsymbol\omega_0|` (Eq. 10)"),
     "D": (
-        "J s²",
+        "|I|",
         ":math:`M^2/(2E)`, the orbit's label independent of the spin rate: "
         r":math:`I_1 \le D \le I_3`, :math:`D > I_2` on SAM, :math:`D < I_2` on LAM",
     ),

@@ -70,7 +70,7 @@ def test_body_space_map_matches_the_limit_formulas():
     x, y = b["flat"].get_data()
     np.testing.assert_allclose(np.sqrt(np.clip(1 - x**2 - y**2, 0, None)), x + y, atol=1e-12)
     assert drawn["colorbar"].ax.get_ylabel()
-    assert ax.get_xlabel().startswith("$I_1$") and ax.get_ylabel().startswith("$I_2$")
+    assert ax.get_xlabel() == r"$I_1\,/\,|I|$" and ax.get_ylabel() == r"$I_2\,/\,|I|$"
     # bodies above the top level take the colour bar's "over" colour: a band
     # up to 8 2 pi (clipped there) painted the minima up to 200 2 pi near the
     # sphere in its own colour and left the bar's triangle unused
