@@ -48,7 +48,9 @@ class CatalogSchema(SphinxDirective):
             "     - meaning",
         ]
         for name, (unit, meaning) in rows:
-            lines += [f"   * - ``{name}``", f"     - {unit or '—'}", f"     - {meaning}"]
+            # units are plain text (|I| would be a substitution in rST)
+            shown = f"``{unit}``" if unit else "—"
+            lines += [f"   * - ``{name}``", f"     - {shown}", f"     - {meaning}"]
         if not isinstance(self.state, RSTState):  # a MyST page: hand the table to rST
             lines = ["```{eval-rst}", *lines, "```"]
         node = nodes.container()
