@@ -53,7 +53,7 @@ def _solve(moments, targets, what, reachable=None):
         if target is None or target <= TWO_PI:
             continue
         branches, _, offsets, info = find_roots(moments, np.array([target]))
-        found.append(offsets[branches == sign])
+        found.append([_polished(moments, float(x), target) for x in offsets[branches == sign]])
         slot = _kernels.INFO_UNREACHED_SAM if sign == 1 else _kernels.INFO_UNREACHED_LAM
         unreached += int(info[slot])
     offsets = np.sort(np.concatenate(found)) if found else np.empty(0)
@@ -71,6 +71,65 @@ def _solve(moments, targets, what, reachable=None):
             stacklevel=caller_stacklevel(),
         )
     return offsets
+
+
+def _polished(moments, offset, target):
+    """The root ``offset`` of ``Delta alpha(dtheta) = target`` refined to the
+    doubles' resolution.
+
+    The search stops within ``1e-10 target`` of the target (its catalog
+    tolerance).  Here the spin is the answer itself, and a period ratio
+    ``Delta alpha / 2 pi - 1`` near 0 (a thin rod's long axis) magnifies that
+    residual: 2e-11 rad was a P_phi 7.6e-2 off on (1e-9, 1, 1 + 1e-9 - 1e-12).
+    So the root is bracketed (``Delta alpha`` is monotone on each branch:
+    rising towards the separatrix) and narrowed with Brent's method
+    (:func:`scipy.optimize.brentq`) to ``4 eps`` relative; the better of the
+    two roots is kept.  Steps never cross the separatrix or leave
+    ``[-theta_c, pi/2 - theta_c]``.
+    """
+    from scipy.optimize import brentq
+
+    from .core.phase import body_constants
+    from .phases import total_phase
+
+    def gap(x):
+        return float(total_phase(moments, dtheta=x)) - target
+
+    here = gap(offset)
+    if here == 0.0:
+        return offset
+    _, _, theta_c, co_theta_c, _, _, _ = body_constants(*(float(v) for v in moments), 0.0)
+    sam = offset < 0.0
+    # Delta alpha rises towards the separatrix (dtheta -> 0) on each branch
+    towards_zero = here < 0.0
+    end = -theta_c if sam else co_theta_c
+    step = abs(offset) * 2.0**-40
+    low, low_gap = offset, here
+    for _ in range(80):
+        if towards_zero:
+            moved = low + (step if sam else -step)
+            if abs(moved) < 0.5 * abs(low):  # at most halfway to the separatrix
+                moved = 0.5 * low
+        else:
+            moved = low - step if sam else low + step
+            if (moved < end) if sam else (moved > end):
+                moved = end
+        moved_gap = gap(moved)
+        if moved_gap == 0.0:
+            return moved
+        if (moved_gap > 0.0) != (low_gap > 0.0):
+            break
+        if moved == end:
+            return offset if abs(here) <= abs(low_gap) else low
+        low, low_gap = moved, moved_gap
+        step *= 2.0
+    else:
+        return offset
+    try:
+        root = brentq(gap, min(low, moved), max(low, moved), xtol=1e-320, rtol=4.0 * 2.0**-52)
+    except (ValueError, RuntimeError):
+        return offset
+    return root if abs(gap(root)) < abs(here) else offset
 
 
 def _table(moments, offsets, targets):
@@ -141,8 +200,10 @@ def spins_with_total_phase(body_or_moments, total_phase):
     -------
     pandas.DataFrame
         The rows of :func:`orbits.phases` at every root, sorted by
-        ``dtheta``, plus ``target`` and ``residual = total_phase - target``
-        (the search guarantees ``|residual| <= 1e-10 target``).
+        ``dtheta``, plus ``target`` and ``residual = total_phase - target``:
+        the search's root (``|residual| <= 1e-10 target``) refined to the
+        doubles' resolution, a few ulps of ``target`` (where the phase is
+        flat, next to an axis, the ulps of ``dtheta`` set it).
 
     Raises
     ------
@@ -206,6 +267,14 @@ def spins_with_period_ratio(body_or_moments, ratio):
         As :func:`spins_with_total_phase`, with ``target`` the total phase
         solved for on each row's branch.
 
+    Warns
+    -----
+    UnresolvedOrbitsWarning
+        Roots closer to the separatrix than the smallest normal double, or
+        LAM rows whose ratio ``Delta alpha / 2 pi - 1`` cancels to fewer
+        digits than :data:`SPIN_VECTOR_RTOL` (a ratio near 0: a thin rod's
+        long axis; the message gives the relative accuracy).
+
     Notes
     -----
     With the precession period :math:`P_\\phi` and the rotation period
@@ -227,6 +296,38 @@ def spins_with_period_ratio(body_or_moments, ratio):
     >>> list(orbits.spins_with_period_ratio(toutatis, 5.41 / 7.35)["branch"])
     ['LAM']
     """
+    from .search import UnresolvedOrbitsWarning
+
+    table = _ratio_table(body_or_moments, ratio)
+    cancelled = _ratio_errors(table, float(ratio))
+    if cancelled:
+        warnings.warn(
+            f"P_psi/P_phi of {plural(len(cancelled), 'LAM row')} is Delta alpha / 2 pi - 1 "
+            "with Delta alpha so near 2 pi (a thin rod's long axis) that the difference "
+            f"keeps the ratio only to about {max(cancelled):.1g} (relative)",
+            UnresolvedOrbitsWarning,
+            stacklevel=caller_stacklevel(),
+        )
+    return table
+
+
+def _ratio_errors(table, ratio):
+    """Relative errors of ``P_psi/P_phi = Delta alpha / 2 pi - 1`` on the LAM
+    rows of ``table`` above :data:`SPIN_VECTOR_RTOL`: the root's residual and
+    a few ulps of ``Delta alpha`` (``RATIO_ULPS``), divided by the ratio."""
+    errors = []
+    for branch, residual in zip(table["branch"].astype(str), table["residual"].to_numpy()):
+        if branch == "LAM":
+            error = (
+                RATIO_ULPS * np.finfo(float).eps * (ratio + 1.0) + abs(residual) / TWO_PI
+            ) / ratio
+            if not error <= SPIN_VECTOR_RTOL:
+                errors.append(error)
+    return errors
+
+
+def _ratio_table(body_or_moments, ratio):
+    """:func:`spins_with_period_ratio` without its warning of a cancelling ratio."""
     moments, _ = unit_moments(body_or_moments)
     if moments.shape != (3,):
         raise InputError("spins_with_period_ratio takes one body")
@@ -294,6 +395,7 @@ def spins_with_periods(body_or_moments, p_psi, p_phi):
     import pandas as pd
 
     from .motion import Motion, as_body
+    from .search import UnresolvedOrbitsWarning
 
     body = as_body(body_or_moments)
     p_psi = positive_finite("P_psi", p_psi)
@@ -304,8 +406,9 @@ def spins_with_periods(body_or_moments, p_psi, p_phi):
             f"P_psi / P_phi = {p_psi!r} / {p_phi!r} does not fit a double: give the "
             "periods in one time unit (their ratio is what fixes the orbit)"
         )
-    table = spins_with_period_ratio(body, ratio)
-    rows, loose, cancelled = [], [], []
+    table = _ratio_table(body, ratio)
+    cancelled = _ratio_errors(table, ratio)
+    rows, loose = [], []
     i3 = float(body.moments[2])
     for dtheta, theta in zip(table["dtheta"].to_numpy(), table["theta"].to_numpy()):
         unit = Motion.from_spin(body, dtheta=float(dtheta))
@@ -324,12 +427,6 @@ def spins_with_periods(body_or_moments, p_psi, p_phi):
         rounded = _rounded_spin(body, motion, periods)
         if rounded is not None:
             loose.append(rounded)
-        if periods.axis == "long":
-            # P_psi / P_phi = Delta alpha / 2 pi - 1 on LAM: a few ulps of
-            # Delta alpha become RATIO_ULPS eps (Delta alpha / 2 pi) / ratio of it
-            error = RATIO_ULPS * np.finfo(float).eps * (periods.ratio + 1.0) / periods.ratio
-            if not error <= SPIN_VECTOR_RTOL:
-                cancelled.append(error)
         rows.append(
             {
                 "branch": motion.branch,
@@ -350,8 +447,6 @@ def spins_with_periods(body_or_moments, p_psi, p_phi):
             }
         )
     if cancelled:
-        from .search import UnresolvedOrbitsWarning
-
         warnings.warn(
             f"P_phi of {plural(len(cancelled), 'LAM row')} comes from P_psi / P_phi = "
             "Delta alpha / 2 pi - 1 with Delta alpha so near 2 pi (a thin rod's long "
@@ -361,8 +456,6 @@ def spins_with_periods(body_or_moments, p_psi, p_phi):
             stacklevel=caller_stacklevel(),
         )
     if loose:
-        from .search import UnresolvedOrbitsWarning
-
         branch, off = max(loose, key=lambda item: item[1])
         warnings.warn(
             f"the spin vector w1, w2, w3 (and theta) of {plural(len(loose), 'row')} "
