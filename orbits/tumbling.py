@@ -89,11 +89,22 @@ def _polished(moments, offset, target):
     """
     from scipy.optimize import brentq
 
+    from .core import phase_table as _table
     from .core.phase import body_constants
-    from .phases import total_phase
+    from .phases import FOLD_LIMIT
+
+    # the kernel of orbits.phases, which gives the table's residual column
+    # (total_phase's SIMD kernels can differ by an ulp or two)
+    i1, i2, i3 = (np.array([float(v)]) for v in moments)
+    phi, angle = np.zeros(1), np.empty(1)
+    columns = np.empty((len(_table.COLUMNS), 1))
+    branch, status = np.empty(1, dtype=np.int8), np.empty(1, dtype=np.int8)
+    total = _table.COLUMNS.index("total_phase")
 
     def gap(x):
-        return float(total_phase(moments, dtheta=x)) - target
+        angle[0] = x
+        _table.phases_columns(i1, i2, i3, phi, angle, True, FOLD_LIMIT, columns, branch, status)
+        return columns[total, 0] - target if status[0] == 0 else math.nan
 
     here = gap(offset)
     if here == 0.0:
@@ -117,6 +128,8 @@ def _polished(moments, offset, target):
         moved_gap = gap(moved)
         if moved_gap == 0.0:
             return moved
+        if math.isnan(moved_gap):
+            return offset
         if (moved_gap > 0.0) != (low_gap > 0.0):
             break
         if moved == end:

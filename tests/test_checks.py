@@ -626,7 +626,7 @@ def _route_mutations():
         # orbits.phases: the table of 'orbits phase --theta'
         "phases_columns": (phase_table, "phases_columns", lambda a: a[7][total]),
         # orbits.spin_phases
-        "parts_from_vector_array": (phase, "parts_from_vector_array", lambda a: a[6][:, 6]),
+        "parts_from_vector_array": (phase, "parts_from_vector_array", lambda a: a[7][:, 6]),
     }
 
 
