@@ -1293,6 +1293,78 @@ def test_api(case, tmp_path, surveys, monkeypatch):
     assert device_state() == device
 
 
+def _silent_listener():
+    """A local port that accepts connections and never sends a byte."""
+    import threading
+
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen()
+    held = []
+
+    def accept():
+        while True:
+            try:
+                held.append(server.accept()[0])
+            except OSError:  # closed
+                return
+
+    threading.Thread(target=accept, daemon=True).start()
+    return server, held
+
+
+def _http_server():
+    """A local HTTP server (what a dashboard port, 8787, answers with)."""
+    import http.server
+    import threading
+
+    # handlers on daemon threads: one stuck reading the client's bytes as a
+    # request line must not hold up shutdown()
+    class Quiet(http.server.SimpleHTTPRequestHandler):
+        def log_message(self, *args):  # not on the test's stderr
+            pass
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Quiet)
+    server.daemon_threads = True
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    return server
+
+
+@pytest.mark.parametrize("kind", ["silent", "http"])
+def test_scheduler_port_that_is_no_scheduler(kind, tmp_path, capsys, monkeypatch):
+    """A port that accepts and never answers (or answers HTTP, as the
+    dashboard's 8787 does) hung --scheduler for good (an audit: still
+    waiting after 623 s); now one line within 1.5 timeouts, nothing written."""
+    pytest.importorskip("distributed")
+    import time
+
+    monkeypatch.setattr(orbits.survey.runner, "CONNECT_TIMEOUT", 1)
+    if kind == "silent":
+        server, held = _silent_listener()
+        port, stop = server.getsockname()[1], server.close
+    else:
+        server = _http_server()
+        port = server.server_address[1]
+
+        def stop():
+            server.shutdown()
+            server.server_close()
+
+    try:
+        capsys.readouterr()
+        start = time.monotonic()
+        code = main(
+            GRID + ["--out", str(tmp_path / "s"), "--scheduler", f"tcp://127.0.0.1:{port}"]
+        )
+        took = time.monotonic() - start
+        _, err = capsys.readouterr()
+    finally:
+        stop()
+    check_clean_failure(code, err, "is it a dask scheduler's address")
+    assert took < 30  # 1.5 s and the start-up, on a loaded machine
+    assert not (tmp_path / "s").exists()
+
+
 def test_scheduler_without_workers(tmp_path, capsys, monkeypatch):
     """A scheduler with no worker: one line stating the timeout, nothing written."""
     distributed = pytest.importorskip("distributed")

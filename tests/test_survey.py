@@ -348,6 +348,23 @@ def test_distributed_equals_local(tmp_path):
     assert read_bytes(tmp_path / "other") == read_bytes(local)
 
 
+def test_distributed_fresh_worker_with_threads(tmp_path):
+    """A fresh worker process with several threads: its first chunks took
+    their lazy imports side by side and met numpy.ma partially initialised
+    ("chunk 0 was lost ... has no attribute 'MaskedArray'"; an audit, 2 of 3
+    fresh starts with --nthreads 2; 1 of 3 here with 4 threads).  The first
+    chunk on a worker now runs alone."""
+    distributed = pytest.importorskip("distributed")
+    local = tmp_path / "local"
+    Survey.grid(local, 60, 8, chunk=50).run()
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=4, processes=True, dashboard_address=None
+    ) as cluster:
+        with distributed.Client(cluster) as client:
+            Survey.grid(tmp_path / "cluster", 60, 8, chunk=50).run(scheduler=client)
+    assert read_bytes(tmp_path / "cluster") == read_bytes(local)
+
+
 def _set_worker_fingerprint(value):
     import orbits._version
 

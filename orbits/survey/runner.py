@@ -384,13 +384,7 @@ class Survey:
                     f"connecting to the dask scheduler at {scheduler} "
                     f"(timeout {CONNECT_TIMEOUT} s)..."
                 )
-            try:
-                client, own = Client(scheduler, timeout=CONNECT_TIMEOUT), True
-            except Exception as error:  # noqa: BLE001 - any failure to connect
-                raise InputError(
-                    f"cannot reach the dask scheduler at {scheduler} "
-                    f"within {CONNECT_TIMEOUT} s: {one_line(error)}"
-                ) from None
+            client, own = _client_within(Client, scheduler, CONNECT_TIMEOUT), True
         try:
             if status is not None and not client.scheduler_info().get("workers"):
                 status(f"waiting up to {CONNECT_TIMEOUT} s for a dask worker...")
@@ -457,6 +451,70 @@ class Survey:
         return survey_report(self.out_dir, self.n_max, self.q_max, len(self.skipped))
 
 
+# "tcp://HOST:8786 by default; 8787 is its dashboard": what the errors say
+_SCHEDULER_HINT = (
+    "is it a dask scheduler's address (tcp://HOST:8786 by default; 8787 is its dashboard)?"
+)
+
+
+def _client_within(client_class, address, timeout):
+    """``Client(address)``, or one InputError within about ``1.5 timeout + 1`` s.
+
+    dask's own ``timeout`` bounds reaching the port, not the handshake: a
+    port that accepts and never answers (a silent listener, or an HTTP
+    server such as the dashboard on 8787) hung ``orbits survey
+    --scheduler`` for good (an audit: still waiting after 623 s).  So the
+    client is made on a daemon thread and given up after the wait; one
+    that connects after all is closed there.  An answer in another
+    protocol (junk bytes read as a frame: "Unable to allocate 3.07 EiB")
+    is said to be one, not a timeout.
+    """
+    lock, box = threading.Lock(), {}
+
+    def connect():
+        try:
+            client = client_class(address, timeout=timeout)
+        except BaseException as error:  # noqa: BLE001 - reported by the caller
+            with lock:
+                box["error"] = error
+            return
+        with lock:
+            if box.get("abandoned"):
+                client.close()
+            else:
+                box["client"] = client
+
+    thread = threading.Thread(target=connect, name="orbits-dask-connect", daemon=True)
+    thread.start()
+    thread.join(1.5 * timeout + 1.0)
+    with lock:
+        if "client" in box:
+            return box["client"]
+        error = box.get("error")
+        if error is None:
+            box["abandoned"] = True
+            raise InputError(
+                f"the dask scheduler at {address} did not answer within {timeout} s "
+                f"(a port that accepts but does not answer); {_SCHEDULER_HINT}"
+            )
+    if isinstance(error, (OSError, TimeoutError)):
+        raise InputError(
+            f"cannot reach the dask scheduler at {address} within {timeout} s: {one_line(error)}"
+        ) from None
+    raise InputError(
+        f"the server at {address} does not answer as a dask scheduler "
+        f"({type(error).__name__}: {one_line(error)}); {_SCHEDULER_HINT}"
+    ) from None
+
+
+# the first chunk on a worker process runs alone: its lazy imports (pandas,
+# pyarrow, the kernels) taken by two worker threads at once met numpy.ma
+# partially initialised ("has no attribute 'MaskedArray'") on fresh workers
+# with --nthreads 2 (an audit, 2 of 3 starts)
+_FIRST_CHUNK = threading.Lock()
+_first_chunk_done = False
+
+
 def _chunk_on_worker(expected, moments, n_max, q_max, first_id, columns):
     """A chunk's tables on a dask worker that runs the client's orbits.
 
@@ -473,6 +531,15 @@ def _chunk_on_worker(expected, moments, n_max, q_max, first_id, columns):
             f"not this run's {expected[0]} (sources {expected[1][:12] or 'unknown'}): "
             "install the same orbits on the workers as here"
         )
+    global _first_chunk_done
+    if not _first_chunk_done:
+        with _FIRST_CHUNK:
+            if not _first_chunk_done:
+                tables = compute.chunk_columns(
+                    compute.search_chunk(moments, n_max, q_max), first_id, columns
+                )
+                _first_chunk_done = True
+                return tables
     chunk = compute.search_chunk(moments, n_max, q_max)
     return compute.chunk_columns(chunk, first_id, columns)
 
