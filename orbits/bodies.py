@@ -1053,6 +1053,18 @@ class Body:
         SymmetricTopError
             Two moments closer than the rounding of the sums over the
             faces that built them (e.g. a sphere or a cube as a mesh).
+
+        Warns
+        -----
+        UserWarning
+            Closed shells whose bounding boxes overlap: where the solids
+            overlap, their common volume counts twice (merge them first).
+
+        Notes
+        -----
+        The mesh is moved to its bounding box's centre before it is
+        integrated, so a mesh far from the origin (a part placed in an
+        assembly's coordinates) gives the same moments as at the origin.
         """
         from .errors import InputError
 
@@ -1073,13 +1085,21 @@ class Body:
         vertices = np.asarray(raw.vertices, dtype=float)
         if not np.all(np.isfinite(vertices)):
             raise InputError(f"mesh {path} has vertices that are not finite numbers")
+        # the mesh moved to its bounding box's centre first: trimesh
+        # integrates about the origin and then shifts the tensor to the centre
+        # of mass, which cancels catastrophically far from it (a box 10^4 m
+        # out came 5 % off, an off-centre cube passed as an asymmetric top;
+        # an audit).  The subtraction's rounding, below an ulp of the extent,
+        # is far inside the file's own (an ulp of the coordinates).
+        low, high = vertices.min(axis=0), vertices.max(axis=0)
+        local = vertices - (0.5 * low + 0.5 * high)
         # exact power-of-two scalings (largest coordinate and the density in
         # [1/2, 1)): trimesh's volume integrals (degree 5 in the lengths) are
         # then free of overflow and underflow, and its merging tolerance is
         # relative to the size; the tensor is 2**exponent times the one computed
-        x_exp = _binary_exponent(float(np.max(np.abs(vertices))))
+        x_exp = _binary_exponent(float(np.max(np.abs(local))))
         d_exp = _binary_exponent(density)
-        mesh = trimesh.Trimesh(vertices=np.ldexp(vertices, -x_exp), faces=np.asarray(raw.faces))
+        mesh = trimesh.Trimesh(vertices=np.ldexp(local, -x_exp), faces=np.asarray(raw.faces))
         if len(mesh.faces) == 0:
             raise InputError(f"{path} holds no triangle mesh")
         if not mesh.is_watertight:
@@ -1088,6 +1108,7 @@ class Body:
             raise InputError(
                 f"mesh {path} is inside out or inconsistently wound (its volume is not positive)"
             )
+        _warn_overlapping_shells(mesh, path)
         mesh.density = math.ldexp(density, -d_exp)
         exponent = d_exp + 5 * x_exp
         tensor = np.asarray(mesh.moment_inertia, dtype=float)
@@ -1309,6 +1330,33 @@ def vertex_rounding(vertices, text=None):
 _WRITTEN_NUMBER = re.compile(rb"[-+]?(?=\.?\d)(\d*)(?:\.(\d*))?(?:[eE]([-+]?\d+))?")
 
 
+def _warn_overlapping_shells(mesh, path):
+    """Warn when closed shells of positive volume have overlapping bounding boxes.
+
+    trimesh integrates every shell, so where two solids overlap their common
+    volume counts twice (two overlapping boxes came out with the mass of
+    both; an audit).  Bounding boxes that overlap do not prove it (linked
+    rings), hence a warning, not a refusal; an inner shell wound inside out
+    (a cavity) has negative volume and is left out.
+    """
+    try:
+        shells = mesh.split(only_watertight=False)
+    except Exception:  # noqa: BLE001 - the check is advisory
+        return
+    boxes = [shell.bounds for shell in shells if len(shells) > 1 and shell.volume > 0.0]
+    for k, (low, high) in enumerate(boxes):
+        for other_low, other_high in boxes[k + 1 :]:
+            if np.all(np.minimum(high, other_high) > np.maximum(low, other_low)):
+                warn(
+                    f"mesh {path} has {len(boxes)} closed shells, and two of them have "
+                    "overlapping bounding boxes: where the solids overlap, their common "
+                    "volume counts twice; merge overlapping shells into one surface (a "
+                    "boolean union) first",
+                    UserWarning,
+                )
+                return
+
+
 def _surface_r2(triangles, areas):
     """The integral of ``|r|^2`` over a triangulated surface (``triangles``
     (F, 3, 3) relative to the point ``r`` is measured from; exact for the
@@ -1338,11 +1386,15 @@ def _written_rounding(text, values):
     A writer that pads (a fraction of two or more digits ending in 0, as
     ``%.8f`` writes ``0.15000000``) keeps fixed decimals: each value is good
     to ``0.5 10^(e - decimals)`` of its finest writing.  A writer that
-    strips trailing zeros (``%g``, ``repr``) keeps some number of significant
-    digits, at least the most seen in any coordinate, ``S``: the values are
-    good to ``0.5 10^(1 - S) max|v|``.  None when the text is not plain
-    ASCII (a binary file) or some value is not written in it as a decimal
-    with a point or an exponent.
+    strips trailing zeros (``%g``, ``repr``, ``%.17g``) keeps some number of
+    significant digits: at least the most seen in any coordinate, ``S``,
+    and at least ``%g``'s 6 (a box written ``1.5``, ``1.0``, ``0.5`` by
+    trimesh's shortest-repr STL export was taken as good to 5 % of its
+    size and refused as a symmetric top; an audit): the values are good to
+    ``0.5 10^(1 - max(S, 6)) max|v|``.  Bare integers count as written
+    values (``%.17g`` writes 0 and 1 as ``0`` and ``1``).  None when the
+    text is not plain ASCII (a binary file) or some value is not written in
+    it.
     """
     if not text or not text.isascii() or b"\0" in text:
         return None
@@ -1350,8 +1402,6 @@ def _written_rounding(text, values):
     padded = False
     for match in _WRITTEN_NUMBER.finditer(text):
         whole, fraction, exponent = match.group(1), match.group(2), match.group(3)
-        if fraction is None and exponent is None:
-            continue  # an integer (or no number at all)
         fraction = fraction or b""
         if not (whole or fraction):
             continue  # a lone point or sign
@@ -1376,8 +1426,13 @@ def _written_rounding(text, values):
         return None
     if padded:
         return float(np.max(finest[where]))
-    significant = int(np.max(most[where]))
+    significant = max(int(np.max(most[where])), _FEWEST_STRIPPED_DIGITS)
     return 0.5 * 10.0 ** (1 - significant) * float(np.max(np.abs(values)))
+
+
+# the significant digits a writer that strips trailing zeros is taken to keep
+# at least (C's and Python's %g)
+_FEWEST_STRIPPED_DIGITS = 6
 
 
 def symmetric_within_rounding(values, rounding, what):
