@@ -462,21 +462,31 @@ def mp_spin_omega(body, dtheta, phi, times, dps):
 @example(
     body=START_BODIES[0], side=-1.0, exponent=-40.0, phi=1.2, fractions=[0.0, 0.31]
 )  # the audit's case
+@example(
+    body=T_HANDLE, side=-1.0, exponent=-295.0, phi=0.0, fractions=[0.0, 2.0]
+)  # 2.05 eps |u| from the reference
 def test_motion_near_the_separatrix_matches_mpmath(body, side, exponent, phi, fractions):
     """omega(t) over two periods against mpmath from the ideal spin.
 
     Working precision 30 digits more than the spin's distance from the
-    separatrix; bound 1e-12 of |omega0| (the kernel's argument
-    ``u = D t`` carries an absolute rounding ``eps |u|``, and ``|u|`` reaches
-    8 K ~ 2800 at dtheta = 1e-300).
+    separatrix.  The kernel's argument ``u = D t`` (``4 K`` a period)
+    carries an absolute rounding of a few ``eps |u|``, and ``|u|`` reaches
+    8 K ~ 2800 at dtheta = 1e-300: the bound is ``6 eps (1 + |u|)`` of
+    |omega0| = 1 (a fixed 1e-12 was below it: 1.27e-12 = 2.05 eps |u| at
+    dtheta = -1e-295, t = 2 T, a case hypothesis found).
     """
+    from scipy.special import ellipkm1
+
     dtheta = offset_spin(side, exponent, body, phi)
     motion = Motion.from_spin(body, dtheta=dtheta, phi=phi)
     times = np.array(fractions) * motion.period
     dps = 30 + int(-math.log10(abs(dtheta)))
     reference, period = mp_spin_omega(body, dtheta, phi, times, dps)
     assert motion.period == pytest.approx(period, rel=1e-13)
-    assert np.abs(motion.omega(times) - reference).max() <= 1e-12
+    u = 4.0 * float(ellipkm1(motion.one_minus_m)) * max(fractions)
+    bound = 6.0 * np.finfo(float).eps * (1.0 + u)
+    assert bound <= 5e-12  # |u| <= 8 K ~ 2800
+    assert np.abs(motion.omega(times) - reference).max() <= bound
 
 
 def test_audit_case_matches_integration():
