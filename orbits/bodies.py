@@ -1124,7 +1124,22 @@ class Body:
         rounding = 2.0 * delta * float(mesh.density) * _surface_r2(
             mesh.triangles - centre, mesh.area_faces
         ) + 16.0 * (len(mesh.faces) + 4) * _EPS * float(np.abs(np.trace(tensor)))
-        body = _from_tensor(cls, tensor, name, defect, rounding, f"mesh {path}", exponent)
+        try:
+            body = _from_tensor(cls, tensor, name, defect, rounding, f"mesh {path}", exponent)
+        except SymmetricTopError as error:
+            file_part = (
+                2.0
+                * delta
+                * float(mesh.density)
+                * _surface_r2(mesh.triangles - centre, mesh.area_faces)
+            )
+            if file_part <= 0.5 * rounding:
+                raise
+            raise SymmetricTopError(
+                f"{error}; the bound is set by the digits the file writes (vertices "
+                f"good to {math.ldexp(delta, x_exp):.2g} in its units): if they are "
+                "exact, write more digits (OBJ with %.8f, or binary STL)"
+            ) from None
         body._moment_unit = SI_FROM_INPUTS
         body.shape = (
             "mesh",
@@ -1324,9 +1339,10 @@ def vertex_rounding(vertices, text=None):
     return big * _EPS
 
 
-# a decimal number with a point or an exponent, as text mesh formats write
-# coordinates (integers alone are indices and counts): sign, integer digits,
-# fraction digits, exponent
+# a decimal number, as text mesh formats write coordinates (integers too:
+# %.17g writes 0 and 1 bare; indices and counts among them only matter
+# where they equal a vertex value): sign, integer digits, fraction digits,
+# exponent
 _WRITTEN_NUMBER = re.compile(rb"[-+]?(?=\.?\d)(\d*)(?:\.(\d*))?(?:[eE]([-+]?\d+))?")
 
 
@@ -1337,21 +1353,39 @@ def _warn_overlapping_shells(mesh, path):
     volume counts twice (two overlapping boxes came out with the mass of
     both; an audit).  Bounding boxes that overlap do not prove it (linked
     rings), hence a warning, not a refusal; an inner shell wound inside out
-    (a cavity) has negative volume and is left out.
+    (a cavity) has negative volume and is left out.  Shells are the face
+    components, their volumes and boxes summed per label, and the boxes
+    are swept in order of their lowest x: no mesh is built per shell, and
+    many disjoint shells (a rubble pile) cost about their sorting.
     """
-    try:
-        shells = mesh.split(only_watertight=False)
-    except Exception:  # noqa: BLE001 - the check is advisory
+    from trimesh.graph import connected_component_labels
+
+    faces = np.asarray(mesh.faces)
+    labels = connected_component_labels(mesh.face_adjacency, node_count=len(faces))
+    count = int(labels.max()) + 1 if labels.size else 0
+    if count < 2:
         return
-    boxes = [shell.bounds for shell in shells if len(shells) > 1 and shell.volume > 0.0]
-    for k, (low, high) in enumerate(boxes):
-        for other_low, other_high in boxes[k + 1 :]:
-            if np.all(np.minimum(high, other_high) > np.maximum(low, other_low)):
+    triangles = np.asarray(mesh.vertices)[faces]
+    signed = np.einsum("ij,ij->i", triangles[:, 0], np.cross(triangles[:, 1], triangles[:, 2]))
+    volume = np.bincount(labels, weights=signed, minlength=count)
+    low = np.full((count, 3), np.inf)
+    high = np.full((count, 3), -np.inf)
+    np.minimum.at(low, labels, triangles.min(axis=1))
+    np.maximum.at(high, labels, triangles.max(axis=1))
+    solid = np.flatnonzero(volume > 0.0)
+    low, high = low[solid], high[solid]
+    order = np.argsort(low[:, 0], kind="stable")
+    low, high = low[order], high[order]
+    for k in range(len(order)):
+        for j in range(k + 1, len(order)):
+            if low[j, 0] >= high[k, 0]:
+                break  # this and every later box start beyond box k in x
+            if np.all(np.minimum(high[k], high[j]) > np.maximum(low[k], low[j])):
                 warn(
-                    f"mesh {path} has {len(boxes)} closed shells, and two of them have "
-                    "overlapping bounding boxes: where the solids overlap, their common "
-                    "volume counts twice; merge overlapping shells into one surface (a "
-                    "boolean union) first",
+                    f"mesh {path} has {len(solid)} closed shells of positive volume, and "
+                    "two of them have overlapping bounding boxes: where the solids "
+                    "overlap, their common volume counts twice; merge overlapping "
+                    "shells into one surface (a boolean union) first",
                     UserWarning,
                 )
                 return
@@ -1387,14 +1421,17 @@ def _written_rounding(text, values):
     ``%.8f`` writes ``0.15000000``) keeps fixed decimals: each value is good
     to ``0.5 10^(e - decimals)`` of its finest writing.  A writer that
     strips trailing zeros (``%g``, ``repr``, ``%.17g``) keeps some number of
-    significant digits: at least the most seen in any coordinate, ``S``,
-    and at least ``%g``'s 6 (a box written ``1.5``, ``1.0``, ``0.5`` by
-    trimesh's shortest-repr STL export was taken as good to 5 % of its
-    size and refused as a symmetric top; an audit): the values are good to
-    ``0.5 10^(1 - max(S, 6)) max|v|``.  Bare integers count as written
-    values (``%.17g`` writes 0 and 1 as ``0`` and ``1``).  None when the
-    text is not plain ASCII (a binary file) or some value is not written in
-    it.
+    significant digits, at least the most seen in any coordinate, ``S``:
+    the values are good to ``0.5 10^(1 - S) max|v|``.  Short values are
+    ambiguous: ``1.5`` may be exact (a shortest-repr writer, as trimesh's
+    ASCII STL export) or rounded (``%.2g``, ``round(x, 2)``: a cube written
+    so is a symmetric top whose moments differ by rounding alone), so they
+    are taken as rounded, and a body whose moments are within that is
+    refused, with a note on the digits (:meth:`Body.from_mesh`).  Bare
+    integers count as written values (``%.17g`` writes 0 and 1 as ``0``
+    and ``1``; they were skipped and the rounding guessed at 0.05).  None
+    when the text is not plain ASCII (a binary file) or some value is not
+    written in it.
     """
     if not text or not text.isascii() or b"\0" in text:
         return None
@@ -1426,13 +1463,8 @@ def _written_rounding(text, values):
         return None
     if padded:
         return float(np.max(finest[where]))
-    significant = max(int(np.max(most[where])), _FEWEST_STRIPPED_DIGITS)
+    significant = int(np.max(most[where]))
     return 0.5 * 10.0 ** (1 - significant) * float(np.max(np.abs(values)))
-
-
-# the significant digits a writer that strips trailing zeros is taken to keep
-# at least (C's and Python's %g)
-_FEWEST_STRIPPED_DIGITS = 6
 
 
 def symmetric_within_rounding(values, rounding, what):

@@ -461,10 +461,11 @@ def test_text_mesh_keeps_the_decimals_it_writes(tmp_path):
     """A box 0.3 x 0.1 x 0.2 m exported by trimesh (OBJ, ``%.8f``: 0.15000000)
     was refused as a symmetric top: the vertex rounding was guessed from the
     values (2 decimals, 0.005 m), not from the 8 decimals in the file.  The
-    same file with the coordinates shortened to 0.15, as a writer of
-    shortest forms writes them (trimesh's STL export), is taken as good to
-    %g's 6 significant digits at least: it was refused too (a bound of 1.7
-    I3, for moments 23 % apart; an audit), and is the same box.
+    same file with the coordinates shortened to 0.15 is ambiguous (a writer
+    of 2 digits, or of shortest forms as trimesh's STL export) and stays
+    refused, with a note that the file's digits set the bound and how to
+    write more (a 6-digit floor let a cube written with 2 decimals through
+    as an asymmetric top; a review).
     """
     mesh = trimesh.creation.box(extents=(0.3, 0.1, 0.2))
     path = tmp_path / "box.obj"
@@ -479,7 +480,8 @@ def test_text_mesh_keeps_the_decimals_it_writes(tmp_path):
     for long, brief in (("0.15000000", "0.15"), ("0.05000000", "0.05"), ("0.10000000", "0.1")):
         text = text.replace(long, brief)
     short.write_text(text)
-    assert Body.from_mesh(short) == body
+    with pytest.raises(SymmetricTopError, match="set by the digits the file writes"):
+        Body.from_mesh(short)
 
 
 def test_vertex_rounding_reads_the_written_decimals():
@@ -489,9 +491,8 @@ def test_vertex_rounding_reads_the_written_decimals():
     # a padded writer: fixed decimals, trailing zeros included
     assert vertex_rounding(values, b"v 0.15000000 -0.05000000 0.10000000\n") == 5e-9
     assert vertex_rounding(values, b"v 1.500e-01 -5.000e-02 1.000e-01\n") == 0.5e-4
-    # a stripping writer (%g, repr): at least the most significant digits
-    # seen, and at least %g's 6
-    assert vertex_rounding(values, b"v 0.15 -0.05 0.1\n") == pytest.approx(0.5e-5 * 0.15)
+    # a stripping writer (%g, repr): at least the most significant digits seen
+    assert vertex_rounding(values, b"v 0.15 -0.05 0.1\n") == pytest.approx(0.5e-1 * 0.15)
     long = np.array([0.0980171403295606, 0.15])
     assert vertex_rounding(long, b"v 0.0980171403295606 0.15 0\n") == pytest.approx(0.5e-15 * 0.15)
     # %.17g writes 0 and 1 bare: they count (they were skipped, and the
@@ -615,3 +616,39 @@ def test_mesh_with_overlapping_shells_warns(tmp_path):
         warnings.simplefilter("error")
         Body.from_mesh(tmp_path / "apart.obj")
         Body.from_mesh(tmp_path / "hollow.obj")
+
+
+def test_low_precision_cube_is_refused(tmp_path):
+    """A rotated cube written with 2 decimals is a symmetric top whose
+    moments differ by rounding alone: refused (a 6-digit floor for writers
+    that strip zeros let 17 of 20 through as asymmetric; a review)."""
+    from scipy.spatial.transform import Rotation
+
+    cube = trimesh.creation.box(extents=(1.0, 1.0, 1.0))
+    for seed in range(5):
+        rotation = Rotation.random(random_state=seed).as_matrix()
+        vertices = 7.3 * cube.vertices @ rotation.T
+        lines = [" ".join(["v"] + [str(round(float(x), 2)) for x in v]) for v in vertices]
+        lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in cube.faces]
+        path = tmp_path / f"cube{seed}.obj"
+        path.write_text("\n".join(lines) + "\n")
+        with pytest.raises(SymmetricTopError, match="set by the digits the file writes"):
+            Body.from_mesh(path)
+
+
+def test_many_disjoint_shells_are_swept(tmp_path):
+    """The overlap check sorts the shells' boxes (it compared every pair:
+    5.6 s for 2,000 shells; a review): 2,000 disjoint boxes do not warn,
+    and one overlapping pair among them does."""
+    box = trimesh.creation.box(extents=(0.5, 0.4, 0.3))
+    parts = [
+        box.copy().apply_translation([2.0 * (k % 50), 2.0 * (k // 50), 0.0]) for k in range(2000)
+    ]
+    trimesh.util.concatenate(parts).export(tmp_path / "pile.obj")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        Body.from_mesh(tmp_path / "pile.obj")
+    parts.append(box.copy().apply_translation([2.0 * 49 + 0.1, 2.0 * 39 + 0.1, 0.1]))
+    trimesh.util.concatenate(parts).export(tmp_path / "pile2.obj")
+    with pytest.warns(UserWarning, match="2001 closed shells of positive volume"):
+        Body.from_mesh(tmp_path / "pile2.obj")

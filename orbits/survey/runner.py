@@ -467,7 +467,9 @@ def _client_within(client_class, address, timeout):
     client is made on a daemon thread and given up after the wait; one
     that connects after all is closed there.  An answer in another
     protocol (junk bytes read as a frame: "Unable to allocate 3.07 EiB")
-    is said to be one, not a timeout.
+    is said to be one, not a timeout.  A port that never answers keeps the
+    abandoned thread (and dask's connection) until the peer closes: Python
+    cannot stop a thread.
     """
     lock, box = threading.Lock(), {}
 
@@ -486,7 +488,15 @@ def _client_within(client_class, address, timeout):
 
     thread = threading.Thread(target=connect, name="orbits-dask-connect", daemon=True)
     thread.start()
-    thread.join(1.5 * timeout + 1.0)
+    try:
+        thread.join(1.5 * timeout + 1.0)
+    except BaseException:  # KeyboardInterrupt: a client that connects later is closed
+        with lock:
+            box["abandoned"] = True
+            late = box.pop("client", None)
+        if late is not None:
+            late.close()
+        raise
     with lock:
         if "client" in box:
             return box["client"]
