@@ -1121,19 +1121,19 @@ class Body:
         # move far more than M R delta); and one sum over the faces per
         # entry, bounded by 16 (faces + 4) eps |I|
         delta = math.ldexp(vertex_rounding(vertices, _mesh_text(path)), -x_exp)
-        rounding = 2.0 * delta * float(mesh.density) * _surface_r2(
-            mesh.triangles - centre, mesh.area_faces
-        ) + 16.0 * (len(mesh.faces) + 4) * _EPS * float(np.abs(np.trace(tensor)))
+        file_part = (
+            2.0
+            * delta
+            * float(mesh.density)
+            * _surface_r2(mesh.triangles - centre, mesh.area_faces)
+        )
+        rounding = file_part + 16.0 * (len(mesh.faces) + 4) * _EPS * float(
+            np.abs(np.trace(tensor))
+        )
         try:
             body = _from_tensor(cls, tensor, name, defect, rounding, f"mesh {path}", exponent)
         except SymmetricTopError as error:
-            file_part = (
-                2.0
-                * delta
-                * float(mesh.density)
-                * _surface_r2(mesh.triangles - centre, mesh.area_faces)
-            )
-            if file_part <= 0.5 * rounding:
+            if file_part <= 0.5 * rounding:  # the sums' rounding, not the file's digits
                 raise
             raise SymmetricTopError(
                 f"{error}; the bound is set by the digits the file writes (vertices "
