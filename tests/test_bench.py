@@ -31,25 +31,8 @@ def test_load_check_times_each_row_and_stops_the_busy_process(monkeypatch):
     monkeypatch.setattr(bench, "_busy_process", spy)
     calls = []
     rows = [
-        {
-            "task": "a",
-            "timed": "t",
-            "ours_s": 1e-3,
-            "baseline": "b",
-            "baseline_s": 2e-3,
-            "speedup": 2.0,
-            "note": "n",
-            "_ours": (lambda: calls.append("a") or sum(range(20000)), 5),
-        },
-        {
-            "task": "no task of its own",
-            "timed": "t",
-            "ours_s": 1.0,
-            "baseline": "b",
-            "baseline_s": math.nan,
-            "speedup": math.nan,
-            "note": "n",
-        },
+        _row(task="a", _ours=(lambda: calls.append("a") or sum(range(20000)), 5)),
+        _row(task="no task of its own", ours_s=1.0, baseline_s=math.nan, speedup=math.nan),
     ]
     bench.load_check(rows)
     assert len(started) == 1 and started[0].poll() is not None  # stopped
@@ -186,6 +169,21 @@ def _strict_json(text):
     return json.loads(text, parse_constant=refuse)
 
 
+def _row(**extra):
+    """A report row with placeholder figures; ``extra`` sets or adds fields."""
+    row = {
+        "task": "a task",
+        "timed": "t",
+        "ours_s": 1e-3,
+        "baseline": "b",
+        "baseline_s": 2e-3,
+        "speedup": 2.0,
+        "note": "n",
+    }
+    row.update(extra)
+    return row
+
+
 def _machine():
     return {
         "cpus_usable": 2,
@@ -314,15 +312,7 @@ def test_survey_scaling_without_cpu_affinity(capsys, monkeypatch):
         bench.bench_survey_scaling(resolution=4, n_max=2, repeats=1)
 
     def other(**kw):
-        return {
-            "task": "another row",
-            "timed": "t",
-            "ours_s": 1.0,
-            "baseline": "b",
-            "baseline_s": 2.0,
-            "speedup": 2.0,
-            "note": "n",
-        }
+        return _row(task="another row", ours_s=1.0, baseline_s=2.0)
 
     monkeypatch.setattr(
         bench, "BENCHMARKS", {"survey_scaling": bench.bench_survey_scaling, "other": other}
@@ -447,25 +437,8 @@ def test_failed_under_load_check_exits_1_after_the_table(capsys, monkeypatch):
     from orbits.cli import main
 
     def report(*args, **kwargs):
-        rows = [
-            {
-                "name": "search",
-                "task": "closed orbits",
-                "timed": "t",
-                "ours_s": 1e-3,
-                "baseline": "b",
-                "baseline_s": 2e-3,
-                "speedup": 2.0,
-                "note": "n",
-                "load": {
-                    "idle_s": 1e-3,
-                    "loaded_s": 4.46e-3,
-                    "slowdown": 4.46,
-                    "holds": False,
-                    "runs": 20,
-                },
-            }
-        ]
+        load = {"idle_s": 1e-3, "loaded_s": 4.46e-3, "slowdown": 4.46, "holds": False, "runs": 20}
+        rows = [_row(name="search", task="closed orbits", load=load)]
         return {"machine": _machine(), "results": rows}
 
     monkeypatch.setattr(bench, "run", report)
@@ -486,16 +459,9 @@ def test_run_reports_the_load_check(monkeypatch):
         bench,
         "BENCHMARKS",
         {
-            "a": lambda **kw: {
-                "task": "a",
-                "timed": "t",
-                "ours_s": 1.0,
-                "baseline": "b",
-                "baseline_s": 1.0,
-                "speedup": 1.0,
-                "note": "n",
-                "_ours": (lambda: None, 1),
-            }
+            "a": lambda **kw: _row(
+                task="a", ours_s=1.0, baseline_s=1.0, speedup=1.0, _ours=(lambda: None, 1)
+            )
         },
     )
     monkeypatch.setattr(bench, "_busy_process", lambda: _Stopped())
@@ -536,19 +502,8 @@ def test_only_refuses_a_repeated_name(capsys):
 def test_long_task_names_keep_the_columns_aligned():
     """F8: a task longer than the column pushed its figures out of line."""
     long = "survey search on the GPU, 3855 bodies, n <= 30 (grid 100), a long name"
-    rows = [
-        {
-            "task": task,
-            "timed": "t",
-            "ours_s": 1e-3,
-            "baseline": "b",
-            "baseline_s": 2e-3,
-            "speedup": 2.0,
-            "note": "n",
-            "load": {"idle_s": 1e-3, "loaded_s": 1e-3, "slowdown": 1.0, "holds": True, "runs": 3},
-        }
-        for task in ("short", long)
-    ]
+    load = {"idle_s": 1e-3, "loaded_s": 1e-3, "slowdown": 1.0, "holds": True, "runs": 3}
+    rows = [_row(task=task, load=load) for task in ("short", long)]
     lines = bench.format_table({"machine": _machine(), "results": rows}).splitlines()
     main_table = [line for line in lines if line.startswith(("task", "short", long))]
     assert len(main_table) == 6  # header and two rows, twice (times, under load)
@@ -699,20 +654,6 @@ def test_quick_changes_every_row_it_can():
 
 
 # ------------------------------------------------------------------ audit fixes
-def _row(**extra):
-    row = {
-        "task": "a task",
-        "timed": "t",
-        "ours_s": 1e-3,
-        "baseline": "b",
-        "baseline_s": 2e-3,
-        "speedup": 2.0,
-        "note": "n",
-    }
-    row.update(extra)
-    return row
-
-
 def test_header_counts_the_cpus_this_process_may_use(monkeypatch):
     """Under ``taskset -c 0`` the header said "2 cores" while one was usable."""
     monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0}, raising=False)
