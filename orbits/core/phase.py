@@ -334,6 +334,22 @@ def scaled_vector_gap(i1, i2, i3, w1, w3, speed):
 
 
 @njit(cache=True, nogil=True)
+def scaled_spin(i1, i2, i3, w1, w2, w3, speed):
+    """``omega / 2**speed`` and its separatrix gap: ``u1, u2, u3, scale,
+    offset, closing``, the gap from the given components
+    (:func:`scaled_vector_gap`), for the kernels of spin vectors."""
+    scale, offset, closing = scaled_vector_gap(i1, i2, i3, w1, w3, speed)
+    return (
+        math.ldexp(w1, -speed),
+        math.ldexp(w2, -speed),
+        math.ldexp(w3, -speed),
+        scale,
+        offset,
+        closing,
+    )
+
+
+@njit(cache=True, nogil=True)
 def orbit_constants(i1, i2, i3, w1, w2, w3, scale, offset, closing):
     """Elliptic constants of the orbit through ``omega = (w1, w2, w3)``.
 
@@ -728,14 +744,5 @@ def parts_from_vector_array(i1, i2, i3, w1, w2, w3, speed, out):
     into the kernels' range; the gap from the given components,
     :func:`scaled_vector_gap`)."""
     for k in prange(out.shape[0]):
-        s = speed[k]
-        scale, offset, closing = scaled_vector_gap(i1[k], i2[k], i3[k], w1[k], w3[k], s)
-        u1 = math.ldexp(w1[k], -s)
-        u2 = math.ldexp(w2[k], -s)
-        u3 = math.ldexp(w3[k], -s)
-        _store_parts(
-            out,
-            k,
-            0,
-            parts_from_spin(i1[k], i2[k], i3[k], u1, u2, u3, scale, offset, closing),
-        )
+        spin = scaled_spin(i1[k], i2[k], i3[k], w1[k], w2[k], w3[k], speed[k])
+        _store_parts(out, k, 0, parts_from_spin(i1[k], i2[k], i3[k], *spin))

@@ -64,7 +64,7 @@ from .phase import (
     STATUS_OK,
     body_constants,
     orbit_constants,
-    scaled_vector_gap,
+    scaled_spin,
     spin_from_angle,
 )
 
@@ -152,11 +152,7 @@ def solid_angle_many(i1, i2, i3, phi, angles, from_offset, out):
 def solid_angle_from_vector_array(i1, i2, i3, w1, w2, w3, speed, out):
     """``Omega`` for arbitrary spin vectors ``(w1, w2, w3) / 2**speed`` (as
     ``phase.parts_from_vector_array``); NaN on the separatrix.  The gap is
-    the exact one of ``phase.scaled_vector_gap``."""
+    the exact one of ``phase.scaled_spin``."""
     for k in prange(out.shape[0]):
-        s = speed[k]
-        scale, offset, closing = scaled_vector_gap(i1[k], i2[k], i3[k], w1[k], w3[k], s)
-        u1 = math.ldexp(w1[k], -s)
-        u2 = math.ldexp(w2[k], -s)
-        u3 = math.ldexp(w3[k], -s)
-        out[k] = solid_angle_from_spin(i1[k], i2[k], i3[k], u1, u2, u3, scale, offset, closing)
+        spin = scaled_spin(i1[k], i2[k], i3[k], w1[k], w2[k], w3[k], speed[k])
+        out[k] = solid_angle_from_spin(i1[k], i2[k], i3[k], *spin)
