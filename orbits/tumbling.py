@@ -309,25 +309,18 @@ def spins_with_period_ratio(body_or_moments, ratio):
     >>> list(orbits.spins_with_period_ratio(toutatis, 5.41 / 7.35)["branch"])
     ['LAM']
     """
-    from .search import UnresolvedOrbitsWarning
-
     table = _ratio_table(body_or_moments, ratio)
-    cancelled = _ratio_errors(table, float(ratio))
-    if cancelled:
-        warnings.warn(
-            f"P_psi/P_phi of {plural(len(cancelled), 'LAM row')} is Delta alpha / 2 pi - 1 "
-            "with Delta alpha so near 2 pi (a thin rod's long axis) that the difference "
-            f"keeps the ratio only to about {max(cancelled):.1g} (relative)",
-            UnresolvedOrbitsWarning,
-            stacklevel=caller_stacklevel(),
-        )
+    _warn_cancelled(table, float(ratio), "P_psi/P_phi")
     return table
 
 
-def _ratio_errors(table, ratio):
-    """Relative errors of ``P_psi/P_phi = Delta alpha / 2 pi - 1`` on the LAM
-    rows of ``table`` above :data:`SPIN_VECTOR_RTOL`: the root's residual and
-    a few ulps of ``Delta alpha`` (``RATIO_ULPS``), divided by the ratio."""
+def _warn_cancelled(table, ratio, quantity):
+    """Warn where ``P_psi/P_phi = Delta alpha / 2 pi - 1`` on the LAM rows of
+    ``table`` is less accurate than :data:`SPIN_VECTOR_RTOL`: the root's
+    residual and a few ulps of ``Delta alpha`` (``RATIO_ULPS``), divided by
+    the ratio.  ``quantity`` names what rests on that ratio."""
+    from .search import UnresolvedOrbitsWarning
+
     errors = []
     for branch, residual in zip(table["branch"].astype(str), table["residual"].to_numpy()):
         if branch == "LAM":
@@ -336,7 +329,15 @@ def _ratio_errors(table, ratio):
             ) / ratio
             if not error <= SPIN_VECTOR_RTOL:
                 errors.append(error)
-    return errors
+    if errors:
+        warnings.warn(
+            f"{quantity} of {plural(len(errors), 'LAM row')} rests on P_psi / P_phi = "
+            "Delta alpha / 2 pi - 1 with Delta alpha so near 2 pi (a thin rod's long "
+            f"axis) that the difference keeps it only to about {max(errors):.1g} "
+            "(relative); the spin's total phase and P_psi are accurate",
+            UnresolvedOrbitsWarning,
+            stacklevel=caller_stacklevel(),
+        )
 
 
 def _ratio_table(body_or_moments, ratio):
@@ -420,7 +421,6 @@ def spins_with_periods(body_or_moments, p_psi, p_phi):
             "periods in one time unit (their ratio is what fixes the orbit)"
         )
     table = _ratio_table(body, ratio)
-    cancelled = _ratio_errors(table, ratio)
     rows, loose = [], []
     i3 = float(body.moments[2])
     for dtheta, theta in zip(table["dtheta"].to_numpy(), table["theta"].to_numpy()):
@@ -459,15 +459,7 @@ def spins_with_periods(body_or_moments, p_psi, p_phi):
                 "total_phase": motion.total_phase(),
             }
         )
-    if cancelled:
-        warnings.warn(
-            f"P_phi of {plural(len(cancelled), 'LAM row')} comes from P_psi / P_phi = "
-            "Delta alpha / 2 pi - 1 with Delta alpha so near 2 pi (a thin rod's long "
-            f"axis) that the difference keeps it only to about {max(cancelled):.1g} "
-            "(relative): the spin's total phase and P_psi are to the search's accuracy",
-            UnresolvedOrbitsWarning,
-            stacklevel=caller_stacklevel(),
-        )
+    _warn_cancelled(table, ratio, "P_phi")
     if loose:
         branch, off = max(loose, key=lambda item: item[1])
         warnings.warn(
