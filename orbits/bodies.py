@@ -1360,12 +1360,11 @@ def _warn_overlapping_shells(mesh, path):
     """
     from trimesh.graph import connected_component_labels
 
-    faces = np.asarray(mesh.faces)
-    labels = connected_component_labels(mesh.face_adjacency, node_count=len(faces))
+    labels = connected_component_labels(mesh.face_adjacency, node_count=len(mesh.faces))
     count = int(labels.max()) + 1 if labels.size else 0
     if count < 2:
         return
-    triangles = np.asarray(mesh.vertices)[faces]
+    triangles = mesh.triangles  # cached by trimesh; from_mesh's rounding bound uses it too
     signed = np.einsum("ij,ij->i", triangles[:, 0], np.cross(triangles[:, 1], triangles[:, 2]))
     volume = np.bincount(labels, weights=signed, minlength=count)
     low = np.full((count, 3), np.inf)
