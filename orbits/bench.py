@@ -31,8 +31,8 @@ Rows that compare results check that both sides agree (``agrees``, and
 ``agree`` or ``DISAGREE`` in the note): ``search_evaluations`` (the same
 roots on every body, offsets within :data:`SEARCH_RTOL` relative),
 ``survey`` (the loop's orbit count of each sampled body equals the
-survey's) and ``cuda_search`` (equal root counts, offsets within
-:data:`SEARCH_RTOL`); ``orbits bench`` exits 1 after the table when a row
+survey's) and ``cuda_search`` (as ``search_evaluations``, GPU against
+CPU); ``orbits bench`` exits 1 after the table when a row
 disagrees (:func:`disagreements`).
 
 With the under-load check (:func:`load_check`) each row's own task is timed
@@ -329,12 +329,18 @@ def _search_counts(function, bodies, levels, keep=None):
         roots += found
         evaluations += info[kernels.INFO_EVALUATIONS]
         if keep is not None:
-            if found < 0:
-                keep.append(None)
-            else:
-                order = np.lexsort((offset[:found], level[:found], branch[:found]))
-                keep.append((branch[order], level[order], offset[order]))
+            keep.append(sorted_roots(branch, level, offset, found))
     return time.perf_counter() - start, evaluations, roots
+
+
+def sorted_roots(branch, level, offset, found):
+    """One body's first ``found`` roots as ``(branch, level, offset)`` arrays
+    sorted by branch, level and offset (copies), or None where ``found < 0``
+    (the body was refused): what :func:`roots_agreement` compares."""
+    if found < 0:
+        return None
+    order = np.lexsort((offset[:found], level[:found], branch[:found]))
+    return branch[order], level[order], offset[order]
 
 
 # two searches agree when they find the same roots (branch and level) on every
@@ -368,6 +374,14 @@ def roots_agreement(ours, theirs, rtol=SEARCH_RTOL):
                 differ += 1
             worst = max(worst, gap) if math.isfinite(gap) else math.inf
     return differ, worst
+
+
+def _per_body(rows):
+    """:class:`orbits.search.SearchRows` as :func:`roots_agreement` takes them."""
+    return [
+        sorted_roots(rows.branch[b], rows.level[b], rows.offset[b], int(found))
+        for b, found in enumerate(rows.counts)
+    ]
 
 
 def _agreement(agrees, text):
@@ -1199,8 +1213,8 @@ def bench_cuda_search(resolution=400, n_max=30, repeats=3):
     :func:`orbits.search.search_bodies` with ``device="cuda"`` (copies
     included) against ``device="cpu"``.  The kernel alone (inputs already
     on the GPU, no copies) is timed too and given in the note, labelled as
-    such.  The two sides must find the same number of roots on every body,
-    offsets within :data:`SEARCH_RTOL` relative (``agrees``).
+    such.  The two sides must find the same roots on every body, offsets
+    within :data:`SEARCH_RTOL` relative (``agrees``, :func:`roots_agreement`).
 
     Raises DeviceError (one line) without a usable GPU or numba-cuda.
     """
@@ -1232,13 +1246,8 @@ def bench_cuda_search(resolution=400, n_max=30, repeats=3):
     cpu_runs = max(1, repeats // 2)
     cpu = best_time(lambda: search_bodies(moments, levels, device="cpu"), cpu_runs)
     same_counts = bool(np.array_equal(rows.counts, cpu_rows.counts))
-    worst = 0.0
-    for b in range(count):
-        k = max(cpu_rows.counts[b], 0)
-        if k and rows.counts[b] == cpu_rows.counts[b]:
-            ours, theirs = rows.offset[b, :k], cpu_rows.offset[b, :k]
-            worst = max(worst, float(np.max(np.abs(ours / theirs - 1.0))))
-    agrees = bool(same_counts and worst <= SEARCH_RTOL)
+    differ, worst = roots_agreement(*(_per_body(found) for found in (rows, cpu_rows)))
+    agrees = differ == 0
     threads = get_num_threads()
     return {
         "task": f"survey search on the GPU, end to end, {count} bodies, n <= {n_max} "
