@@ -273,7 +273,9 @@ class Motion:
         SeparatrixError
             omega on the separatrix (including a spin exactly along I2).
         InputError
-            ``axes`` not one of the two names.
+            ``axes`` not one of the two names, or the energy, angular
+            momentum or period of the motion does not fit a double at this
+            scale of the moments and ``omega`` (rescale them).
 
         Warns
         -----

@@ -632,7 +632,7 @@ def spin_phases(body_or_moments, omega):
     omega : array_like, shape (..., 3)
         Initial angular velocity in the *principal* frame, components
         along (I1, I2, I3) sorted ascending, any direction, any magnitude
-        whose energy and momentum fit a normal double (use
+        whose energy, momentum, ``D`` and period fit a normal double (use
         :attr:`Body.frame` to convert from your own axes).
 
     Returns
@@ -655,9 +655,10 @@ def spin_phases(body_or_moments, omega):
     AngleError
         ``omega`` not finite, or zero.
     InputError
-        The energy or momentum of a row does not fit a normal double
-        (``|omega|`` or the moments too large or too small, e.g.
-        ``|omega| ~ 1e155`` with moments of order 1).
+        The energy, momentum, ``D`` or period of a row does not fit a
+        normal double (``|omega|`` or the moments too large or too small,
+        e.g. ``|omega| ~ 1e155`` with moments of order 1, or a period of
+        1.3e309 for moments ~1e308 and ``|omega| ~ 2e-308``).
     SeparatrixError
         ``M^2 == 2 E I2`` to rounding (including a spin exactly along I2).
 
