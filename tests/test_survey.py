@@ -30,7 +30,7 @@ from orbits.survey import (
     survey_grid,
     write_part,
 )
-from orbits.survey.tables import arrow_table
+from orbits.survey.tables import arrow_table, read_table
 
 
 def read_bytes(directory):
@@ -547,6 +547,74 @@ def test_a_failure_mid_run_leaves_whole_chunks(tmp_path, monkeypatch, failure):
     monkeypatch.undo()
     Survey.grid(target, 40, 4, chunk=60).run()
     assert read_bytes(target) == read_bytes(reference)
+
+
+@pytest.mark.parametrize("verify", [True, False])
+def test_an_interrupted_survey_is_not_read_as_one(tmp_path, monkeypatch, verify):
+    """read_survey and read_table refuse a directory with chunks never written.
+
+    ``verify=False`` skips the hashing of the parts, not the check that the
+    ledger has every chunk: the bodies and orbits of the chunks written
+    would otherwise pass for the survey (their row sums agree).
+    """
+    import orbits.survey.compute as module
+
+    original = module.search_chunk
+    calls = []
+
+    def interrupted(moments, *args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return original(moments, *args, **kwargs)
+
+    monkeypatch.setattr(module, "search_chunk", interrupted)
+    target = tmp_path / "interrupted"
+    survey = Survey.grid(target, 20, 4, chunk=50)
+    with pytest.raises(KeyboardInterrupt):
+        survey.run()
+    written = load_manifest(target)["parts"]
+    assert 1 <= len(written) < survey.chunks
+    with pytest.raises(InputError, match="incomplete .*chunk 1 missing"):
+        read_survey(target, verify=verify)
+    for table in ("bodies", "orbits"):
+        with pytest.raises(InputError, match="incomplete"):
+            read_table(target, table, verify=verify)
+    monkeypatch.undo()
+    survey.run()
+    bodies, orbits_ = read_survey(target, verify=verify)
+    assert len(bodies) == survey.moments.shape[0]
+    assert len(orbits_) == int(bodies["orbits"].sum())
+
+
+def test_a_stopped_survey_command_says_what_it_kept(tmp_path, monkeypatch, capsys):
+    # the chunks finished stay (whole, in the ledger) for a rerun to resume:
+    # the stop's line says so instead of "no partial output was written"
+    import orbits.survey.compute as module
+
+    original = module.search_chunk
+    calls = []
+
+    def interrupted(moments, *args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return original(moments, *args, **kwargs)
+
+    monkeypatch.setattr(module, "search_chunk", interrupted)
+    out = tmp_path / "stopped"
+    argv = ["survey", "--resolution", "20", "--n-max", "4", "--chunk", "50", "--out", str(out)]
+    assert main(argv) == 130
+    done = len(load_manifest(out)["parts"])
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert last == (
+        f"orbits: interrupted; {done} of 4 chunks are written whole in {out} (the survey "
+        "is incomplete, and read_survey refuses it): rerun the same command to compute the rest"
+    )
+    assert 1 <= done < 4
+    monkeypatch.undo()
+    assert main(argv) == 0
+    assert len(read_survey(out)[0]) == 157
 
 
 @pytest.mark.parametrize("fmt", ["parquet", "csv"])

@@ -207,7 +207,8 @@ def _stop_outcome(stop):
     """The end of a stop's line: what became of the output."""
     if getattr(stop, "output_complete", False):
         return " as the run ended; its output was written whole"
-    return "; no partial output was written"
+    # a survey keeps the chunks it finished (orbits.cli.survey says which)
+    return getattr(stop, "outcome", None) or "; no partial output was written"
 
 
 def _raise_pending_stop():

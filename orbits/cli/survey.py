@@ -3,7 +3,8 @@
 import math
 import sys
 
-from ..errors import InputError
+from ..atomic import Terminated
+from ..errors import InputError, OrbitsError
 from ..limits import check_resolution
 from .shared import (
     EXIT_CHECK_FAILED,
@@ -126,9 +127,13 @@ def _cmd_survey(args):
 
         if not announced:
             announce("survey", seconds, memory)
-        report = survey.run(
-            scheduler=args.scheduler, progress=bar.update, notify=notify, status=status
-        )
+        try:
+            report = survey.run(
+                scheduler=args.scheduler, progress=bar.update, notify=notify, status=status
+            )
+        except (KeyboardInterrupt, Terminated) as stop:
+            stop.outcome = _stopped_outcome(survey, args.out)
+            raise
     pending = sum(len(survey.chunk_moments(k)) for k in survey.last_todo)
     elapsed = time.perf_counter() - start
     try:
@@ -145,6 +150,23 @@ def _cmd_survey(args):
             file=sys.stderr,
         )
     return 0
+
+
+def _stopped_outcome(survey, out):
+    """The end of a stopped run's line: what the directory holds and how to go on."""
+    try:
+        left = len(survey.missing())
+    except OrbitsError:  # a manifest that cannot be read: say nothing of it
+        return "; the directory was not checked"
+    done = survey.chunks - left
+    if done == 0:
+        return f"; no chunk was finished in {out}: rerun the same command to start again"
+    if left == 0:
+        return f"; every chunk is written in {out}: rerun the same command for its report"
+    return (
+        f"; {done} of {survey.chunks} chunks are written whole in {out} (the survey is "
+        "incomplete, and read_survey refuses it): rerun the same command to compute the rest"
+    )
 
 
 def _print_report(args, report, total, pending, elapsed):

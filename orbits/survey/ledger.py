@@ -104,9 +104,14 @@ def part_name(table, index, fmt):
     return f"{table}/part-{index:05d}.{fmt}"
 
 
+def chunk_count(parameters):
+    """How many chunks the survey of a manifest's ``parameters`` has."""
+    return -(-parameters["body_count"] // parameters["chunk"])
+
+
 def entry_problem(key, entry, parameters):
     """What binds an entry to its chunk and the parameters, broken ('' if not)."""
-    chunks = -(-parameters["body_count"] // parameters["chunk"])
+    chunks = chunk_count(parameters)
     if not (is_chunk_key(key) and key == str(int(key))):
         return "malformed ledger key"
     index = int(key)
@@ -280,6 +285,12 @@ def load_manifest(out_dir):
     return document
 
 
+def missing_chunks(document):
+    """``["chunk K", ...]``: the chunks a manifest's ledger has no entry for."""
+    ledger, chunks = document["parts"], chunk_count(document["parameters"])
+    return [f"chunk {k}" for k in range(chunks) if str(k) not in ledger]
+
+
 def check_parts(out_dir):
     """Verify the parts of a survey directory against its ledger (not ``report.json``).
 
@@ -298,7 +309,7 @@ def check_parts(out_dir):
     """
     document = load_manifest(out_dir)
     parameters, ledger = document["parameters"], document["parts"]
-    chunks = -(-parameters["body_count"] // parameters["chunk"])
+    chunks = chunk_count(parameters)
     damaged, verified = [], 0
     for key in sorted(ledger, key=int):  # keys checked by load_manifest
         problem = _check_part(out_dir, key, ledger[key], parameters)
@@ -306,7 +317,7 @@ def check_parts(out_dir):
             damaged.append(f"chunk {key}: {problem}")
         else:
             verified += 1
-    missing = [f"chunk {k}" for k in range(chunks) if str(k) not in ledger]
+    missing = missing_chunks(document)
     return {
         "chunks": chunks,
         "verified": verified,
@@ -452,7 +463,7 @@ class Ledger:
 
     @property
     def chunks(self):
-        return -(-self.parameters["body_count"] // self.parameters["chunk"])
+        return chunk_count(self.parameters)
 
     def refuse_foreign_directory(self):
         """Refuse a path that is not (and is not becoming) a survey directory, or holds a link."""

@@ -24,7 +24,7 @@ from ..cells import neutralize, unneutralize
 from ..errors import InputError
 from ..search import CATALOG_COLUMNS
 from .compute import BODY_COLUMNS, CATEGORIES, UNIT_COLUMNS, as_frame, derive_orbit_rows
-from .ledger import check_parts, entry_problem, load_manifest, one_line
+from .ledger import check_parts, entry_problem, load_manifest, missing_chunks, one_line
 
 
 def require_pyarrow():
@@ -263,8 +263,9 @@ def read_table(out_dir, table, verify=True):
     Raises
     ------
     InputError
-        Not a survey directory, incomplete, or (with ``verify``) a part that
-        is missing or does not match its SHA-256.
+        Not a survey directory, incomplete (a chunk the run never wrote,
+        whatever ``verify``), or (with ``verify``) a part that is missing or
+        does not match its SHA-256.
     """
     import pandas as pd
 
@@ -272,8 +273,14 @@ def read_table(out_dir, table, verify=True):
         raise InputError(f"table must be 'bodies' or 'orbits', got {table!r}")
     verify = flag("verify", verify)
     document = load_manifest(out_dir)
+    # without verify the parts are not hashed, but an interrupted run's
+    # directory (chunks never written) is refused all the same: a partial
+    # table would pass for the survey
     status = check_parts(out_dir) if verify else None
-    if status is not None and not status["complete"]:
+    if status is None:
+        status = {"damaged": [], "missing": missing_chunks(document)}
+        status["complete"] = not status["missing"]
+    if not status["complete"]:
         problems = status["damaged"] + [f"{m} missing" for m in status["missing"]]
         raise InputError(
             f"{out_dir} is damaged or incomplete ({len(problems)} "
