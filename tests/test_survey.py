@@ -617,6 +617,30 @@ def test_a_stopped_survey_command_says_what_it_kept(tmp_path, monkeypatch, capsy
     assert len(read_survey(out)[0]) == 157
 
 
+def test_survey_warns_of_orbits_left_out_next_to_the_separatrix(tmp_path, capsys):
+    # (0.001, 1, 1.001) at n <= 300: 147 levels are reached only closer than
+    # |dtheta| = 2.2e-308 to theta_c; orbits catalog warns of them, and so
+    # does the survey (it used to say only "1048 closed orbits")
+    bodies = tmp_path / "b.csv"
+    bodies.write_text("I1,I2,I3\n0.001,1,1.001\n0.3,0.5,0.7\n")
+    out = tmp_path / "s"
+    argv = ["survey", "--bodies", str(bodies), "--n-max", "300", "--out", str(out)]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert (
+        "orbits: warning: 1 of 2 bodies has closed orbits with 2 pi p/q <= 2 pi 300 "
+        "closer than |dtheta| = 2.2e-308 to the separatrix"
+    ) in err
+    table, orbit_rows = read_survey(out)
+    assert table["unresolved"].tolist() == [147, 0]
+    with pytest.warns(orbits.UnresolvedOrbitsWarning, match="147 closed orbits"):
+        expected = orbits.catalog([[0.001, 1, 1.001], [0.3, 0.5, 0.7]], n_max=300)
+    assert len(orbit_rows) == len(expected)
+    argv = ["survey", "--bodies", str(bodies), "--n-max", "20", "--out", str(tmp_path / "t")]
+    assert main(argv) == 0
+    assert "warning" not in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("fmt", ["parquet", "csv"])
 @pytest.mark.parametrize("columns", ["compact", "all"])
 def test_run_report_equals_the_report_read_back(tmp_path, fmt, columns, monkeypatch):

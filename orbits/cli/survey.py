@@ -136,6 +136,16 @@ def _cmd_survey(args):
             raise
     pending = sum(len(survey.chunk_moments(k)) for k in survey.last_todo)
     elapsed = time.perf_counter() - start
+    unresolved = report["bodies_with_unresolved_orbits"]
+    if unresolved:  # as orbits catalog warns of each such body
+        print(
+            f"orbits: warning: {unresolved} of {total} bodies "
+            f"{'has' if unresolved == 1 else 'have'} closed orbits with "
+            f"2 pi p/q <= 2 pi {args.n_max} closer than |dtheta| = 2.2e-308 to the "
+            "separatrix, which cannot be stored in double precision; they are left out "
+            "(the bodies table's column unresolved counts them)",
+            file=sys.stderr,
+        )
     try:
         _print_report(args, report, total, pending, elapsed)
         sys.stdout.flush()
