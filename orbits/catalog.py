@@ -61,7 +61,7 @@ from .limits import (
     read_input_text,
     search_estimate,
 )
-from .search import CATALOG_COLUMNS, closed_orbits
+from .search import CATALOG_COLUMNS, UnresolvedOrbitsWarning, closed_orbits
 from .tumbling import SPIN_VECTOR_RTOL
 
 VERIFIED_COLUMN = "closure_error"
@@ -214,8 +214,12 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
         ``omega`` on the separatrix (no closed orbits accumulate at a finite
         phase there: its phase is infinite).
     InputError
-        ``k`` or ``q_max`` not integers >= 1, an unknown unit, or a search
-        beyond the machine (a spin very close to the separatrix).
+        ``k`` or ``q_max`` not integers >= 1, an unknown unit, a search
+        beyond the machine (a spin very close to the separatrix), or orbits
+        among the ``k`` nearest that lie closer than ``|dtheta| = 2.2e-308``
+        to the separatrix (levels above ``attrs["reach"]`` of
+        :func:`orbits.closed_orbits`: no double holds them, and ranking the
+        others would skip them).
     """
     from .errors import AngleError
     from .motion import Motion
@@ -246,18 +250,23 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
             "machine; lower k (--nearest) or --q-max, or take a spin farther from the "
             "separatrix"
         )
-    # the search's n_max is ours, not the caller's: say what it was for
-    frame = _labelled_search(
-        body,
-        n_max,
-        q_max,
-        f"the {k} closed orbits nearest this spin (total phase {alpha:.6g} rad, a "
-        f"search up to n = {n_max}): ",
-    )
+    with held_warnings() as caught:  # not catch_warnings: not thread-safe
+        frame = closed_orbits(body, n_max=n_max, q_max=q_max)
     distance = np.abs(frame["total_phase"].to_numpy() - alpha)
     other = (frame["branch"].astype(str) != spin.branch).to_numpy()
     level = np.abs(frame["D"].to_numpy() - d_spin)
     order = np.lexsort((level, distance, other))[:k]
+    _refuse_unheld_nearest(frame, order, distance, other, spin, alpha, k)
+    # the search's n_max is ours, not the caller's: say what it was for.  Orbits
+    # it left out next to the separatrix are farther than the k chosen
+    # (_refuse_unheld_nearest): not a warning about this result
+    label = (
+        f"the {k} closed orbits nearest this spin (total phase {alpha:.6g} rad, a "
+        f"search up to n = {n_max}): "
+    )
+    for message, category in caught:
+        if not issubclass(category, UnresolvedOrbitsWarning):
+            warn(f"{label}{message}", category)
     frame = frame.iloc[order].reset_index(drop=True)
     columns = {name: [] for name in NEAREST_COLUMNS}
     unheld = []  # (row, relative period error) of starting spins that miss their orbit
@@ -279,8 +288,6 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
     for name in NEAREST_COLUMNS:
         frame[name] = np.array(columns[name])
     if unheld:
-        from .search import UnresolvedOrbitsWarning
-
         rows = ", ".join(str(row) for row, _ in unheld[:5]) + (" ..." if len(unheld) > 5 else "")
         worst = max(off for _, off in unheld)
         warnings.warn(
@@ -299,6 +306,41 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
         "D": d_spin,
     }
     return frame
+
+
+def _refuse_unheld_nearest(frame, order, distance, other, spin, alpha, k):
+    """Refuse a ranking that orbits left out next to the separatrix could change.
+
+    The search leaves out the levels above a branch's phase at
+    ``|dtheta| = 2.2e-308`` (``attrs["reach"]``): they exist, but no double
+    holds their orbit.  On the spin's branch they rank before every orbit
+    of the other branch, and by distance they are at least
+    ``reach - alpha`` from the spin; the ``k`` chosen rows are the nearest
+    only if all lie on the spin's branch within that distance.
+    """
+    left_out = frame.attrs["unresolved_by_branch"][spin.branch]
+    if not left_out:
+        return
+    reach = frame.attrs["reach"][spin.branch]
+    chosen = distance[order]
+    if len(order) == k and not other[order].any() and chosen.max() <= reach - alpha:
+        return
+    if alpha >= reach:
+        where = (
+            f"lies nearer the separatrix than |dtheta| = 2.2e-308: its total phase "
+            f"{alpha:.6g} rad is above {reach:.6g} rad, the most an orbit on "
+            f"{spin.branch} a double can hold reaches, so the closed orbits nearest it "
+            "cannot be stored in double precision; take a spin farther from the separatrix"
+        )
+    else:
+        where = (
+            f"(total phase {alpha:.6g} rad, {spin.branch}) lies so near the separatrix "
+            f"that closed orbits among the {k} nearest it (total phase above "
+            f"{reach:.6g} rad on {spin.branch}) lie closer than |dtheta| = 2.2e-308 to "
+            "it and cannot be stored in double precision; lower k (--nearest) or take a "
+            "spin farther from the separatrix"
+        )
+    raise InputError(f"this spin {where}")
 
 
 def _labelled_search(body, n_max, q_max, label):

@@ -339,7 +339,11 @@ def closed_orbits(body, n_max=10, q_max=1):
         One row per closed orbit, sorted by ``theta`` (i.e. by ``dtheta``),
         with the columns of :data:`CATALOG_COLUMNS` (see :data:`CATALOG_SCHEMA`
         and the documentation's catalog schema).  ``n`` is ``p``; ``q`` is 1 for integer orbits.
-        ``attrs["unresolved"]`` counts the orbits left out (below);
+        ``attrs["unresolved"]`` counts the orbits left out (below), and
+        ``attrs["unresolved_by_branch"]`` per branch (``{"SAM": n, "LAM":
+        n}``); ``attrs["reach"]`` maps each branch to its phase at
+        ``|dtheta| = 2.2e-308`` (radians): the levels above it are the ones
+        left out;
         ``attrs["minimum_phase"]`` maps ``"SAM"`` and ``"LAM"`` to each
         branch's smallest phase and its ``dtheta``, as the search found
         them: the end of the branch wherever the phase decreased at every
@@ -407,6 +411,11 @@ def closed_orbits(body, n_max=10, q_max=1):
         _label(body, moments, exponent), moments, level[order], offset[order], p, q, values
     )
     frame.attrs["unresolved"] = unreached
+    frame.attrs["unresolved_by_branch"] = per_branch
+    frame.attrs["reach"] = {
+        "SAM": float(info[_kernels.INFO_TOP_SAM]),
+        "LAM": float(info[_kernels.INFO_TOP_LAM]),
+    }
     frame.attrs["minimum_phase"] = branch_minima(info)
     return frame
 

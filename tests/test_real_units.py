@@ -162,6 +162,45 @@ def test_nearest_orbits_start_on_their_orbits_next_to_the_separatrix(moments, om
         assert np.sign(row.omega_x) == np.sign(omega[0]) and np.sign(row.omega_y) == 1
 
 
+def test_nearest_orbits_never_skip_an_orbit_left_out_next_to_the_separatrix(capsys):
+    """Levels above a branch's phase at |dtheta| = 2.2e-308 exist but cannot
+    be stored; the search leaves them out.  nearest_orbits used to rank what
+    was left: (1e-160, 1, 1e-160) on (1, 2, 2.5) got n = 504, 503, 502, 144
+    rad from the spin's 3310 rad, with exit 0.  Now a ranking those orbits
+    could change is refused, and one they cannot change is kept, silently
+    (the orbits left out are farther than every row)."""
+    moments = (1.0, 2.0, 2.5)
+
+    def nearest_levels(omega, k):
+        # the integer levels nearest the spin's total phase (spin_phases:
+        # the vector route, not nearest_orbits' Motion); on the spin's branch
+        # each level above it has an orbit, and these bodies' branches reach
+        # far below the spin
+        alpha = float(orbits.spin_phases(moments, omega)["total_phase"].iloc[0])
+        n0 = round(alpha / (2 * math.pi))
+        return sorted(range(n0 - k - 1, n0 + k + 2), key=lambda n: abs(2 * math.pi * n - alpha))[
+            :k
+        ]
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        frame = orbits.nearest_orbits(moments, (1e-152, 1.0, 1e-152), 3)
+        assert frame["n"].tolist() == nearest_levels((1e-152, 1.0, 1e-152), 3) == [501, 500, 502]
+        # 2 pi 505 is left out (the reach is 3172.5 rad), and is the third nearest
+        frame = orbits.nearest_orbits(moments, (1e-153, 1.0, 1e-153), 2)
+        assert frame["n"].tolist() == nearest_levels((1e-153, 1.0, 1e-153), 2) == [504, 503]
+    assert nearest_levels((1e-153, 1.0, 1e-153), 3)[2] == 505
+    with pytest.raises(orbits.InputError, match="among the 3 nearest it .*lower k"):
+        orbits.nearest_orbits(moments, (1e-153, 1.0, 1e-153), 3)
+    # the spin itself is beyond what an orbit's double reaches: no k helps
+    with pytest.raises(orbits.InputError, match="nearer the separatrix than .*2.2e-308"):
+        orbits.nearest_orbits(moments, (1e-160, 1.0, 1e-160), 1)
+    argv = ["catalog", "--moments", "1", "2", "2.5", "--omega", "1e-300", "1", "1e-300"]
+    assert main([*argv, "--nearest", "1200", "--out", "-"]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and "2.2e-308" in err
+
+
 def test_nearest_orbits_refuses_bad_input():
     with pytest.raises(orbits.InputError, match="unknown angular-velocity unit"):
         orbits.nearest_orbits(phone(), PHONE_THROW_RPM, 3, units="rps")
