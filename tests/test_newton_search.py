@@ -102,12 +102,17 @@ def test_same_roots_as_the_bracketing_search(compared):
 
 
 def test_five_times_fewer_evaluations_and_no_fallback(compared):
-    """At most 5 evaluations per root beside the monotonicity probe (at most
-    PROBE_POINTS per branch), and 5 times fewer than the bracketing scan in all."""
+    """At most 4 evaluations per root beside the monotonicity probe (at most
+    PROBE_POINTS per branch), and 5 times fewer than the bracketing scan in all.
+
+    Measured 3.43 per root over these 750 bodies (n <= 10); a Newton search
+    started from the separatrix expansion's guess with its sign flipped
+    still finds every root, in 4.41 per root: the bound holds the guess to
+    its worth."""
     _, rows, evaluations, fallbacks = compared
     roots = sum(new[2].size for _, new, _ in rows)
     probes = 2 * kernels.PROBE_POINTS * len(rows)
-    assert (evaluations[0] - probes) / roots <= 5.0
+    assert (evaluations[0] - probes) / roots <= 4.0
     assert evaluations[1] >= 5 * evaluations[0]
     assert fallbacks == 0
 
@@ -143,6 +148,13 @@ def test_probe_points_ascend_within_the_branch():
     assert points == sorted(points) and len(set(points)) == len(points)
     assert points[0] == pytest.approx(width * 1e-256, rel=1e-13)
     assert points[kernels.PROBE_DECADES - 1] == pytest.approx(width / 10, rel=1e-15)
+    # the documented probe (docs/numerics.md, closed_orbits' Notes): 14
+    # points, every squaring of a decade from 1e-256 of the width to 1e-1,
+    # then 0.2, 0.4, 0.6, 0.8 and 0.95 of it
+    decades = [10.0 ** -(2**j) for j in range(8, -1, -1)]
+    expected = [width * x for x in decades + [0.2, 0.4, 0.6, 0.8, 0.95]]
+    assert kernels.PROBE_POINTS == 14
+    assert points == pytest.approx(expected, rel=1e-13)
     assert 0.0 < points[0] and points[-1] < width
 
 

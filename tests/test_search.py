@@ -165,6 +165,35 @@ def test_minimum_phase_at_the_ends():
     assert where == pytest.approx(-orbits.critical_angle(FIG6))  # theta = 0
 
 
+@pytest.mark.parametrize(
+    "moments", [(1e-3, 0.5, 0.5009), (0.2, 0.5, 0.6), (0.3, 0.6, 0.742), (1.0, 2.0, 2.5)]
+)
+def test_branch_minima_lie_at_their_ends_with_their_signs(moments):
+    """Each branch's minimum (closed_orbits' attrs, minimum_phase) and where
+    it lies: SAM at theta = 0 (dtheta = -theta_c < 0), LAM at theta = pi/2
+    (dtheta = pi/2 - theta_c > 0), against a dense scan of orbits.phases on
+    each branch and the closed-form end limits (eqns alphamin1/2).  A LAM
+    location stored with the SAM sign passed every test before."""
+    theta_c = orbits.critical_angle(moments)
+    limits = orbits.phase_limits(moments)
+    found = closed_orbits(moments, n_max=5).attrs["minimum_phase"]
+    ends = {
+        "SAM": (limits.theta_zero, -theta_c),
+        "LAM": (limits.theta_half_pi, np.pi / 2 - theta_c),
+    }
+    for name, (value, where) in found.items():
+        end_value, end = ends[name]
+        assert where == pytest.approx(end, rel=1e-15) and np.sign(where) == np.sign(end)
+        assert value == pytest.approx(end_value, rel=1e-13)
+        # the scan: log-spaced from the separatrix to the end, on this branch
+        width = abs(end)
+        offsets = np.sign(end) * width * np.geomspace(1e-12, 1.0, 2000)
+        scanned = orbits.phases(moments, dtheta=offsets)["total_phase"].to_numpy()
+        assert scanned.min() >= value * (1 - 1e-13)
+    best = min(found.values())
+    assert minimum_phase(moments) == (best[0], pytest.approx(best[1], rel=1e-15))
+
+
 def test_minimum_phase_scans_and_keeps_a_minimum_inside_a_branch(monkeypatch):
     """minimum_phase takes the minimum of the full scan of each branch (the
     bracketing search), wherever it lies; one inside a branch is reported as
