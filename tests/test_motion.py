@@ -567,6 +567,27 @@ def test_spin_within_1e300_of_the_unstable_axis(omega0):
     assert_matches_mpmath(motion, times, 1e-11, dps=700)
 
 
+@pytest.mark.parametrize(
+    "omega0",
+    [(3e-158, 1.0, 1e-158), (1e-157, 1.0, 3e-157), (2e-150, 1.0, 1e-150), (1e-145, -1.0, 1e-145)],
+    ids=["LAM-1e-158", "SAM-1e-157", "1e-150", "1e-145"],
+)
+def test_phi_next_to_the_unstable_axis_where_cn_and_dn_are_tiny(omega0):
+    """Within 1e-140 of the I2 axis the R_J of phi(t) is formed from cn and dn,
+    not from their squares (core.motion._TINY_ROOT); a threshold moved to
+    1e-160 put phi(1) 8.7e-9 off on LAM and 2.7e-11 on SAM with every other
+    test passing.  Here omega stays along I2 to ~1e-150 for these times, so
+    dphi/dt = M / I2 to rounding and phi(t) = (M / I2) t; also mpmath at 700
+    digits (the squares of the small components are ~1e-316)."""
+    body = Body(FIG6.normalized_moments)
+    motion = Motion.from_omega(body, omega0)
+    times = np.array([0.0, 1e-3, 1.0, 10.0])
+    euler, state = assert_matches_mpmath(motion, times, 1e-13, dps=700)
+    # phi's own rate: dphi/dt = M (I1 w1^2 + I2 w2^2) / (I1^2 w1^2 + I2^2 w2^2)
+    rate = motion.momentum / body.moments[1]
+    assert state.euler[1:, 0] == pytest.approx(rate * times[1:], rel=1e-14)
+
+
 def test_times_beyond_the_resolution_of_the_period_are_refused():
     """Up to 2^50 periods the unwrapped angles follow their drift; beyond, the
     quarter-period count of the elliptic argument is no longer exact (at 2^62

@@ -833,7 +833,9 @@ def _mp_total_phase_at(moments, theta, phi):
 
 
 @pytest.mark.parametrize("moments", [(0.26, 0.55, 0.793662), (1.0, 1.0 + 1e-9, 1.5)])
-@pytest.mark.parametrize("phi", [np.pi / 2, np.nextafter(np.pi / 2, 0.0), 1.5, 0.3])
+@pytest.mark.parametrize(
+    "phi", [np.pi / 2, np.nextafter(np.pi / 2, 0.0), np.pi / 2 - 1e-8, np.pi / 2 - 1e-9, 1.5, 0.3]
+)
 def test_offsets_at_the_pi_half_end(moments, phi):
     """dtheta next to pi/2 - theta_c, where phi near pi/2 brings theta_c
     within ~1e-16 of pi/2: an offset past pi/2 is refused (AngleError), or,
@@ -847,6 +849,10 @@ def test_offsets_at_the_pi_half_end(moments, phi):
         theta_c = mp.atan2(mp.sqrt(i3 * (i3 - i2)), mp.sqrt(i1 * (i2 - i1)) * abs(mp.cos(p)))
         room = mp.pi / 2 - theta_c
         offsets = {float(room * f) for f in (0.5, 1 - 1e-6, 1 - 2**-40, 1 + 2**-60)}
+        # past the end by a relative 2**-21 to 2**-29 of it: refused beyond
+        # the 2**-27 of end_slack (phi = pi/2 - 1e-8 puts the end ~1e-8 from
+        # the separatrix, where 4 ulp of pi/2 would not decide it)
+        offsets |= {float(room * (1 + 2.0**-e)) for e in (21, 24, 26, 29)}
         offsets |= {float(room) + d for d in (1e-16, 3e-16, 1e-15)}
         offsets |= {float(mp.pi / 2) - float(theta_c)}  # as a caller writes it
         for dtheta in sorted(offsets - {0.0}):  # 0 (phi = pi/2): the separatrix

@@ -6,10 +6,12 @@ import platform
 import re
 from pathlib import Path
 
+import mpmath as mp
 import numba
 import numpy as np
 import pandas as pd
 import pytest
+from mp_formulas import period_and_total_phase
 from numba import njit
 
 import orbits
@@ -191,3 +193,49 @@ def test_one_body_simd_path_against_mpmath_reference():
             assert np.all(np.abs(got / expected - 1) <= bound)
         checked += len(group)
     assert checked == len(rows)
+
+
+@pytest.mark.parametrize(
+    "moments",
+    [(0.5, 0.500001, 1.0), (0.3, 0.3 + 1e-9, 0.5), (0.2, 0.999999, 1.0), (0.6, 0.9 - 1e-9, 0.9)],
+    ids=["oblate", "oblate-1e-9", "prolate", "prolate-1e-9"],
+)
+@pytest.mark.parametrize("phi", [0.0, 0.4, 1.0])
+def test_simd_path_on_the_far_half_of_a_wide_branch(moments, phi):
+    """Offsets beyond pi/4 from theta_c, batched: theta_c next to pi/2 (an
+    oblate body: SAM spans nearly all of [0, pi/2]) or next to 0 (prolate:
+    LAM does).  There |sin dtheta| is formed as the cosine of pi/2 - |dtheta|;
+    the random bodies of the tests above almost never have such a branch, and
+    a batch path taking the sine's series up to pi/2 was 2.2e-14 off here
+    (against <= 1e-15 for the scalar path and mpmath)."""
+    theta_c = float(orbits.critical_angle(moments, phi))
+    width = max(theta_c, math.pi / 2 - theta_c)
+    assert width > 1.5  # a branch nearly pi/2 wide
+    sign = -1.0 if theta_c > math.pi / 4 else 1.0
+    fractions = np.array([0.5, 0.6, 0.8, 0.9, 0.99, 0.999, 1 - 1e-6, 1 - 1e-12, 1.0])
+    dtheta = sign * width * fractions
+    # the same input on both paths (see test_simd_path_matches_scalar_path)
+    unit, _ = canonical_moments(np.array(moments))
+    batch = np.tile(unit, (dtheta.size, 1))
+    want, status = _scalar(batch, dtheta, np.full(dtheta.size, fold_angle(phi)), True)
+    assert (status == 0).all()
+    got = orbits.total_phase(batch, dtheta=dtheta, phi=phi)
+    assert np.max(np.abs(got / want - 1)) <= 2e-15
+    # one body: the per-body kernel, its own SIMD set-up
+    got = orbits.total_phase(unit, dtheta=dtheta, phi=phi)
+    assert np.max(np.abs(got / want - 1)) <= 2e-15
+    # and against the paper's formula in mpmath, from the spin (theta, phi)
+    # that the offset names (theta_c + dtheta rounded: the theta path)
+    theta = np.array([theta_c + d for d in dtheta])
+    got_theta = np.concatenate(
+        [orbits.total_phase(batch, theta, phi=phi), orbits.total_phase(unit, theta, phi=phi)]
+    )
+    with mp.workdps(60):
+        i1, i2, i3 = (mp.mpf(float(v)) for v in unit)
+        for t, value in zip(np.tile(theta, 2), got_theta):
+            st, ct = mp.sin(mp.mpf(t)), mp.cos(mp.mpf(t))
+            w = (st * mp.cos(phi), st * mp.sin(phi), ct)
+            two_e = i1 * w[0] ** 2 + i2 * w[1] ** 2 + i3 * w[2] ** 2
+            m_sq = i1**2 * w[0] ** 2 + i2**2 * w[1] ** 2 + i3**2 * w[2] ** 2
+            _, expected = period_and_total_phase(i1, i2, i3, two_e, m_sq)
+            assert abs(value / float(expected) - 1) <= 2e-15, (t, value, expected)
