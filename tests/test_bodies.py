@@ -163,6 +163,34 @@ class TestInertiaTensor:
         )
         assert np.linalg.det(body.frame) == pytest.approx(1.0)
 
+    def test_frame_is_a_proper_rotation_whatever_eigh_returns(self):
+        """eigh's eigenvectors may form a left-handed basis (det -1); the
+        frame is made proper (its last row flipped), so that a spin in the
+        body's axes is turned, never mirrored.  diag(1, 3, 2): the principal
+        axes are x, z and x cross z = -y, so the body spin (0.1, 0.2, 0.3)
+        is (0.1, 0.3, -0.2) along them."""
+        rng = np.random.default_rng(11)
+        tensors = [
+            np.diag([1.0, 3.0, 2.0]),
+            np.array([[3, 0.3, 0.1], [0.3, 2, 0.2], [0.1, 0.2, 4]]),
+        ]
+        for _ in range(20):
+            q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+            tensors.append(q @ np.diag(rng.uniform(1.0, 2.0, 3)) @ q.T)
+        improper = 0
+        for tensor in tensors:
+            improper += np.linalg.det(np.linalg.eigh(tensor)[1]) < 0
+            body = Body.from_inertia_tensor(tensor)
+            assert np.linalg.det(body.frame) == pytest.approx(1.0, abs=1e-12)
+            np.testing.assert_allclose(
+                body.frame @ tensor @ body.frame.T, np.diag(body.moments), atol=1e-12
+            )
+        assert improper >= 3  # the check has cases to decide
+        motion = orbits.Motion.from_omega(
+            Body.from_inertia_tensor(np.diag([1.0, 3.0, 2.0])), [0.1, 0.2, 0.3], axes="body"
+        )
+        np.testing.assert_array_equal(motion.omega0, [0.1, 0.3, -0.2])
+
     def test_rejects_asymmetric(self):
         with pytest.raises(NonPhysicalBodyError, match="symmetric"):
             Body.from_inertia_tensor([[1, 0.5, 0], [0, 2, 0], [0, 0, 2.5]])

@@ -261,3 +261,11 @@ def test_a_moved_rod_is_named_by_its_place_among_all_bodies():
         orbits.total_phase(rods, 0.3)
     with pytest.raises(orbits.SymmetricTopError, match=r"\(body 1 of 2\)"):
         orbits.total_phase([[1.0, 1.0, 1.5], [1.0, 2.0, 2.5]], 0.3)
+
+
+def test_the_first_exact_move_onto_the_edge_is_taken():
+    """I3 <- I1 + I2 first, then I1 <- I3 - I2, then I2 <- I3 - I1 (each
+    exact): (0.25, 0.5, 0.75 + ulp) becomes (0.25, 0.5, 0.75); the other
+    order gave (0.25 + ulp, 0.5, 0.75 + ulp), a body 2e-15 off in phase."""
+    body = Body((0.25, 0.5, np.nextafter(0.75, 1.0)))
+    assert body.moments.tolist() == [0.25, 0.5, 0.75]

@@ -15,6 +15,7 @@ import orbits
 from orbits import AngleError, Body, InputError, Motion, SeparatrixError
 from orbits.checks import exact_motion_mpmath
 from orbits.core.ode import euler_rhs
+from orbits.phases import fold_angle
 
 FIG6 = Body.preset("fig6")
 T_HANDLE = Body.t_handle(8, 4, 1)
@@ -272,6 +273,34 @@ def test_scaling_omega_scales_time_only():
     assert fast.total_phase() == pytest.approx(motion.total_phase(), rel=1e-14)
     t = np.linspace(0, motion.period, 50)
     np.testing.assert_allclose(fast.omega(t / 2.5), 2.5 * motion.omega(t), atol=1e-14)
+
+
+def test_speed_is_kept_for_any_theta_and_l_is_i_omega_at_any_scale():
+    """from_spin folds theta outside [0, pi/2] and keeps |omega0| = speed (a
+    fold that dropped the speed gave |omega0| = 1, a period 10x too long);
+    angular_momentum is I omega0 in the moments' own units (it lost the
+    moments' power-of-two scale, 2**-11 for a box in kg m^2, unseen for
+    bodies with I3 in [1/2, 1))."""
+    body = Body([1.0, 2.0, 3.0])
+    for theta in (2.0, -0.7, 4.0):
+        spun = Motion.from_spin(body, theta, phi=0.3, speed=10.0)
+        folded = Motion.from_spin(body, float(fold_angle(theta)), phi=0.3, speed=10.0)
+        assert np.linalg.norm(spun.omega0) == pytest.approx(10.0, rel=1e-15)
+        assert spun.period == pytest.approx(folded.period, rel=1e-14)
+        assert spun.energy == pytest.approx(folded.energy, rel=1e-14)
+    for body in (
+        Body([1.0, 2.0, 3.0]),
+        Body.box(0.15, 0.07, 0.008, 0.2),
+        Body([1e-200, 2e-200, 2.5e-200]),
+    ):
+        motion = Motion.from_omega(body, [0.1, 0.2, 0.3])
+        np.testing.assert_allclose(
+            motion.angular_momentum(0.0), body.moments * [0.1, 0.2, 0.3], rtol=1e-15
+        )
+        scale = body.moments[2]  # |L| / I3: no square underflows at 1e-200
+        moment = motion.angular_momentum(np.array([0.0, 1.3, 7.0])) / scale
+        lengths = np.linalg.norm(moment, axis=1)
+        np.testing.assert_allclose(lengths, motion.momentum / scale, rtol=1e-14)
 
 
 def test_steady_spins():

@@ -12,6 +12,7 @@ import pytest
 from scipy import constants as codata
 from scipy import integrate
 
+import orbits
 from orbits import Body
 from orbits.bodies import InertialDefectWarning, cylinder_moments
 from orbits.errors import InputError, NonPhysicalBodyError, SymmetricTopError
@@ -72,6 +73,30 @@ def test_circular_cylinder_moments_are_the_textbook_ones():
     assert i_z == pytest.approx(m * r * r / 2, rel=1e-15)
     with pytest.raises(SymmetricTopError, match="radius_y"):
         Body.cylinder(r, length, m)
+
+
+def test_elliptic_cylinder_moments_belong_to_their_axes():
+    """radius along x, radius_y along y: I_x = m (b^2/4 + L^2/12) is the
+    largest here, so the principal order (I1, I2, I3) is (z, y, x).  The
+    sorted moments alone do not tell the axes apart (a cylinder with a and b
+    swapped has the same ones); a spin about x must have E = I_x w^2 / 2."""
+    a, b, length, m = 0.03, 0.05, 0.2, 1.0
+    body = Body.cylinder(a, length, m, radius_y=b)
+    i_x = m * (b * b / 4 + length**2 / 12)
+    i_y = m * (a * a / 4 + length**2 / 12)
+    i_z = m * (a * a + b * b) / 4
+    assert body.moments == pytest.approx([i_z, i_y, i_x], rel=1e-15)
+    assert body.permutation == (2, 1, 0)
+    for axis, moment in enumerate((i_x, i_y, i_z)):
+        spin = np.zeros(3)
+        spin[axis] = 2.0
+        if axis == 1:
+            spin[0] = 1e-3  # not exactly along I2 (the separatrix)
+            moment_energy = 0.5 * (i_x * 1e-6 + moment * 4.0)
+        else:
+            moment_energy = 0.5 * moment * 4.0
+        motion = orbits.Motion.from_omega(body, spin, axes="body")
+        assert motion.energy == pytest.approx(moment_energy, rel=1e-14)
 
 
 def test_elliptic_cylinder_against_numerical_integration():

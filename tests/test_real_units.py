@@ -602,3 +602,12 @@ def test_too_many_nearest_orbits_name_the_options_that_apply(capsys):
         "beyond this machine; lower k (--nearest) or --q-max, or take a spin farther from "
         "the separatrix"
     )
+
+
+def test_time_units_in_seconds():
+    from orbits.units import TIME_UNITS, time_factor
+
+    assert [time_factor(u) for u in ("s", "min", "h", "d")] == [1.0, 60.0, 3600.0, 86400.0]
+    assert list(TIME_UNITS) == ["s", "min", "h", "d"]
+    with pytest.raises(orbits.InputError, match="unknown time unit 'yr'"):
+        time_factor("yr")
