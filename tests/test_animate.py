@@ -958,6 +958,23 @@ def test_the_clock_tells_fast_frames_apart():
     assert animate.clock_text(1.5, np.linspace(0.0, 3.0, 10)) == "1.500"
 
 
+def test_the_clock_reads_the_time_and_the_fraction_of_a_period():
+    """Three frames over one period of Fig. 6 at theta = 0.5 (T = 7.742 in
+    1/|w0|, seconds at |w0| = 1 rad/s), and the player's frame interval at
+    the frame rate (a clock labelled in ms, a fraction of 2 T, or an interval
+    a tenth of the frame's passed every test)."""
+    with pytest.warns(UserWarning, match="aliasing"):  # 3 frames a period, on purpose
+        anim = animate.poinsot_animation(FIG6, 0.5, frames=3)
+    shown = []
+    for k in range(3):
+        anim.frame(k)
+        shown += [t.get_text() for t in anim.figure.texts if t.get_text().startswith("t = ")]
+    assert shown == ["t = 0.000 s = 0.000 T", "t = 3.871 s = 0.500 T", "t = 7.742 s = 1.000 T"]
+    player = anim.animation
+    assert player.event_source.interval == pytest.approx(1000.0 / anim.fps)
+    player._draw_was_started = True  # not drawn here: no warning at its deletion
+
+
 def test_a_solid_given_as_a_mapping_names_its_parts():
     """A dict solid took its values in the mapping's order and ignored the
     keys: {"kind": "box", "c": .., "a": .., "b": ..} drew a box of sides c, a, b."""

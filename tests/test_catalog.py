@@ -465,3 +465,24 @@ def test_catalogs_from_threads_leave_the_warning_machinery_alone():
     assert [len(f) for f in frames] == [
         len(frames[0]) if n == 420 else len(frames[1]) for n in calls
     ]
+
+
+@pytest.mark.parametrize("added, code", [(5e-7, 1), (5e-9, 0)])
+def test_catalog_verify_fails_on_a_closure_error(tmp_path, monkeypatch, capsys, added, code):
+    """`orbits catalog --verify` exits 1 when an orbit does not close to 1e-8
+    rad (here the independent integration is made to miss by 5e-7), and 0
+    within it; nothing tested the failing branch (an exit 0 there, or an
+    allowance 100 times too wide, passed the suite)."""
+    from orbits import checks
+
+    original = checks.closure_errors
+    monkeypatch.setattr(
+        checks, "closure_errors", lambda *args, **kwargs: original(*args, **kwargs) + added
+    )
+    out = tmp_path / "c.csv"
+    argv = ["catalog", "--preset", "fig6", "--n-max", "3", "--verify", "--out", str(out)]
+    assert main(argv) == code
+    err = capsys.readouterr().err
+    failed = "orbits: error: 4 closure errors above 1e-08 rad (and the check's own error)"
+    assert (failed in err) == (code == 1)
+    assert read_catalog(out)["closure_error"].min() >= added

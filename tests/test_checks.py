@@ -44,6 +44,36 @@ class TestTHandle:
         assert value == pytest.approx(orbits.total_phase(T_HANDLE, **SPIN), abs=1e-12)
 
 
+@pytest.mark.parametrize("engine", ["scipy", "compiled"])
+def test_ode_rotation_error_is_against_the_closed_form(engine, monkeypatch):
+    """The check has teeth: a closed form 0.1 rad off is an error of 0.1
+    (an error computed from the integrated angle against itself read 1e-12
+    and passed every test)."""
+    original = checks.motion_closed_form
+    monkeypatch.setattr(checks, "motion_closed_form", lambda motion: original(motion) + 0.1)
+    result = checks.rotation_by_integration(T_HANDLE, **SPIN, engine=engine)
+    assert result.error == pytest.approx(0.1, abs=1e-9)
+    assert round(result.angle, 5) == 2.68074  # the integration itself unchanged
+
+
+def _circular(angle):
+    return abs((angle + math.pi) % (2 * math.pi) - math.pi)
+
+
+@pytest.mark.parametrize("dtheta", [0.05, -0.2, 3e-4, -5e-5])
+@pytest.mark.parametrize("periods", [1, 2])
+def test_closure_errors_of_orbits_that_do_not_close(dtheta, periods):
+    """On an orbit that is not closed, the closure error is the angle q
+    Delta alpha reduced to [0, pi] (both paths: the direct integration for
+    |dtheta| >= 1e-3, the quarter period closer in); a direct path that
+    integrated half the angle still flagged such orbits, with wrong values."""
+    alpha = float(orbits.total_phase(FIG6, dtheta=dtheta))
+    expected = _circular(periods * alpha)
+    assert expected > 0.05  # not closed
+    got = checks.closure_errors(FIG6.moments, dtheta, periods)
+    assert got == pytest.approx(expected, abs=1e-9)
+
+
 def test_montgomery_solid_angle_by_brute_force():
     """Omega as the area of the cap the polhode bounds, from the polhode
     points alone (spherical polygon, many vertices)."""
