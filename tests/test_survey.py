@@ -549,14 +549,8 @@ def test_a_failure_mid_run_leaves_whole_chunks(tmp_path, monkeypatch, failure):
     assert read_bytes(target) == read_bytes(reference)
 
 
-@pytest.mark.parametrize("verify", [True, False])
-def test_an_interrupted_survey_is_not_read_as_one(tmp_path, monkeypatch, verify):
-    """read_survey and read_table refuse a directory with chunks never written.
-
-    ``verify=False`` skips the hashing of the parts, not the check that the
-    ledger has every chunk: the bodies and orbits of the chunks written
-    would otherwise pass for the survey (their row sums agree).
-    """
+def _interrupt_second_chunk(monkeypatch):
+    """Ctrl-C while the second chunk is searched (the first is written)."""
     import orbits.survey.compute as module
 
     original = module.search_chunk
@@ -569,6 +563,17 @@ def test_an_interrupted_survey_is_not_read_as_one(tmp_path, monkeypatch, verify)
         return original(moments, *args, **kwargs)
 
     monkeypatch.setattr(module, "search_chunk", interrupted)
+
+
+@pytest.mark.parametrize("verify", [True, False])
+def test_an_interrupted_survey_is_not_read_as_one(tmp_path, monkeypatch, verify):
+    """read_survey and read_table refuse a directory with chunks never written.
+
+    ``verify=False`` skips the hashing of the parts, not the check that the
+    ledger has every chunk: the bodies and orbits of the chunks written
+    would otherwise pass for the survey (their row sums agree).
+    """
+    _interrupt_second_chunk(monkeypatch)
     target = tmp_path / "interrupted"
     survey = Survey.grid(target, 20, 4, chunk=50)
     with pytest.raises(KeyboardInterrupt):
@@ -590,18 +595,7 @@ def test_an_interrupted_survey_is_not_read_as_one(tmp_path, monkeypatch, verify)
 def test_a_stopped_survey_command_says_what_it_kept(tmp_path, monkeypatch, capsys):
     # the chunks finished stay (whole, in the ledger) for a rerun to resume:
     # the stop's line says so instead of "no partial output was written"
-    import orbits.survey.compute as module
-
-    original = module.search_chunk
-    calls = []
-
-    def interrupted(moments, *args, **kwargs):
-        calls.append(1)
-        if len(calls) == 2:
-            raise KeyboardInterrupt
-        return original(moments, *args, **kwargs)
-
-    monkeypatch.setattr(module, "search_chunk", interrupted)
+    _interrupt_second_chunk(monkeypatch)
     out = tmp_path / "stopped"
     argv = ["survey", "--resolution", "20", "--n-max", "4", "--chunk", "50", "--out", str(out)]
     assert main(argv) == 130
