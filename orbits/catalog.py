@@ -61,7 +61,7 @@ from .limits import (
     read_input_text,
     search_estimate,
 )
-from .search import CATALOG_COLUMNS, UnresolvedOrbitsWarning, closed_orbits
+from .search import CATALOG_COLUMNS, UnresolvedOrbitsWarning, closed_orbits, phase_levels
 from .tumbling import SPIN_VECTOR_RTOL
 
 VERIFIED_COLUMN = "closure_error"
@@ -256,7 +256,7 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
     other = (frame["branch"].astype(str) != spin.branch).to_numpy()
     level = np.abs(frame["D"].to_numpy() - d_spin)
     order = np.lexsort((level, distance, other))[:k]
-    _refuse_unheld_nearest(frame, order, distance, other, spin, alpha, k)
+    _refuse_unheld_nearest(frame, order, distance, other, spin, alpha, k, n_max, q_max)
     # the search's n_max is ours, not the caller's: say what it was for.  Orbits
     # it left out next to the separatrix are farther than the k chosen
     # (_refuse_unheld_nearest): not a warning about this result
@@ -308,39 +308,44 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
     return frame
 
 
-def _refuse_unheld_nearest(frame, order, distance, other, spin, alpha, k):
+def _refuse_unheld_nearest(frame, order, distance, other, spin, alpha, k, n_max, q_max):
     """Refuse a ranking that orbits left out next to the separatrix could change.
 
     The search leaves out the levels above a branch's phase at
     ``|dtheta| = 2.2e-308`` (``attrs["reach"]``): they exist, but no double
     holds their orbit.  On the spin's branch they rank before every orbit
-    of the other branch, and by distance they are at least
-    ``reach - alpha`` from the spin; the ``k`` chosen rows are the nearest
-    only if all lie on the spin's branch within that distance.
+    of the other branch, and the nearest of them to the spin is the first
+    level above the reach; the ``k`` chosen rows are the nearest only if all
+    lie on the spin's branch and nearer than that level (strictly: on a tie
+    the left-out orbit's ``D``, the tie-break, is unknown).
     """
-    left_out = frame.attrs["unresolved_by_branch"][spin.branch]
-    if not left_out:
+    if not frame.attrs["unresolved_by_branch"][spin.branch]:
         return
     reach = frame.attrs["reach"][spin.branch]
+    p, q, values = phase_levels(n_max, q_max)
+    first = int(np.argmax(values > reach))  # one exists: a level was left out
+    bound = values[first] - alpha
     chosen = distance[order]
-    if len(order) == k and not other[order].any() and chosen.max() <= reach - alpha:
+    if len(order) == k and not other[order].any() and chosen.max() < bound:
         return
-    if alpha >= reach:
-        where = (
-            f"lies nearer the separatrix than |dtheta| = 2.2e-308: its total phase "
-            f"{alpha:.6g} rad is above {reach:.6g} rad, the most an orbit on "
-            f"{spin.branch} a double can hold reaches, so the closed orbits nearest it "
-            "cannot be stored in double precision; take a spin farther from the separatrix"
-        )
-    else:
-        where = (
-            f"(total phase {alpha:.6g} rad, {spin.branch}) lies so near the separatrix "
-            f"that closed orbits among the {k} nearest it (total phase above "
-            f"{reach:.6g} rad on {spin.branch}) lie closer than |dtheta| = 2.2e-308 to "
-            "it and cannot be stored in double precision; lower k (--nearest) or take a "
-            "spin farther from the separatrix"
-        )
-    raise InputError(f"this spin {where}")
+    # the left-out level nearest the spin: among the k nearest (it is nearer
+    # than the k-th stored row, or the spin's branch has fewer than k rows)
+    left = np.flatnonzero(values > reach)
+    j = left[np.argmin(np.abs(values[left] - alpha))]
+    level = f"2 pi {p[j]}" + (f"/{q[j]}" if q[j] != 1 else "")
+    # lowering k helps only where the nearest stored orbit is nearer than it
+    fewer = k > 1 and len(order) and not other[order[0]] and chosen[0] < bound
+    nearest = (
+        "the closed orbit nearest it is" if k == 1 else f"the {k} closed orbits nearest it include"
+    )
+    raise InputError(
+        f"this spin (total phase {alpha:.6g} rad, {spin.branch}) lies so near the "
+        f"separatrix that {nearest} Delta alpha = {level} = {values[j]:.6g} rad, "
+        f"which lies closer than |dtheta| = 2.2e-308 to it (as every level above "
+        f"{reach:.6g} rad on {spin.branch}) and cannot be stored in double precision; "
+        + ("lower k (--nearest) or " if fewer else "")
+        + "take a spin farther from the separatrix"
+    )
 
 
 def _labelled_search(body, n_max, q_max, label):

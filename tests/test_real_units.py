@@ -189,12 +189,23 @@ def test_nearest_orbits_never_skip_an_orbit_left_out_next_to_the_separatrix(caps
         # 2 pi 505 is left out (the reach is 3172.5 rad), and is the third nearest
         frame = orbits.nearest_orbits(moments, (1e-153, 1.0, 1e-153), 2)
         assert frame["n"].tolist() == nearest_levels((1e-153, 1.0, 1e-153), 2) == [504, 503]
+        # the spin lies between the reach and 2 pi 505: 504 is 3.02 rad away,
+        # 505 (left out) 3.26: the ranking stands (a bound at the reach
+        # itself, 2.78 rad away, refused it)
+        spin = (6.672009257679572e-154, 1.0, 6.672009257679572e-154)
+        frame = orbits.nearest_orbits(moments, spin, 1)
+        assert frame["n"].tolist() == nearest_levels(spin, 1) == [504]
     assert nearest_levels((1e-153, 1.0, 1e-153), 3)[2] == 505
-    with pytest.raises(orbits.InputError, match="among the 3 nearest it .*lower k"):
+    with pytest.raises(
+        orbits.InputError,
+        match="the 3 closed orbits nearest it include Delta alpha = 2 pi 505 .*lower k",
+    ):
         orbits.nearest_orbits(moments, (1e-153, 1.0, 1e-153), 3)
     # the spin itself is beyond what an orbit's double reaches: no k helps
-    with pytest.raises(orbits.InputError, match="nearer the separatrix than .*2.2e-308"):
+    assert nearest_levels((1e-160, 1.0, 1e-160), 1) == [527]
+    with pytest.raises(orbits.InputError, match="nearest it is Delta alpha = 2 pi 527 = ") as told:
         orbits.nearest_orbits(moments, (1e-160, 1.0, 1e-160), 1)
+    assert "lower k" not in str(told.value)
     argv = ["catalog", "--moments", "1", "2", "2.5", "--omega", "1e-300", "1", "1e-300"]
     assert main([*argv, "--nearest", "1200", "--out", "-"]) == 2
     out, err = capsys.readouterr()

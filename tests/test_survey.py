@@ -635,6 +635,46 @@ def test_survey_warns_of_orbits_left_out_next_to_the_separatrix(tmp_path, capsys
     assert "warning" not in capsys.readouterr().err
 
 
+def test_a_stopped_survey_counts_the_chunks_its_manifest_holds(tmp_path, monkeypatch, capsys):
+    """A chunk is entered in the ledger in memory, then the manifest is
+    written; a stop between the two must not count it (the line said 2 of 4
+    chunks were kept, the manifest on disk held 1)."""
+    import orbits.survey.runner as runner
+    from orbits.survey.ledger import Ledger
+
+    monkeypatch.setattr(runner, "table_workers", lambda *args: 0)  # in the main thread
+    original = Ledger.write_manifest
+
+    def stopped_writing(self):
+        if len(self.parts) == 2:
+            raise KeyboardInterrupt
+        return original(self)
+
+    monkeypatch.setattr(Ledger, "write_manifest", stopped_writing)
+    out = tmp_path / "stopped"
+    argv = ["survey", "--resolution", "20", "--n-max", "4", "--chunk", "50", "--out", str(out)]
+    assert main(argv) == 130
+    assert list(load_manifest(out)["parts"]) == ["0"]
+    assert "interrupted; 1 of 4 chunks are written whole" in capsys.readouterr().err
+
+
+def test_a_survey_stopped_after_its_report_says_it_is_whole(tmp_path, monkeypatch, capsys):
+    # a stop while the summary is printed: the survey and report.json are
+    # complete, and the line says so (it said "no partial output was written")
+    import orbits.cli.survey as command
+
+    def stopped(*args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(command, "_print_report", stopped)
+    out = tmp_path / "whole"
+    argv = ["survey", "--resolution", "20", "--n-max", "4", "--out", str(out)]
+    assert main(argv) == 130
+    last = capsys.readouterr().err.strip().splitlines()[-1]
+    assert last == "orbits: interrupted as the run ended; its output was written whole"
+    assert len(read_survey(out)[0]) == 157
+
+
 @pytest.mark.parametrize("fmt", ["parquet", "csv"])
 @pytest.mark.parametrize("columns", ["compact", "all"])
 def test_run_report_equals_the_report_read_back(tmp_path, fmt, columns, monkeypatch):

@@ -134,6 +134,18 @@ def _cmd_survey(args):
         except (KeyboardInterrupt, Terminated) as stop:
             stop.outcome = _stopped_outcome(survey, args.out)
             raise
+    try:
+        _finish(args, survey, report, total, start)
+    except (KeyboardInterrupt, Terminated) as stop:
+        stop.output_complete = True  # the survey and its report.json are written
+        raise
+    return 0
+
+
+def _finish(args, survey, report, total, start):
+    """After a complete run: the warning of orbits left out, then the summary."""
+    import time
+
     pending = sum(len(survey.chunk_moments(k)) for k in survey.last_todo)
     elapsed = time.perf_counter() - start
     unresolved = report["bodies_with_unresolved_orbits"]
@@ -159,13 +171,22 @@ def _cmd_survey(args):
             "its report.json holds the summary",
             file=sys.stderr,
         )
-    return 0
 
 
 def _stopped_outcome(survey, out):
-    """The end of a stopped run's line: what the directory holds and how to go on."""
+    """The end of a stopped run's line: what the directory holds and how to go on.
+
+    Counted from the manifest on disk (a chunk is recorded in memory just
+    before its manifest is written, and the stop can come between).
+    """
+    from pathlib import Path
+
+    from ..survey.ledger import MANIFEST, load_manifest, missing_chunks
+
+    if not (Path(out) / MANIFEST).is_file():
+        return f"; no chunk was finished in {out}: rerun the same command to start again"
     try:
-        left = len(survey.missing())
+        left = len(missing_chunks(load_manifest(out)))
     except OrbitsError:  # a manifest that cannot be read: say nothing of it
         return "; the directory was not checked"
     done = survey.chunks - left
