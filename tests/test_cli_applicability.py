@@ -9,6 +9,7 @@ Defaults never count: only options typed on the command line are judged.
 
 import argparse
 import itertools
+import math
 
 import pytest
 
@@ -252,6 +253,22 @@ def test_angles_beyond_a_turn(argv, fragment):
 )
 def test_angles_within_a_turn_pass(argv):
     check_arguments(_parse(argv))
+
+
+@pytest.mark.parametrize("option", ["--theta", "--phi", "--dtheta"])
+@pytest.mark.parametrize("degrees", [False, True])
+def test_the_angle_limit_is_one_turn_exactly(option, degrees):
+    """At the edge: one turn passes, a hair more is refused, either sign
+    (a limit of 361 deg, or 2 pi + 0.5, folded 360.5 deg to 0.5 deg silently;
+    only values far past it were tested)."""
+    turn = 360.0 if degrees else 2 * math.pi
+    units = ["--degrees"] if degrees else []
+    base = ["phase", "--preset", "fig6"] + (["--theta", "0.3"] if option == "--phi" else [])
+    for value in (turn, -turn):
+        check_arguments(_parse(base + [option, repr(value)] + units))
+    for value in (turn + 0.5, -turn - 0.5, math.nextafter(turn, math.inf)):
+        with pytest.raises(InputError, match=r"\[-360, 360\]" if degrees else r"\[-2 pi, 2 pi\]"):
+            check_arguments(_parse(base + [option, repr(value)] + units))
 
 
 @pytest.mark.parametrize(
