@@ -920,3 +920,109 @@ def test_a_survey_that_cannot_write_its_lock_names_it(tmp_path):
     assert done.stderr.strip().splitlines() == [
         f"orbits: error: cannot write {tmp_path / 's' / '.lock'}: File too large"
     ]
+
+
+# ------------------------------------- each guard on its own (mutation audit)
+def test_the_temporary_is_synced_before_it_is_moved(tmp_path, monkeypatch):
+    """fsync of the finished temporary, then os.replace (no copy: a copy
+    writes through a link planted at the target, and truncates in place)."""
+    from orbits import atomic
+
+    events = []
+    real_fsync, real_replace = os.fsync, os.replace
+    monkeypatch.setattr(atomic.os, "fsync", lambda fd: (events.append("fsync"), real_fsync(fd)))
+    monkeypatch.setattr(
+        atomic.os, "replace", lambda a, b: (events.append("replace"), real_replace(a, b))
+    )
+    target = tmp_path / "a.txt"
+    target.write_text("old\n")
+    inode = target.stat().st_ino
+    write_text_atomic(target, "new\n")
+    assert events[-2:] == ["fsync", "replace"]
+    assert target.read_text() == "new\n" and target.stat().st_ino != inode
+
+
+def test_a_link_or_fifo_planted_during_the_write_is_not_written_through(tmp_path):
+    from orbits.atomic import atomic_path
+    from orbits.errors import InputError
+
+    outside = tmp_path / "outside.txt"
+    outside.write_text("precious\n")
+    target = tmp_path / "a.txt"
+    with atomic_path(target) as temporary:
+        temporary.write_text("new\n")
+        os.symlink(outside, target)  # between the first check and the move
+    assert outside.read_text() == "precious\n"
+    assert not target.is_symlink() and target.read_text() == "new\n"
+    fifo = tmp_path / "f.txt"
+    with pytest.raises(InputError, match="FIFO"):
+        with atomic_path(fifo) as temporary:
+            temporary.write_text("new\n")
+            os.mkfifo(fifo)
+    assert stat_is_fifo(fifo)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.txt", "f.txt", "outside.txt"]
+
+
+def test_a_fifo_planted_under_a_survey_root_during_the_write_is_kept(tmp_path, monkeypatch):
+    from orbits import atomic
+    from orbits.errors import InputError
+
+    target = tmp_path / "f.bin"
+    real_fsync = os.fsync
+
+    def fsync_then_plant(fd):
+        real_fsync(fd)
+        os.mkfifo(target)
+
+    monkeypatch.setattr(atomic.os, "fsync", fsync_then_plant)
+    with pytest.raises(InputError, match="not a regular file"):
+        atomic.write_bytes_under(tmp_path, "f.bin", b"new\n")
+    assert stat_is_fifo(target)
+
+
+def stat_is_fifo(path):
+    import stat
+
+    return stat.S_ISFIFO(os.lstat(path).st_mode)
+
+
+def test_reads_never_follow_a_link_nor_open_a_fifo(tmp_path):
+    from orbits.atomic import open_nofollow, read_bytes_nofollow
+    from orbits.errors import InputError
+
+    secret = tmp_path / "secret.txt"
+    secret.write_text("secret\n")
+    link = tmp_path / "link"
+    os.symlink(secret, link)
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    for read in (open_nofollow, read_bytes_nofollow):
+        with pytest.raises(InputError, match="symbolic link"):
+            read(link)
+        with pytest.raises(InputError, match="not a regular file"):
+            read(fifo)
+    assert read_bytes_nofollow(secret) == b"secret\n"
+
+
+def test_a_catalog_whose_header_miscounts_its_rows_is_damaged(tmp_path):
+    # the checksum covers the data only: the row count is checked on its own
+    path = tmp_path / "c.csv"
+    orbits.write_catalog(orbits.catalog(orbits.Body.preset("fig6"), n_max=5, q_max=2), path)
+    text = path.read_text()
+    count = len(orbits.read_catalog(path))
+    assert f"# rows: {count}\n" in text
+    path.write_text(text.replace(f"# rows: {count}\n", "# rows: 999\n"))
+    with pytest.raises(orbits.InputError, match=f"{count} rows, the header records 999"):
+        orbits.read_catalog(path)
+
+
+def test_two_runs_never_hold_a_survey_directory_at_once(tmp_path):
+    """The lock is exclusive between two orbits runs (the tests held the
+    lock from outside with LOCK_EX, which a shared lock would also respect)."""
+    first = orbits.survey.Survey.grid(tmp_path / "s", 20, 4)
+    second = orbits.survey.Survey.grid(tmp_path / "s", 20, 4)
+    (tmp_path / "s").mkdir()
+    with first.lock():
+        with pytest.raises(orbits.InputError, match="being written by another orbits run"):
+            with second.lock():
+                pass
