@@ -250,23 +250,23 @@ def nearest_orbits(body, omega, k=3, q_max=1, *, units="rad/s"):
             "machine; lower k (--nearest) or --q-max, or take a spin farther from the "
             "separatrix"
         )
-    with held_warnings() as caught:  # not catch_warnings: not thread-safe
-        frame = closed_orbits(body, n_max=n_max, q_max=q_max)
+    # the search's n_max is ours, not the caller's: say what it was for.  The
+    # orbits it leaves out next to the separatrix are not a warning about
+    # this result: they are farther than the k chosen, or the call is refused
+    # (_refuse_unheld_nearest)
+    frame = _labelled_search(
+        body,
+        n_max,
+        q_max,
+        f"the {k} closed orbits nearest this spin (total phase {alpha:.6g} rad, a "
+        f"search up to n = {n_max}): ",
+        drop=UnresolvedOrbitsWarning,
+    )
     distance = np.abs(frame["total_phase"].to_numpy() - alpha)
     other = (frame["branch"].astype(str) != spin.branch).to_numpy()
     level = np.abs(frame["D"].to_numpy() - d_spin)
     order = np.lexsort((level, distance, other))[:k]
     _refuse_unheld_nearest(frame, order, distance, other, spin, alpha, k, n_max, q_max)
-    # the search's n_max is ours, not the caller's: say what it was for.  Orbits
-    # it left out next to the separatrix are farther than the k chosen
-    # (_refuse_unheld_nearest): not a warning about this result
-    label = (
-        f"the {k} closed orbits nearest this spin (total phase {alpha:.6g} rad, a "
-        f"search up to n = {n_max}): "
-    )
-    for message, category in caught:
-        if not issubclass(category, UnresolvedOrbitsWarning):
-            warn(f"{label}{message}", category)
     frame = frame.iloc[order].reset_index(drop=True)
     columns = {name: [] for name in NEAREST_COLUMNS}
     unheld = []  # (row, relative period error) of starting spins that miss their orbit
@@ -323,14 +323,13 @@ def _refuse_unheld_nearest(frame, order, distance, other, spin, alpha, k, n_max,
         return
     reach = frame.attrs["reach"][spin.branch]
     p, q, values = phase_levels(n_max, q_max)
-    first = int(np.argmax(values > reach))  # one exists: a level was left out
-    bound = values[first] - alpha
+    left = np.flatnonzero(values > reach)  # not empty: a level was left out
+    bound = values[left[0]] - alpha
     chosen = distance[order]
     if len(order) == k and not other[order].any() and chosen.max() < bound:
         return
     # the left-out level nearest the spin: among the k nearest (it is nearer
     # than the k-th stored row, or the spin's branch has fewer than k rows)
-    left = np.flatnonzero(values > reach)
     j = left[np.argmin(np.abs(values[left] - alpha))]
     level = f"2 pi {p[j]}" + (f"/{q[j]}" if q[j] != 1 else "")
     # lowering k helps only where the nearest stored orbit is nearer than it
@@ -348,13 +347,15 @@ def _refuse_unheld_nearest(frame, order, distance, other, spin, alpha, k, n_max,
     )
 
 
-def _labelled_search(body, n_max, q_max, label):
+def _labelled_search(body, n_max, q_max, label, drop=()):
     """:func:`~orbits.search.closed_orbits` with its warnings told at the
-    caller's line, each message after ``label``."""
+    caller's line, each message after ``label``; those of the classes in
+    ``drop`` are not told."""
     with held_warnings() as caught:  # not catch_warnings: not thread-safe
         frame = closed_orbits(body, n_max=n_max, q_max=q_max)
     for message, category in caught:
-        warn(f"{label}{message}", category)
+        if not issubclass(category, drop):
+            warn(f"{label}{message}", category)
     return frame
 
 

@@ -183,12 +183,12 @@ def _stopped_outcome(survey, out):
 
     from ..survey.ledger import MANIFEST, load_manifest, missing_chunks
 
-    if not (Path(out) / MANIFEST).is_file():
-        return f"; no chunk was finished in {out}: rerun the same command to start again"
-    try:
-        left = len(missing_chunks(load_manifest(out)))
-    except OrbitsError:  # a manifest that cannot be read: say nothing of it
-        return "; the directory was not checked"
+    left = survey.chunks  # no manifest yet: no chunk recorded
+    if (Path(out) / MANIFEST).is_file():
+        try:
+            left = len(missing_chunks(load_manifest(out)))
+        except OrbitsError:  # a manifest that cannot be read: say nothing of it
+            return "; the directory was not checked"
     done = survey.chunks - left
     if done == 0:
         return f"; no chunk was finished in {out}: rerun the same command to start again"

@@ -273,13 +273,14 @@ def read_table(out_dir, table, verify=True):
         raise InputError(f"table must be 'bodies' or 'orbits', got {table!r}")
     verify = flag("verify", verify)
     document = load_manifest(out_dir)
-    # without verify the parts are not hashed, but an interrupted run's
-    # directory (chunks never written) is refused all the same: a partial
-    # table would pass for the survey
-    status = check_parts(out_dir) if verify else None
-    if status is None:
-        status = {"damaged": [], "missing": missing_chunks(document)}
-        status["complete"] = not status["missing"]
+    if verify:
+        status = check_parts(out_dir)
+    else:
+        # the parts are not hashed, but an interrupted run's directory
+        # (chunks never written) is refused all the same: a partial table
+        # would pass for the survey
+        missing = missing_chunks(document)
+        status = {"damaged": [], "missing": missing, "complete": not missing}
     if not status["complete"]:
         problems = status["damaged"] + [f"{m} missing" for m in status["missing"]]
         raise InputError(
