@@ -588,8 +588,10 @@ def read_catalog(path, *, check=True):
         non-finite numbers; a row that is no closed orbit as the search
         writes it (``n/q`` not above 1 or not in lowest terms, ``dtheta``
         on the wrong side for its branch, ``total_phase`` or ``residual``
-        beyond ``1e-10 * 2 pi n/q``, ``theta`` not ``theta_crit + dtheta``),
-        with or without ``check``.
+        beyond ``1e-10 * 2 pi n/q``, ``theta`` not ``theta_crit + dtheta``,
+        columns that break the identities between them, ``m`` not ``k^2``
+        of the row's moments and ``D`` or not in ``(0, 1]``), with or
+        without ``check``.
     """
     path = path_argument("path", path)
     check = flag("check", check)
@@ -751,7 +753,9 @@ def _identity_problems(frame):
     dynamic_phase - geometric_phase``, ``dynamic_phase = 2 E T / M``
     (Montgomery's 2ET/M), ``D = M^2 / (2E)`` and ``closes_after`` of
     ``n/q`` (:func:`orbits.search.closes_after`): an edited moment, period,
-    energy, |L|, D or phase shows, though the phases are not evaluated again.
+    energy, |L|, D, m or phase shows, though the phases are not evaluated again;
+    and ``m`` is ``k^2`` of eqn:TK from the row's moments and ``D``
+    (:func:`_parameter_holds`).
     """
     from .search import closes_after
 
@@ -782,11 +786,37 @@ def _identity_problems(frame):
         ),
         (~close(momentum * momentum / (2.0 * energy), column["D"]), "its D is not M^2 / (2E)"),
         (
+            ~_parameter_holds(column, frame["branch"].to_numpy() == "SAM"),
+            "its m is not k^2 of its moments and D (eqn:TK), in (0, 1]",
+        ),
+        (
             frame["closes_after"].astype(str).to_numpy()
             != np.asarray(closes_after(frame["n"].to_numpy(), frame["q"].to_numpy())),
             "its closes_after is not that of n/q",
         ),
     ]
+
+
+def _parameter_holds(column, sam):
+    """Whether each row's ``m`` is ``k^2`` of eqn:TK from its ``I1, I2, I3, D``, in ``(0, 1]``.
+
+    ``m = (I2-I1)(I3-D) / ((I3-I2)(D-I1))`` on SAM, its ``1 <-> 3`` image on
+    LAM, to :data:`IDENTITY_ULPS` ulps of ``m`` times the quotient's
+    condition number ``I3/|I3-D| + D/|D-I1| + I2/(I2-I1) + I3/(I3-I2)``
+    (the rounding of the moment and ``D`` columns; at most 2.2 of those
+    measured on 5,032 rows of the committed catalogs and of near-symmetric,
+    near-flat and thin bodies up to n = 60).
+    """
+    i1, i2, i3, d, m = (column[name] for name in ("I1", "I2", "I3", "D", "m"))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        quotient = np.where(
+            sam,
+            (i2 - i1) * (i3 - d) / ((i3 - i2) * (d - i1)),
+            (i3 - i2) * (d - i1) / ((i2 - i1) * (i3 - d)),
+        )
+        condition = i3 / np.abs(i3 - d) + d / np.abs(d - i1) + i2 / (i2 - i1) + i3 / (i3 - i2)
+        near = np.abs(quotient - m) <= IDENTITY_ULPS * np.spacing(m) * condition
+    return near & (m > 0.0) & (m <= 1.0)
 
 
 def _one_line(error):
@@ -1084,7 +1114,20 @@ def _arrow_numbers(column, given, problems, whole=None):
             values[k] = np.nan
             if whole is None or whole[k]:
                 problems.setdefault(int(k), f"{column} {cell!r} is not a number")
+    for k in np.flatnonzero(values == 0.0):
+        _note_underflow(column, given[int(k)].as_py(), int(k), problems, whole)
     return values
+
+
+def _note_underflow(column, cell, k, problems, whole):
+    """A cell such as ``1e-400`` reads as 0: say so, not "moments (0, ...)"."""
+    mantissa = cell.strip().lower().split("e")[0]
+    if any(digit in mantissa for digit in "123456789") and (whole is None or whole[k]):
+        problems.setdefault(
+            k,
+            f"{column} {cell.strip()} is below the smallest normal double (2.2e-308): "
+            "it reads as 0",
+        )
 
 
 def _python_cells(path, rest, header, start=0):
@@ -1122,6 +1165,8 @@ def _python_cells(path, rest, header, start=0):
             for k, cell in enumerate(values):
                 if NUMBER.fullmatch(cell.strip()):
                     numbers[k] = float(cell)
+                    if numbers[k] == 0.0:
+                        _note_underflow(column, cell, k, problems, whole)
                 elif whole[k]:
                     problems.setdefault(k, f"{column} {cell!r} is not a number")
         columns.append(numbers)

@@ -8,6 +8,7 @@ import signal
 import sys
 from pathlib import Path
 
+import mpmath
 import numpy as np
 import pandas as pd
 import pytest
@@ -73,6 +74,33 @@ def test_schema_and_order():
     )
 
 
+@pytest.mark.parametrize("name", ["fig6", "t-handle"])
+def test_elliptic_parameter_near_the_separatrix(name):
+    """``m = k^2`` stays below 1 and within 8 ulps of mpmath up to n = 30.
+
+    The quotient of gaps put ``m`` at 1 + 4 ulp (outside the domain of
+    ``K(m)``) on rows of both committed catalogs, up to 10.3 ulps off; with
+    ``1 - kc^2`` the worst is 6.3 ulps.  Reference: eqn:TK at 40 digits for
+    the spin ``theta_crit + dtheta`` of each row (the body's own moments).
+    """
+    body = Body.preset(name)
+    frame = orbits.closed_orbits(body, n_max=30, q_max=5)
+    assert (frame["m"] <= 1.0).all() and (frame["m"] > 0.0).all()
+    worst = 0.0
+    with mpmath.workdps(40):
+        i1, i2, i3 = (mpmath.mpf(float(x)) for x in body.unit_moments)
+        theta_c = mpmath.atan(mpmath.sqrt(i3 * (i3 - i2) / (i1 * (i2 - i1))))
+        for m, dtheta in zip(frame["m"], frame["dtheta"]):
+            s, c = mpmath.sin(theta_c + dtheta), mpmath.cos(theta_c + dtheta)
+            d = (i1**2 * s**2 + i3**2 * c**2) / (i1 * s**2 + i3 * c**2)
+            if d > i2:
+                exact = (i2 - i1) * (i3 - d) / ((i3 - i2) * (d - i1))
+            else:
+                exact = (i3 - i2) * (d - i1) / ((i2 - i1) * (i3 - d))
+            worst = max(worst, float(abs(m - exact)) / np.spacing(float(exact)))
+    assert worst <= 8.0, worst
+
+
 def test_csv_round_trip_is_bit_exact(tmp_path):
     frame = catalog(FIG6, n_max=30, q_max=3, verify=True)
     path = tmp_path / "fig6.csv"
@@ -121,6 +149,8 @@ def test_csv_round_trip_is_bit_exact(tmp_path):
         (lambda f: f.assign(D=f["D"] * (1 + 1e-12)), "D is not M\\^2 / \\(2E\\)"),
         (lambda f: f.assign(geometric_phase=5.0), "not dynamic_phase - geometric_phase"),
         (lambda f: f.assign(closes_after="2"), "closes_after is not that of n/q"),
+        (lambda f: f.assign(m=f["m"] * (1 + 1e-9)), "its m is not k\\^2"),
+        (lambda f: f.assign(m=1.0 + 2.0**-52), "its m is not k\\^2"),
     ],
 )
 def test_read_catalog_checks_schema(tmp_path, mutate, message):

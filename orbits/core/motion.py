@@ -300,7 +300,7 @@ def orbit_setup(i1, i2, i3, w1, w2, w3, scale, offset, closing, orbit):
     orbit[SLOT_RATE] = rate
     orbit[SLOT_QUARTER] = quarter
     orbit[SLOT_N] = n
-    m = elliptic_parameter(i1, i2, i3, branch, gap_m1, gap_3m)
+    m = elliptic_parameter(i1, i2, i3, branch, gap_m1, gap_3m, kc)
     if n < _FAR_N:
         # m / N and W = sqrt((1 + N)(1 + m / N)) of pi_far, as products:
         # m / N = I1 (2EI3 - M^2) / (I3 (M^2 - 2EI1)) on SAM, I1 (I3-I2) /
