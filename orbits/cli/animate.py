@@ -269,7 +269,8 @@ def add_parser(subparsers):
         type=finite,
         metavar=("W1", "W2", "W3"),
         help="a real throw: the angular velocity along the body's own axes (x y z "
-        "of --box, the order of --moments), in --units; plays in real time: "
+        "of --box, the order of --moments, a b c of --rotational-constants), "
+        "in --units; plays in real time: "
         "one period T, --periods X of them, or --seconds S (not --frames)",
     )
     spin.add_argument(

@@ -155,7 +155,8 @@ def _omega_table(body, args):
     """One row for a spin given as a vector: physical outputs and D = M^2/(2E).
 
     omega is given along the caller's axes (the order of --moments, x y z of
-    --box, ...) in --units, turned to the principal frame with Body.frame.
+    --box, a b c of --rotational-constants, ...) in --units, turned to the
+    principal frame with Body.frame.
     With moments in kg m^2 the energy is in J, |L| in J s and the periods
     in s; ``D_normalised = D/|I|`` is the ``D`` of the orbit's catalog row.
     """
@@ -308,7 +309,8 @@ def add_parser(subparsers):
         metavar=("W1", "W2", "W3"),
         help="the initial angular velocity as a vector along the "
         "body's own axes (the order of --moments, x y z of "
-        "--box ...), in --units; prints physical E, |L|, "
+        "--box, a b c of --rotational-constants whatever the order typed "
+        "...), in --units; prints physical E, |L|, "
         "periods and D = M^2/(2E)",
     )
     angle.add_argument(
