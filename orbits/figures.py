@@ -7,6 +7,7 @@ SVG or PDF metadata, a fixed SVG hash salt).
 """
 
 import math
+import re
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -208,13 +209,16 @@ def herpolhode_set(
     n_max, q_max : int
         As :func:`orbits.closed_orbits`.
     out_dir : path
-        Existing directory for the files.
+        Existing directory for the files, holding no figures of another
+        set (``herpolhode_*`` or ``contact_sheet`` names this set does not
+        write, which would stay beside it): refused, nothing removed.
     formats : sequence of str
         Any of ``png``, ``svg``, ``pdf``.
     progress : callable, optional
         Called with 1 after each figure.
     orbits : DataFrame, optional
-        The catalog to draw (computed if omitted).
+        The catalog to draw (computed if omitted): rows of ``body``, within
+        ``n_max`` and ``q_max`` (:func:`check_orbits_of`).
 
     Returns
     -------
@@ -225,10 +229,13 @@ def herpolhode_set(
     out_dir = _directory(out_dir)
     if orbits is None:
         orbits = closed_orbits(body, n_max=n_max, q_max=q_max)
+    else:
+        check_orbits_of(body, orbits, n_max, q_max)
     orbits = _paper_order(orbits)
     check_figure_set(len(orbits), formats, turns=drawn_turns(orbits))
     name = body.name or "body"
     files = set_file_names(orbits, formats)
+    _refuse_another_set(out_dir, files)
     # all or none: a stop or an error leaves the directory as it was
     with file_set(out_dir, files) as stage:
         radii = [plotting.herpolhode_radii(body, dtheta=row.dtheta) for row in orbits.itertuples()]
@@ -243,6 +250,60 @@ def herpolhode_set(
         if progress is not None:
             progress(1)
     return [out_dir / name for name in files]
+
+
+def check_orbits_of(body, orbits, n_max=None, q_max=None):
+    """Refuse catalog rows that are not ``body``'s, or beyond ``n_max``, ``q_max``.
+
+    A row is drawn from its ``dtheta`` and the body given: a row of another
+    body was drawn as an orbit of this one under its title (a t-handle
+    figure titled ``Delta alpha = 2 pi 2`` showed a spin of 2.15 turns
+    that does not close; an audit).  Its ``I1, I2, I3`` must be the body's
+    unit-norm moments (:attr:`Body.normalized_moments`) to 4 ulps.  With
+    ``n_max``/``q_max`` (:func:`herpolhode_set`), a row of level ``n/q``
+    above ``n_max`` or ``q`` above ``q_max`` is refused, not drawn.
+
+    ``orbits``: a DataFrame of catalog rows, or one row (a named tuple of
+    ``itertuples`` or a Series).
+    """
+    mine = body.normalized_moments if isinstance(body, Body) else Body(body).normalized_moments
+    try:
+        given = np.column_stack(
+            [
+                np.atleast_1d(np.asarray(_field(orbits, name), dtype=float))
+                for name in ("I1", "I2", "I3")
+            ]
+        )
+    except (AttributeError, KeyError, TypeError, ValueError):
+        raise InputError(
+            "catalog rows need their I1, I2, I3 columns (orbits.closed_orbits)"
+        ) from None
+    off = ~np.all(np.abs(given - mine) <= 4.0 * np.spacing(mine), axis=1)
+    if off.any():
+        row = given[np.flatnonzero(off)[0]]
+        raise InputError(
+            f"a catalog row has moments ({row[0]:.10g}, {row[1]:.10g}, {row[2]:.10g}), "
+            f"not those of the body drawn ({mine[0]:.10g}, {mine[1]:.10g}, {mine[2]:.10g}, "
+            "unit norm): its dtheta is an orbit of another body; draw it with that body"
+        )
+    if n_max is None:
+        return
+    n_max, q_max = integer("n_max", n_max, minimum=1), integer("q_max", q_max, minimum=1)
+    n = np.atleast_1d(np.asarray(_field(orbits, "n")))
+    q = np.atleast_1d(np.asarray(_field(orbits, "q")))
+    beyond = (n > n_max * q) | (q > q_max)
+    if beyond.any():
+        k = np.flatnonzero(beyond)[0]
+        raise InputError(
+            f"orbits holds the level n/q = {n[k]}/{q[k]}, beyond n_max = {n_max}, "
+            f"q_max = {q_max}: give the n_max and q_max of the catalog, or only its rows "
+            "within them"
+        )
+
+
+def _field(rows, name):
+    """Column ``name`` of a DataFrame, or the field of one row."""
+    return rows[name] if hasattr(rows, "columns") else getattr(rows, name)
 
 
 def closed_herpolhode_figure(body, row, name=None, *, limit=None, radii=None):
@@ -278,6 +339,7 @@ def draw_closed_herpolhode(
     Returns the dict of :func:`orbits.plotting.mark_herpolhode` plus
     ``curve`` (Line2D) and ``periods`` (the duration drawn, in T).
     """
+    check_orbits_of(body, row)
     periods = plotting.drawn_periods(row)
     curve = plotting.plot_herpolhode(
         ax, body, dtheta=row.dtheta, periods=periods, label_axes=label_axes, **line
@@ -464,6 +526,7 @@ def contact_sheet(body, orbits, columns=None):
     count = len(orbits)
     if count == 0:
         raise InputError("the contact sheet needs at least one closed orbit")
+    check_orbits_of(body, orbits)
     if columns is None:
         columns = _sheet_columns(count)
     columns = integer("columns", columns, minimum=1)
@@ -520,6 +583,40 @@ def contact_sheet(body, orbits, columns=None):
     figure.get_layout_engine().set(w_pad=0.15, h_pad=0.08)  # inches: clear of the edges
     figure.limit = limit
     return figure
+
+
+# the names herpolhode_set writes (set_file_names)
+_SET_FILE = re.compile(
+    r"(herpolhode_(SAM|LAM)_(n[0-9]{3,}|p[0-9]{3,}q[0-9]+)|contact_sheet)\.(png|svg|pdf)"
+)
+
+
+def _refuse_another_set(out_dir, files):
+    """Refuse a directory holding figures of another set (a set's names not in ``files``).
+
+    A second run replaced only its own names: a directory of n <= 3 and
+    p/q figures in three formats, run again with n <= 2 in PNG, kept the
+    old p/q figures and SVG/PDF contact sheet beside the new PNG one (an
+    audit).  Nothing is removed; the user chooses.
+    """
+    import os
+
+    wanted = set(files)
+    try:
+        with os.scandir(out_dir) as entries:
+            stale = sorted(
+                entry.name
+                for entry in entries
+                if _SET_FILE.fullmatch(entry.name) and entry.name not in wanted
+            )
+    except OSError as error:
+        raise InputError(f"cannot read {out_dir}: {error.strerror or error}") from None
+    if stale:
+        shown = ", ".join(stale[:3]) + (f" and {len(stale) - 3} more" if len(stale) > 3 else "")
+        raise InputError(
+            f"{out_dir} holds figures of another set ({shown}) that this one would not "
+            "replace, leaving a mixed set: write into an empty directory, or remove them"
+        )
 
 
 def _directory(out_dir):
@@ -640,9 +737,20 @@ def figure6(n_inset=3):
     by leader lines that do not cross; the levels are named on the right
     axis and the legend sits under the plot, so nothing covers the curve,
     the level names or the spike at theta_c.
+
+    Parameters
+    ----------
+    n_inset : int
+        1 to 7 (the plot shows n <= 8; default 3, the paper's insets).
+
+    Raises
+    ------
+    InputError
+        ``n_inset`` not an integer from 1 to 7.
     """
     from matplotlib.patches import ConnectionPatch
 
+    n_inset = integer("n_inset", n_inset, minimum=1, maximum=7)
     body = Body.preset("fig6")
     orbits = closed_orbits(body, n_max=8)
     shown = orbits[orbits["n"] <= n_inset + 1].sort_values("theta").reset_index(drop=True)

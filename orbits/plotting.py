@@ -85,6 +85,33 @@ def _end_time(periods, period):
     return end
 
 
+def _no_angles_with_motion(theta, dtheta, phi, where):
+    """Refuse angles given with a :class:`orbits.Motion`, which has its own spin
+    (they were ignored: ``plot_herpolhode(ax, motion, 1.2)`` drew the motion's
+    theta = 0.5 curve; an audit)."""
+    given = [
+        name
+        for name, value, default in (
+            ("theta", theta, None),
+            ("dtheta", dtheta, None),
+            ("phi", phi, 0.0),
+        )
+        if not (value is default or (default is not None and _is_zero(value)))
+    ]
+    if given:
+        raise InputError(
+            f"{where}: {' and '.join(given)} given with a Motion, which has its own spin; "
+            "give the body and the angles, or the Motion alone"
+        )
+
+
+def _is_zero(value):
+    try:
+        return float(value) == 0.0
+    except (TypeError, ValueError):
+        return False
+
+
 def plot_herpolhode(
     ax, body, theta=None, *, dtheta=None, phi=0.0, periods=1, points=None, label_axes=True, **line
 ):
@@ -96,7 +123,9 @@ def plot_herpolhode(
     body, theta, dtheta, phi : as :func:`orbits.herpolhode`
         Or ``body`` a :class:`orbits.Motion` (no angles): its own spin.
     periods : float
-        Periods to draw, positive (a p/q orbit closes after q).
+        Periods to draw, positive (a closed orbit's herpolhode closes
+        after its catalog's ``closes_after``: 1/2 for odd n, q/2 when p
+        and q are odd, else q).
     points : int, optional
         Samples; by default enough for the curve's turns.
     label_axes : bool
@@ -113,13 +142,15 @@ def plot_herpolhode(
     ------
     InputError
         ``periods`` not positive and finite, ``points`` not an integer from
-        2 to :data:`orbits.motion.MAX_POINTS`, or (``points`` omitted) a
-        curve of more than :data:`MAX_TURNS` turns.
+        2 to :data:`orbits.motion.MAX_POINTS`, (``points`` omitted) a
+        curve of more than :data:`MAX_TURNS` turns, or ``theta``,
+        ``dtheta`` or a non-zero ``phi`` with a :class:`orbits.Motion`.
     """
     periods = positive_finite("periods", periods)
     if points is not None:
         points = integer("points", points, minimum=2, maximum=MAX_POINTS)
     if isinstance(body, Motion):
+        _no_angles_with_motion(theta, dtheta, phi, "plot_herpolhode")
         if points is None:
             turns = abs(body.total_phase()) / TWO_PI * periods
             check_turns(turns, f"the herpolhode over periods={periods:g}", "lower periods")
@@ -746,6 +777,7 @@ def plot_binet(ax3d, body, theta=None, *, dtheta=None, phi=0.0):
         ``energy``, ``momentum``.
     """
     if isinstance(body, Motion):
+        _no_angles_with_motion(theta, dtheta, phi, "plot_binet")
         # the motion as given: moments in kg m^2 and rad/s give J and J s
         unit = body.body.moments
         row = body
@@ -794,6 +826,7 @@ def plot_omega_components(ax, body, theta=None, *, dtheta=None, phi=0.0, periods
     periods = positive_finite("periods", periods)
     points = integer("points", points, minimum=2, maximum=MAX_POINTS)
     if isinstance(body, Motion):
+        _no_angles_with_motion(theta, dtheta, phi, "plot_omega_components")
         motion = body
     else:
         motion = Motion.from_spin(as_body(body), theta, dtheta=dtheta, phi=phi)

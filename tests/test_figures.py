@@ -501,6 +501,76 @@ def test_unknown_paper_figures_and_bad_columns_are_refused(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+def test_rows_of_another_body_or_beyond_n_max_are_refused(tmp_path, capsys):
+    """A catalog row is drawn from its dtheta and the body given: fig6 rows
+    drawn on the t-handle came out titled 2 pi 2 with a spin of 2.15 turns
+    that does not close, and herpolhode_set(n_max=2) drew the n = 3 rows of
+    the catalog it was given (an audit)."""
+    t_handle = Body.preset("t-handle")
+    catalog = orbits.closed_orbits(FIG6, n_max=3)
+    other = "not those of the body drawn .* its dtheta is an orbit of another body"
+    with pytest.raises(orbits.errors.InputError, match=other):
+        figures.herpolhode_set(t_handle, 3, tmp_path, orbits=catalog)
+    with pytest.raises(orbits.errors.InputError, match=other):
+        figures.closed_herpolhode_figure(t_handle, next(catalog.itertuples()))
+    with pytest.raises(orbits.errors.InputError, match=other):
+        figures.contact_sheet(t_handle, catalog)
+    with pytest.raises(orbits.errors.InputError, match="n/q = 3/1, beyond n_max = 2, q_max = 1"):
+        figures.herpolhode_set(FIG6, 2, tmp_path, orbits=catalog)
+    rational = orbits.closed_orbits(FIG6, n_max=3, q_max=2)
+    with pytest.raises(orbits.errors.InputError, match="n/q = 5/2, beyond n_max = 2, q_max = 2"):
+        figures.herpolhode_set(FIG6, 2, tmp_path, q_max=2, orbits=rational)
+    with pytest.raises(orbits.errors.InputError, match="q_max = 1"):
+        figures.herpolhode_set(FIG6, 3, tmp_path, orbits=rational)
+    assert list(tmp_path.iterdir()) == []
+    # the catalog of this body read back from its CSV is drawn
+    path = tmp_path / "fig6.csv"
+    orbits.write_catalog(catalog, path)
+    written = (
+        figures.herpolhode_set(
+            FIG6, 3, tmp_path / "set", formats=("png",), orbits=orbits.read_catalog(path)
+        )
+        if (tmp_path / "set").mkdir() is None
+        else None
+    )
+    assert sorted(p.name for p in written)[-1] == "herpolhode_SAM_n003.png"
+    assert len(written) == len(catalog) + 1
+
+
+def test_a_directory_of_another_set_is_refused(tmp_path, capsys):
+    """A second run into the same --out replaced only its own names, leaving
+    the old set's p/q figures and SVG contact sheet beside it (an audit)."""
+    out = tmp_path / "set"
+    first = ["figures", "--moments", "1", "2", "3", "--n-max", "3", "--q-max", "2"]
+    assert main([*first, "--formats", "png", "svg", "--out", str(out)]) == 0
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert "contact_sheet.svg" in before and "herpolhode_SAM_p005q2.png" in before
+    capsys.readouterr()
+    again = ["figures", "--moments", "1", "2", "3", "--n-max", "2", "--formats", "png"]
+    assert main([*again, "--out", str(out)]) == 2
+    last = capsys.readouterr().err.splitlines()[-1]
+    assert last.startswith("orbits: error: ") and "holds figures of another set" in last
+    assert "herpolhode_LAM_n003.png" in last
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    # the same set again is written over, and other files are no concern
+    (out / "notes.txt").write_text("mine")
+    assert main([*first, "--formats", "png", "svg", "--out", str(out)]) == 0
+    assert sorted(p.name for p in out.iterdir()) == sorted([*before, "notes.txt"])
+
+
+def test_figure6_n_inset_is_checked():
+    for bad, message in ((0, ">= 1, got 0"), (-1, ">= 1, got -1"), (2.5, "got 2.5"), (8, "<= 7")):
+        with pytest.raises(orbits.errors.OrbitsError, match=message):
+            figures.figure6(n_inset=bad)
+
+
+def test_figures_help_says_each_orbit_is_drawn_until_it_closes(capsys):
+    assert main(["figures", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "drawn over q periods" not in text
+    assert "T/2 for odd n, q/2 periods when p and q are odd, else q" in text
+
+
 def test_contact_sheet_of_rows_without_closes_after(tmp_path):
     """p/q rows without closes_after (or NaN there) are drawn over q periods,
     and their panels say so (an AttributeError before)."""

@@ -238,6 +238,28 @@ def test_plots_take_a_motion_in_real_units():
     assert "J s" in ax.get_xlabel()
 
 
+def test_angles_given_with_a_motion_are_refused():
+    """A Motion has its own spin: angles beside it were ignored
+    (``plot_herpolhode(ax, motion, 1.2)`` drew the theta = 0.5 curve; an
+    audit).  phi = 0 (the default) is not an angle given."""
+    motion = orbits.Motion.from_spin(FIG6, 0.5)
+    ax = new_figure().add_subplot()
+    for draw in (plotting.plot_herpolhode, plotting.plot_omega_components):
+        with pytest.raises(orbits.errors.InputError, match="theta given with a Motion"):
+            draw(ax, motion, 1.2)
+        with pytest.raises(orbits.errors.InputError, match="dtheta given with a Motion"):
+            draw(ax, motion, dtheta=-0.1)
+        with pytest.raises(orbits.errors.InputError, match="phi given with a Motion"):
+            draw(ax, motion, phi=0.3)
+    ax3d = new_figure().add_subplot(projection="3d")
+    with pytest.raises(orbits.errors.InputError, match="theta and phi given with a Motion"):
+        plotting.plot_binet(ax3d, motion, 1.2, phi=0.3)
+    line = plotting.plot_herpolhode(ax, motion, phi=0.0, points=101)
+    np.testing.assert_array_equal(
+        line.get_xydata(), motion.omega_space(np.linspace(0.0, motion.period, 101))[:, :2]
+    )
+
+
 def test_herpolhode_radii_bound_the_curve_and_are_reached():
     """r_min, r_max (closed form from the invariants) against the exact motion.
 

@@ -165,8 +165,10 @@ def add_parser(subparsers):
         "figures",
         help="draw closed herpolhodes, or the paper's six figures",
         description="With a body: one figure per closed orbit (each n, both "
-        "branches, p/q orbits with --q-max; a p/q orbit is drawn "
-        "over q periods) in the invariable plane, plus a contact "
+        "branches, p/q orbits with --q-max), each drawn over the "
+        "time its herpolhode closes in (the catalog's closes_after: "
+        "T/2 for odd n, q/2 periods when p and q are odd, else q) "
+        "in the invariable plane, plus a contact "
         "sheet of them all in the paper's Fig. 6 order.  With "
         "--paper: Figs. 1-6 of the paper.  With --survey DIR: "
         "Fig. 2 from a survey directory.  Files are written "
