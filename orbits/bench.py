@@ -283,27 +283,41 @@ def bench_motion_rate(points=1_000_000, repeats=3):
 
 
 def _roots_by_scipy(body, n_max, points=2000):
-    """The obvious route: scan theta, brentq on the SciPy-route phase."""
+    """The obvious route: scan theta, brentq on the SciPy-route phase.
+
+    The grid is refined geometrically towards ``theta_c`` on each branch
+    (offsets from 1e-13 to the axis, ``points`` of them), where the roots
+    crowd; the roots' theta, sorted.
+    """
     from scipy.optimize import brentq
 
     moments = body.moments
     theta_c = float(critical_angle(body))
-    found = 0
-    for lo_end, hi_end in ((0.0, theta_c), (theta_c, 0.5 * np.pi)):
-        theta = np.linspace(lo_end, hi_end, points)[1:-1]
+    found = []
+    for side, span in ((-1.0, theta_c), (1.0, 0.5 * np.pi - theta_c)):
+        theta = np.sort(theta_c + side * np.geomspace(1e-13, span, points)[:-1])
         values = scipy_total_phase(moments, theta)
         for n in range(1, n_max + 1):
             level = 2.0 * np.pi * n
             signs = np.flatnonzero(np.diff(np.sign(values - level)) != 0)
             for k in signs:
-                brentq(
-                    lambda t: float(scipy_total_phase(moments, np.array([t]))[0]) - level,
-                    theta[k],
-                    theta[k + 1],
-                    xtol=1e-15,
+                found.append(
+                    brentq(
+                        lambda t: float(scipy_total_phase(moments, np.array([t]))[0]) - level,
+                        theta[k],
+                        theta[k + 1],
+                        xtol=1e-15,
+                    )
                 )
-                found += 1
-    return found
+    return np.sort(np.asarray(found))
+
+
+# the search row's orbits: at n <= 15 every root of the fig6 body is at least
+# 2.2e-12 rad from theta_c, so a grid in theta can hold them all (at n <= 20
+# one is 2.2e-16 away, below an ulp of theta_c; at n <= 50, 2.5e-40)
+SEARCH_N_MAX = 15
+# the roots' theta agree to 4.4e-16 rad (measured); the row's check allows
+SEARCH_THETA_ATOL = 1e-13
 
 
 def _search_counts(function, bodies, levels, keep=None):
@@ -389,8 +403,13 @@ def _agreement(agrees, text):
     return f"{'agree' if agrees else 'DISAGREE'}: {text}"
 
 
-def bench_search(n_max=50, repeats=20):
-    """Every closed orbit with n <= 50 on both branches of the fig6 body."""
+def bench_search(n_max=SEARCH_N_MAX, repeats=20):
+    """Every closed orbit with n <= 15 on both branches of the fig6 body.
+
+    Both arms find the same roots (checked: their count and each theta to
+    :data:`SEARCH_THETA_ATOL`); at n <= 15 a theta grid can still hold every
+    root (:data:`SEARCH_N_MAX`), beyond it only the offset from theta_c can.
+    """
     from .core import search as kernels
     from .search import closed_orbits, find_roots, phase_levels
 
@@ -398,24 +417,39 @@ def bench_search(n_max=50, repeats=20):
     ours = best_time(lambda: closed_orbits(body, n_max=n_max), repeats)
     levels = phase_levels(n_max)[2]
     kernel = best_time(lambda: find_roots(body.moments, levels), repeats)
-    roots = len(closed_orbits(body, n_max=n_max))
+    table = closed_orbits(body, n_max=n_max)
+    roots = len(table)
     theirs = best_time(lambda: _roots_by_scipy(body, n_max), 3)
     found = _roots_by_scipy(body, n_max)
+    ours_theta = np.sort(table["theta"].to_numpy())
+    agrees = found.size == roots
+    worst = float(np.max(np.abs(found - ours_theta), initial=0.0)) if agrees else np.inf
+    agrees = agrees and worst <= SEARCH_THETA_ATOL
     _, new_evaluations, _ = _search_counts(kernels.search_body, [body.moments], levels)
     _, old_evaluations, _ = _search_counts(kernels.search_body_bracketing, [body.moments], levels)
+    deepest = float(np.min(np.abs(table["dtheta"].to_numpy()), initial=np.inf))
     return {
         "_ours": (lambda: closed_orbits(body, n_max=n_max), repeats),
         "task": f"closed orbits n <= {n_max}, both branches (fig6)",
         "timed": f"ours best of {repeats} runs, the baseline best of 3, each after a "
         "warm-up run, in this process",
         "ours_s": ours,
-        "baseline": "theta grid (2000 points) + scipy.optimize.brentq on the SciPy-route phase",
+        "baseline": "theta grid (2000 points, refined geometrically towards theta_c) "
+        "+ scipy.optimize.brentq on the SciPy-route phase",
         "baseline_s": theirs,
         "speedup": theirs / ours,
-        "note": f"ours finds {roots} roots ({kernel * 1e3:.2f} ms in the kernel, the rest "
-        f"is the DataFrame; {new_evaluations / roots:.1f} phase evaluations per "
-        f"root, the bracketing search {old_evaluations / roots:.1f}); the baseline "
-        f"finds {found}: roots closer to theta_c than its grid step are missed",
+        "agrees": agrees,
+        "note": f"{roots} roots, the nearest {deepest:.1e} rad from theta_c "
+        f"({kernel * 1e3:.2f} ms in the kernel, the rest is the DataFrame; "
+        f"{new_evaluations / roots:.1f} phase evaluations per root, the bracketing "
+        f"search {old_evaluations / roots:.1f}); "
+        + _agreement(
+            agrees,
+            f"the baseline finds {found.size}"
+            + (f", theta within {worst:.1e} rad" if found.size == roots else "")
+            + "; beyond n = 15 the roots come closer to theta_c than a theta grid "
+            "can hold (2.5e-40 rad at n = 50), where only the offset dtheta can",
+        ),
     }
 
 

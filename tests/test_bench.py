@@ -709,6 +709,24 @@ def test_search_evaluations_checks_both_searches_agree(monkeypatch):
     assert row["agrees"] is False and "DISAGREE: " in row["note"]
 
 
+def test_search_row_compares_the_same_roots(monkeypatch):
+    """The row printed a ratio (1.3-2x) of ours finding 98 roots at n <= 50
+    against a theta grid finding 7 (an audit): now both arms find the 28 of
+    n <= 15 and the row checks their theta."""
+    row = bench.bench_search(repeats=1)
+    assert row["agrees"] is True and "DISAGREE" not in row["note"]
+    assert row["task"] == "closed orbits n <= 15, both branches (fig6)"
+    assert row["note"].startswith("28 roots, the nearest 2.2e-12 rad from theta_c")
+    assert "the baseline finds 28, theta within" in row["note"]
+    real = bench._roots_by_scipy
+    monkeypatch.setattr(bench, "_roots_by_scipy", lambda body, n_max: real(body, n_max)[1:])
+    row = bench.bench_search(repeats=1)
+    assert row["agrees"] is False and "DISAGREE: the baseline finds 27" in row["note"]
+    monkeypatch.setattr(bench, "_roots_by_scipy", lambda body, n_max: real(body, n_max) + 1e-12)
+    row = bench.bench_search(repeats=1)
+    assert row["agrees"] is False and "DISAGREE: the baseline finds 28" in row["note"]
+
+
 def test_survey_checks_the_loop_against_the_survey(monkeypatch):
     """The survey row never compared the loop's orbits with the survey's."""
     from orbits import search
