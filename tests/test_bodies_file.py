@@ -217,3 +217,16 @@ def test_subnormal_moments_are_refused_as_on_the_command_line(tmp_path, parser, 
     # the smallest normal double itself is a number like any other
     path = write(tmp_path, "I1,I2,I3\n2.2250738585072014e-308,4e-308,5e-308\n")
     np.testing.assert_array_equal(read_bodies_csv(path).moments[0, 0], sys.float_info.min)
+
+
+def test_a_moment_that_reads_as_zero_is_named_as_typed(tmp_path, parser, capsys):
+    """``1e-400`` reads as 0: the message said "moments (0, 2, 2.5) must all
+    be positive", not what was typed (an audit); a typed zero still says that."""
+    path = write(tmp_path, "I1,I2,I3\n1e-400,2,2.5\n")
+    with pytest.raises(InputError, match=r"row 1: I1 1e-400 is below the smallest normal double"):
+        read_bodies_csv(path)
+    path = write(tmp_path, "I1,I2,I3\n0.0e5,2,2.5\n")
+    with pytest.raises(InputError, match=r"moments \(0, 2, 2.5\) must all be positive"):
+        read_bodies_csv(path)
+    assert main(["phase", "--moments", "1e-400", "2", "2.5", "--theta", "0.3"]) == 2
+    assert "'1e-400' is below the smallest normal double" in capsys.readouterr().err

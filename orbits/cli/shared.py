@@ -191,7 +191,9 @@ def moment(text):
     body computed would silently differ from the one typed.
     """
     value = finite(text)
-    if below_normal(value):
+    # 1e-400 reads as 0: below the smallest normal double too, not "0"
+    underflow = value == 0.0 and any(d in text.lower().split("e")[0] for d in "123456789")
+    if below_normal(value) or underflow:
         raise argparse.ArgumentTypeError(below_normal_message(repr(text)))
     return value
 
