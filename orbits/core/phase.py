@@ -423,8 +423,9 @@ def elliptic_parameter(i1, i2, i3, branch, gap_m1, gap_3m, kc):
     SAM, its 1 <-> 3 image on LAM; ``1 - kc^2`` where that is above 1/2.
 
     Near the separatrix the quotient of gaps carries a few ulps of rounding,
-    which put ``m`` above 1 (1 + 4 ulp) on 19 of the 58 rows of the fig6
-    catalog (n up to 30), outside the domain of ``K(m)``; ``kc`` comes from
+    which put ``m`` above 1 (1 + 4 ulp) on 7 of the 58 rows of the t-handle
+    catalog (n up to 30; 67 of 571 with q <= 5), outside the domain of
+    ``K(m)``; ``kc`` comes from
     the factored ``M^2 - 2EI2`` (:func:`orbit_constants`), so ``1 - kc^2``
     is within an ulp of ``m`` and never above 1 (it rounds to 1 only within
     ``1.1e-16`` of the separatrix, where ``dtheta`` is the label to use).
