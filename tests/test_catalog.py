@@ -79,8 +79,8 @@ def test_elliptic_parameter_near_the_separatrix(name):
     """``m = k^2`` stays below 1 and within 8 ulps of mpmath up to n = 30.
 
     The quotient of gaps put ``m`` at 1 + 4 ulp (outside the domain of
-    ``K(m)``) on rows of both committed catalogs, up to 10.3 ulps off; with
-    ``1 - kc^2`` the worst is 6.3 ulps.  Reference: eqn:TK at 40 digits for
+    ``K(m)``) on 67 rows of the committed t-handle catalog, up to 10.3 ulps
+    off (7.7 on fig6); with ``1 - kc^2`` the worst is 6.3 ulps.  Reference: eqn:TK at 40 digits for
     the spin ``theta_crit + dtheta`` of each row (the body's own moments).
     """
     body = Body.preset(name)
