@@ -1359,10 +1359,13 @@ def _check_shells(mesh, path):
     rings), hence a warning, not a refusal; an inner shell wound inside out
     (a cavity) has negative volume and is left out, and one that is inside
     no solid shell's bounding box (so no cavity) is refused with
-    :class:`InputError`.  Shells are the face
-    components, their volumes and boxes summed per label, and the boxes
-    are swept in order of their lowest x: no mesh is built per shell, and
-    many disjoint shells (a rubble pile) cost about their sorting.
+    :class:`InputError`.  Inside a bounding box is necessary for a cavity,
+    not sufficient: a part wound inside out in the hole of a ring passes.
+    Shells are the face components, their volumes and boxes summed per
+    label, and the solid boxes are swept in order of their lowest x: no
+    mesh is built per shell, and many disjoint solid shells (a rubble pile)
+    cost about their sorting (each inside-out shell is compared with every
+    solid one).
     """
     from trimesh.graph import connected_component_labels
 

@@ -21,7 +21,7 @@ from ._args import integer, path_argument
 from .atomic import file_set, refuse_link, write_bytes_under
 from .bodies import Body
 from .cells import literal_text
-from .errors import InputError
+from .errors import InputError, OrbitsError
 from .limits import AGG_MAX_PIXELS, MAX_SECONDS, about_duration, format_bytes, memory_budget
 from .search import closed_orbits
 
@@ -253,49 +253,62 @@ def herpolhode_set(
 
 
 def check_orbits_of(body, orbits, n_max=None, q_max=None):
-    """Refuse catalog rows that are not ``body``'s, or beyond ``n_max``, ``q_max``.
+    """Refuse catalog rows that are no closed orbit of ``body``, or beyond ``n_max``, ``q_max``.
 
     A row is drawn from its ``dtheta`` and the body given: a row of another
     body was drawn as an orbit of this one under its title (a t-handle
     figure titled ``Delta alpha = 2 pi 2`` showed a spin of 2.15 turns
-    that does not close; an audit).  Its ``I1, I2, I3`` must be the body's
-    unit-norm moments (:attr:`Body.normalized_moments`) to 4 ulps.  With
-    ``n_max``/``q_max`` (:func:`herpolhode_set`), a row of level ``n/q``
-    above ``n_max`` or ``q`` above ``q_max`` is refused, not drawn.
+    that does not close; an audit).  The body's total phase at each row's
+    ``dtheta`` (``phi = 0``) must be the row's ``2 pi n/q`` within the
+    catalog's own tolerance (:data:`orbits.search.RESIDUAL_TOLERANCE` of
+    it): the same body built another way (point masses in another order,
+    lengths in other units), whose moments differ in the last digits, is
+    accepted.  With ``n_max``/``q_max`` (:func:`herpolhode_set`), a row of
+    level ``n/q`` above ``n_max`` or ``q`` above ``q_max`` is refused, not
+    drawn.
 
     ``orbits``: a DataFrame of catalog rows, or one row (a named tuple of
-    ``itertuples`` or a Series).
+    ``itertuples`` or a Series), with ``n``, ``q`` and ``dtheta``.
     """
-    mine = body.normalized_moments if isinstance(body, Body) else Body(body).normalized_moments
+    from .phases import total_phase
+    from .search import RESIDUAL_TOLERANCE
+
     try:
-        given = np.column_stack(
-            [
-                np.atleast_1d(np.asarray(_field(orbits, name), dtype=float))
-                for name in ("I1", "I2", "I3")
-            ]
+        n, q, dtheta = (
+            np.atleast_1d(np.asarray(_field(orbits, name), dtype=float))
+            for name in ("n", "q", "dtheta")
         )
     except (AttributeError, KeyError, TypeError, ValueError):
         raise InputError(
-            "catalog rows need their I1, I2, I3 columns (orbits.closed_orbits)"
+            "catalog rows need their n, q and dtheta columns (orbits.closed_orbits)"
         ) from None
-    off = ~np.all(np.abs(given - mine) <= 4.0 * np.spacing(mine), axis=1)
-    if off.any():
-        row = given[np.flatnonzero(off)[0]]
+    target = 2.0 * math.pi * n / q
+    try:
+        phase = np.asarray(total_phase(body, dtheta=dtheta), dtype=float)
+    except OrbitsError as error:  # a dtheta past an axis of this body
         raise InputError(
-            f"a catalog row has moments ({row[0]:.10g}, {row[1]:.10g}, {row[2]:.10g}), "
-            f"not those of the body drawn ({mine[0]:.10g}, {mine[1]:.10g}, {mine[2]:.10g}, "
-            "unit norm): its dtheta is an orbit of another body; draw it with that body"
+            f"catalog rows that are no closed orbits of the body drawn ({error}); "
+            "rows of another body? draw them with that body"
+        ) from None
+    with np.errstate(invalid="ignore"):
+        miss = np.abs(phase - target)
+        off = ~(miss <= RESIDUAL_TOLERANCE * target * (1.0 + 1e-6) + 4.0 * np.spacing(target))
+    if off.any():
+        k = np.flatnonzero(off)[0]
+        raise InputError(
+            f"a catalog row (n/q = {n[k]:.0f}/{q[k]:.0f}, dtheta = {float(dtheta[k])!r}) is "
+            "no closed orbit of the body drawn: its total phase there is "
+            f"{float(phase[k])!r} rad, not 2 pi n/q = {float(target[k])!r}; a row of another "
+            "body? draw it with that body"
         )
     if n_max is None:
         return
     n_max, q_max = integer("n_max", n_max, minimum=1), integer("q_max", q_max, minimum=1)
-    n = np.atleast_1d(np.asarray(_field(orbits, "n")))
-    q = np.atleast_1d(np.asarray(_field(orbits, "q")))
     beyond = (n > n_max * q) | (q > q_max)
     if beyond.any():
         k = np.flatnonzero(beyond)[0]
         raise InputError(
-            f"orbits holds the level n/q = {n[k]}/{q[k]}, beyond n_max = {n_max}, "
+            f"orbits holds the level n/q = {n[k]:.0f}/{q[k]:.0f}, beyond n_max = {n_max}, "
             f"q_max = {q_max}: give the n_max and q_max of the catalog, or only its rows "
             "within them"
         )
@@ -741,16 +754,17 @@ def figure6(n_inset=3):
     Parameters
     ----------
     n_inset : int
-        1 to 7 (the plot shows n <= 8; default 3, the paper's insets).
+        1 to 5 (default 3, the paper's insets; beyond 5 the 2 (n_inset + 1)
+        insets' titles overlap in the row above the plot).
 
     Raises
     ------
     InputError
-        ``n_inset`` not an integer from 1 to 7.
+        ``n_inset`` not an integer from 1 to 5.
     """
     from matplotlib.patches import ConnectionPatch
 
-    n_inset = integer("n_inset", n_inset, minimum=1, maximum=7)
+    n_inset = integer("n_inset", n_inset, minimum=1, maximum=5)
     body = Body.preset("fig6")
     orbits = closed_orbits(body, n_max=8)
     shown = orbits[orbits["n"] <= n_inset + 1].sort_values("theta").reset_index(drop=True)

@@ -88,7 +88,8 @@ CATALOG_SCHEMA = {
         "",
         r"elliptic parameter :math:`k^2` of Eq. (16b) "
         r"(indices :math:`1 \leftrightarrow 3` on LAM), in :math:`(0, 1]`: "
-        "it rounds to 1.0 within 1.1e-16 of the separatrix, where ``dtheta`` labels the orbit",
+        "it rounds to 1.0 when :math:`1 - m < 1.1\\cdot 10^{-16}`, where ``dtheta`` labels "
+        "the orbit",
     ),
     "residual": (
         "rad",

@@ -228,5 +228,11 @@ def test_a_moment_that_reads_as_zero_is_named_as_typed(tmp_path, parser, capsys)
     path = write(tmp_path, "I1,I2,I3\n0.0e5,2,2.5\n")
     with pytest.raises(InputError, match=r"moments \(0, 2, 2.5\) must all be positive"):
         read_bodies_csv(path)
+    path = write(tmp_path, "I1,I2,I3\n-1e-400,2,2.5\n")
+    with pytest.raises(InputError, match=r"I1 -1e-400 is negative and below the smallest normal"):
+        read_bodies_csv(path)
     assert main(["phase", "--moments", "1e-400", "2", "2.5", "--theta", "0.3"]) == 2
-    assert "'1e-400' is below the smallest normal double" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "'1e-400' is below the smallest normal double (2.2e-308): it reads as 0" in err
+    assert main(["phase", "--moments", "-1e-400", "2", "2.5", "--theta", "0.3"]) == 2
+    assert "'-1e-400' is negative and below" in capsys.readouterr().err

@@ -151,6 +151,7 @@ def test_csv_round_trip_is_bit_exact(tmp_path):
         (lambda f: f.assign(closes_after="2"), "closes_after is not that of n/q"),
         (lambda f: f.assign(m=f["m"] * (1 + 1e-9)), "its m is not k\\^2"),
         (lambda f: f.assign(m=1.0 + 2.0**-52), "its m is not k\\^2"),
+        (lambda f: f.assign(m=1.0 + 2.0**-40), "its m is not k\\^2"),
     ],
 )
 def test_read_catalog_checks_schema(tmp_path, mutate, message):
@@ -172,6 +173,28 @@ def test_read_catalog_checks_schema(tmp_path, mutate, message):
         read_catalog(path)
     with pytest.raises(InputError, match=message):
         read_catalog(path, check=False)
+
+
+def test_read_catalog_names_m_above_1_from_before_the_fix(tmp_path):
+    """Catalogs written before m was kept <= 1 hold m = 1 + 4 ulp near the
+    separatrix (7 rows of the t-handle's at n <= 30): refused with the
+    remedy (regenerate), not as a hand edit; m above 1 that is no rounding
+    of k^2 is an edit."""
+    frame = orbits.closed_orbits(Body.preset("t-handle"), n_max=30)
+    near = frame["m"] == 1.0
+    assert near.sum() >= 7
+    old = frame.assign(m=np.where(near, 1.0 + 4 * np.spacing(1.0), frame["m"]))
+    data = csv_text(old)
+    path = tmp_path / "old.csv"
+    rows, digest = data.count("\n") - 1, hashlib.sha256(data.encode()).hexdigest()
+    path.write_text(f"# {ROWS_KEY}{rows}\n# {CHECKSUM_KEY}{digest}\n{data}")
+    first = int(np.flatnonzero(near)[0]) + 1
+    with pytest.raises(InputError) as error:
+        read_catalog(path)
+    message = str(error.value)
+    assert f"data row {first} (and {near.sum() - 1} more): its m is above 1 by rounding" in message
+    assert message.endswith("regenerate the catalog with the command in its header")
+    assert "edited by hand" not in message
 
 
 def test_read_catalog_missing_file(tmp_path):

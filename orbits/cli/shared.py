@@ -191,9 +191,14 @@ def moment(text):
     body computed would silently differ from the one typed.
     """
     value = finite(text)
-    # 1e-400 reads as 0: below the smallest normal double too, not "0"
-    underflow = value == 0.0 and any(d in text.lower().split("e")[0] for d in "123456789")
-    if below_normal(value) or underflow:
+    if value == 0.0 and any(d in text.lower().split("e")[0] for d in "123456789"):
+        # 1e-400 reads as 0: say so, not "moments (0, 2, 2.5)"
+        sign = "negative and " if text.strip().startswith("-") else ""
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is {sign}below the smallest normal double (2.2e-308): it reads as "
+            "0; give the moments in larger units"
+        )
+    if below_normal(value):
         raise argparse.ArgumentTypeError(below_normal_message(repr(text)))
     return value
 

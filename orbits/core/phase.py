@@ -425,10 +425,10 @@ def elliptic_parameter(i1, i2, i3, branch, gap_m1, gap_3m, kc):
     Near the separatrix the quotient of gaps carries a few ulps of rounding,
     which put ``m`` above 1 (1 + 4 ulp) on 7 of the 58 rows of the t-handle
     catalog (n up to 30; 67 of 571 with q <= 5), outside the domain of
-    ``K(m)``; ``kc`` comes from
-    the factored ``M^2 - 2EI2`` (:func:`orbit_constants`), so ``1 - kc^2``
-    is within an ulp of ``m`` and never above 1 (it rounds to 1 only within
-    ``1.1e-16`` of the separatrix, where ``dtheta`` is the label to use).
+    ``K(m)``; ``kc`` comes from the factored ``M^2 - 2EI2``
+    (:func:`orbit_constants`), so ``1 - kc^2`` is as accurate as ``kc^2``
+    (a few ulps, scaled by ``kc^2 < 1/2``) and never above 1 (it rounds to
+    1 when ``1 - m < 1.1e-16``, where ``dtheta`` is the label to use).
     """
     complement = kc * kc
     if complement < 0.5:
