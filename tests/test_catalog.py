@@ -539,3 +539,17 @@ def test_catalog_verify_fails_on_a_closure_error(tmp_path, monkeypatch, capsys, 
     failed = "orbits: error: 4 closure errors above 1e-08 rad (and the check's own error)"
     assert (failed in err) == (code == 1)
     assert read_catalog(out)["closure_error"].min() >= added
+
+
+def test_catalog_verify_of_no_orbit_says_so(tmp_path, capsys):
+    """An empty catalog printed "largest closure error 0.00e+00 rad", a
+    check that never ran (an audit)."""
+    out = tmp_path / "none.csv"
+    command = ["catalog", "--preset", "fig6", "--n-max", "1", "--q-max", "5", "--verify"]
+    assert main([*command, "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert "0 closed orbits of 1 body written" in err and err.rstrip().endswith(
+        "; no orbit to verify"
+    )
+    assert "closure error" not in err
+    assert len(read_catalog(out)) == 0

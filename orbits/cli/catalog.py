@@ -55,9 +55,11 @@ def _cmd_catalog(args):
         print(f"orbits: warning: {message}", file=sys.stderr)
     elapsed = time.perf_counter() - start
     note = ""
-    if args.verify:
-        worst = float(frame["closure_error"].max()) if len(frame) else 0.0
+    if args.verify and len(frame):
+        worst = float(frame["closure_error"].max())
         note = f"; largest closure error {worst:.2e} rad"
+    elif args.verify:
+        note = "; no orbit to verify"
     print(
         f"orbits catalog: {plural(len(frame), 'closed orbit')} of "
         f"{plural(len(bodies), 'body', 'bodies')} written to "
