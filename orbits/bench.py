@@ -1555,6 +1555,8 @@ def format_table(report):
         ours = _seconds(row["ours_s"]) if _finite(row["ours_s"]) else "-"
         baseline = _seconds(row["baseline_s"]) if _finite(row["baseline_s"]) else "-"
         ratio = f"{row['speedup']:.1f}x" if _finite(row["speedup"]) else "-"
+        if row.get("agrees") is False:  # no ratio of two arms that did not agree
+            ratio = "DISAGREE"
         lines.append(f"{row['task']:<{width}} {ours:>10} {baseline:>10} {ratio:>8}")
         if row.get("skipped"):
             lines.append(f"    skipped: {row['skipped']}")

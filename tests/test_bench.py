@@ -766,6 +766,9 @@ def test_a_row_that_disagrees_exits_1_after_the_table(capsys, monkeypatch):
     captured = capsys.readouterr()
     assert "agreement check: both sides agree in 1 of 2 rows" in captured.out
     assert "NOT ALL: DISAGREE" in captured.out
+    # no ratio for the row whose two sides disagree; the other keeps its own
+    table = {line.split()[0]: line.split()[-1] for line in captured.out.splitlines() if line}
+    assert table["search"] == "DISAGREE" and table["survey"].endswith("x")
     assert captured.err.strip().splitlines() == [
         "orbits: error: the two sides disagree: search kernel"
     ]
