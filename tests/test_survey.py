@@ -22,7 +22,9 @@ from orbits.survey import (
     Survey,
     chunk_columns,
     chunk_tables,
+    compute,
     compute_chunk,
+    derive_orbit_rows,
     load_manifest,
     read_survey,
     search_chunk,
@@ -1004,3 +1006,267 @@ def test_table_workers_where_no_threading_layer_loads(monkeypatch):
     monkeypatch.setattr(numba, "threading_layer", no_layer)
     monkeypatch.setattr(tasks, "start_threads", no_layer)
     assert runner.table_workers(10, 1, 100) == 0
+
+
+# ------------------------------------------------------------------------
+# Each test below kills a mutant of orbits/survey or core/rows that passed
+# the suite (a mutation audit, 2026-11-29: 53 mutants, 18 survivors that
+# changed an output or a report).
+
+
+def _overflow_rows(moments, levels, capacity):
+    from orbits.core import search as K
+
+    n = len(moments)
+    info = np.empty((n, K.INFO_SIZE))
+    br = np.empty((n, capacity), np.int8)
+    le = np.empty((n, capacity), np.int64)
+    off = np.empty((n, capacity))
+    found = np.empty(n, np.int64)
+    K.search_many(moments, levels, br, le, off, found, info)
+    return found, compute._flatten(moments, levels, br, le, off, found, info)
+
+
+def test_overflowed_bodies_are_searched_again_to_the_same_rows():  # C4 C5 C6
+    """Bodies whose roots overflow their row are searched again (compute._flatten):
+    the same rows, in dtheta order, with their branch (no test reached it)."""
+    from orbits.bodies import unit_moments
+    from orbits.search import phase_levels, searched
+
+    moments = np.ascontiguousarray(unit_moments(orbits.region_sample(6))[0]).reshape(-1, 3)
+    p, q, lv = phase_levels(6, 1)
+    levels = np.ascontiguousarray(lv[np.flatnonzero(searched(p, q))])
+    _, good = _overflow_rows(moments, levels, 2 * levels.size + 8)
+    found, small = _overflow_rows(moments, levels, 3)
+    assert (found < 0).sum() == 4 and len(small[0]) == 32
+    for a, b in zip(good, small):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_min_at_end_tolerances_of_the_survey():  # C8 C9
+    """min_at_end is True only within the survey's own end tolerances."""
+    from orbits.core import search as K
+
+    found = compute.search_chunk(np.array([[0.3, 0.6, 0.9]] * 2), 6)
+    i1, i2, i3 = found.moments[0]
+    end = min(
+        2 * np.pi * np.sqrt(i1 * i2 / ((i3 - i2) * (i3 - i1))),
+        2 * np.pi * np.sqrt(i2 * i3 / ((i2 - i1) * (i3 - i1))),
+    )
+    info = found.info.copy()
+    w = info[:, K.INFO_WIDTH_SAM]
+    info[:, K.INFO_MIN_SAM] = [end, end * (1 - 1e-9)]  # at the end value / 1e-9 below it
+    info[:, K.INFO_MIN_AT_SAM] = [-(w[0] - 1e-7), -w[1]]  # 1e-7 rad inside / at the end
+    info[:, K.INFO_MIN_LAM] = np.inf
+    found.info = info
+    bodies, _ = compute.chunk_columns(found, 0, "compact")
+    assert bodies["min_at_end"].tolist() == [False, False]
+
+
+def test_estimate_counts_a_partial_last_chunk():  # C10
+    """The estimate counts the last, partial chunk."""
+    assert compute.survey_estimate(15, 3, 1, 10)[1] == pytest.approx(
+        0.0047544713439166865, rel=1e-12
+    )
+
+
+def test_the_advised_chunk_fits(monkeypatch):  # C11
+    """The --chunk a refusal advises fits the memory budget; one more does not."""
+    budget = compute.survey_estimate(1000, 30, 1, 1000)[0] * 0.5
+    monkeypatch.setattr(compute, "memory_budget", lambda: budget)
+    with pytest.raises(InputError, match=r"use --chunk 499 or less"):
+        compute.check_survey_bounds(1000, 30, 1, 1000)
+    assert (
+        compute.survey_estimate(499, 30, 1, 499)[0]
+        <= budget
+        < compute.survey_estimate(500, 30, 1, 500)[0]
+    )
+
+
+def test_a_forged_branch_label_is_damage(tmp_path):  # C12
+    """A branch label that is not the branch of its dtheta is refused on read."""
+    s = Survey.grid(tmp_path / "s", 10, 4, chunk=1000, fmt="csv")
+    s.run()
+    part = tmp_path / "s" / "orbits" / "part-00000.csv"
+    f = pd.read_csv(part)
+    f.loc[0, "branch"] = "LAM" if f.loc[0, "branch"] == "SAM" else "SAM"
+    write_part(f, part, "csv")
+    s.ledger.parts["0"]["orbits"]["sha256"] = sha256_file(part)
+    s.ledger.write_manifest()
+    with pytest.raises(InputError, match="branch is not the branch of its dtheta"):
+        read_survey(tmp_path / "s")
+
+
+def test_a_row_of_the_next_chunks_body_is_an_input_error():  # C13
+    """An orbit row of a body outside the chunk is an InputError, not an IndexError."""
+    unit = np.array([[0.3, 0.6, 0.9]]) / np.linalg.norm([0.3, 0.6, 0.9])
+    row = pd.DataFrame(
+        {
+            "body": [1],
+            "branch": pd.Categorical(["SAM"], ["SAM", "LAM"]),
+            "n": [4],
+            "q": [1],
+            "dtheta": [0.0],
+        }
+    )
+    with pytest.raises(InputError, match="not orbits of the survey"):
+        derive_orbit_rows(row, unit, 0, 4, 1)
+
+
+def test_names_follow_their_bodies_across_chunks(tmp_path):  # U1
+    """Each chunk's names are its own bodies' names."""
+    bs = [orbits.Body((x, 0.6, 0.8), name=n) for x, n in ((0.3, "a"), (0.4, "b"), (0.5, "c"))]
+    Survey.from_bodies(tmp_path / "s", bs, 3, chunk=1).run()
+    assert read_survey(tmp_path / "s")[0]["name"].tolist() == ["a", "b", "c"]
+
+
+def test_local_progress_counts_bodies(tmp_path):  # U4
+    """Local progress counts bodies, not orbits."""
+    seen = []
+    Survey.grid(tmp_path / "s", 12, 3, chunk=20).run(progress=seen.append)
+    assert seen and sum(seen) == 56
+
+
+def test_distributed_keeps_columns_all_and_counts_bodies(tmp_path):  # U3 U5
+    """The dask path writes columns="all" as the local one, byte for byte, and
+    its progress counts bodies (it wrote compact parts under an "all" manifest)."""
+    distributed = pytest.importorskip("distributed")
+    with (
+        distributed.LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+        ) as cl,
+        distributed.Client(cl) as c,
+    ):
+        seen = []
+        Survey.grid(tmp_path / "d", 12, 3, chunk=20, columns="all").run(
+            scheduler=c, progress=seen.append
+        )
+    Survey.grid(tmp_path / "l", 12, 3, chunk=20, columns="all").run()
+    assert sum(seen) == 56
+    for t in ("bodies", "orbits"):
+        assert (tmp_path / "d" / t / "part-00000.parquet").read_bytes() == (
+            tmp_path / "l" / t / "part-00000.parquet"
+        ).read_bytes()
+    assert len(read_survey(tmp_path / "d")[1].columns) == 20
+
+
+def test_table_workers_leave_room_for_the_chunk_being_searched(monkeypatch):  # U8
+    """The table workers leave memory for the chunk being searched."""
+    import orbits.limits
+    from orbits.survey.runner import table_workers
+
+    per_chunk = compute.survey_estimate(50, 6, 1, 50)[0] / 2
+    compute.search_chunk(np.array([[0.3, 0.6, 0.8]]), 3)  # a parallel kernel has run
+    monkeypatch.setattr(orbits.limits, "memory_budget", lambda: 2.5 * per_chunk)
+    assert table_workers(6, 1, 50) in (0, 1)
+
+
+def test_more_than_ten_chunks_read_in_order(tmp_path):  # T1
+    """Chunks 10 and 11 are read after chunk 2 (numeric, not text, order)."""
+    Survey.grid(tmp_path / "s", 12, 3, chunk=5).run()
+    bodies, table = read_survey(tmp_path / "s")
+    assert bodies["body"].tolist() == list(range(56))
+    assert table["body"].is_monotonic_increasing
+
+
+def test_csv_bodies_keep_integer_columns(tmp_path):  # T3
+    """A CSV survey's integer body columns read back as int64."""
+    Survey.grid(tmp_path / "s", 8, 3, fmt="csv").run()
+    bodies, _ = read_survey(tmp_path / "s")
+    for name in ("body", "orbits", "n_smallest", "n_largest", "unresolved"):
+        assert bodies[name].dtype == np.int64, name
+
+
+def _one_csv_chunk(tmp_path):
+    s = Survey.grid(tmp_path / "s", 10, 3, chunk=1000, fmt="csv")
+    s.run()
+    return s, tmp_path / "s" / "orbits" / "part-00000.csv"
+
+
+def test_unverified_read_refuses_orbits_out_of_body_order(tmp_path):  # T6
+    """verify=False still refuses orbit rows out of their bodies' order."""
+    s, part = _one_csv_chunk(tmp_path)
+    lines = part.read_bytes().splitlines(keepends=True)
+    body = [line.split(b",")[0] for line in lines]
+    k = next(i for i in range(2, len(lines)) if body[i] != body[i - 1])
+    lines[k - 1], lines[k] = lines[k], lines[k - 1]
+    part.write_bytes(b"".join(lines))
+    with pytest.raises(InputError, match="not of the chunk's bodies"):
+        read_survey(tmp_path / "s", verify=False)
+
+
+def test_unverified_read_refuses_a_missing_orbit_row(tmp_path):  # T7
+    """verify=False still refuses a chunk whose orbit rows miss one."""
+    s, part = _one_csv_chunk(tmp_path)
+    part.write_bytes(b"".join(part.read_bytes().splitlines(keepends=True)[:-1]))
+    s.ledger.parts["0"]["orbits"]["rows"] -= 1
+    s.ledger.write_manifest()
+    with pytest.raises(InputError, match="93 orbit rows, but the bodies table counts 94"):
+        read_survey(tmp_path / "s", verify=False)
+
+
+def test_a_forged_row_count_is_repaired_by_a_rerun(tmp_path):  # L3
+    """A ledger row count that is not the part's is damage, and a rerun repairs it."""
+    from orbits.survey.ledger import check_parts
+
+    s = Survey.grid(tmp_path / "s", 10, 3, chunk=1000)
+    s.run()
+    s.ledger.parts["0"]["orbits"]["rows"] += 1
+    s.ledger.write_manifest()
+    assert check_parts(tmp_path / "s")["damaged"] == [
+        "chunk 0: orbits/part-00000.parquet has 94 rows, the ledger says 95"
+    ]
+    Survey.grid(tmp_path / "s", 10, 3, chunk=1000).run()
+    assert len(read_survey(tmp_path / "s")[1]) == 94
+
+
+def test_a_bodies_part_short_of_its_chunk_is_damage(tmp_path):  # L8
+    """A bodies part with fewer rows than its chunk's bodies is damage."""
+    from orbits.survey.ledger import check_parts
+
+    s, _ = _one_csv_chunk(tmp_path)
+    bp = tmp_path / "s" / "bodies" / "part-00000.csv"
+    bp.write_bytes(b"".join(bp.read_bytes().splitlines(keepends=True)[:-1]))
+    e = s.ledger.parts["0"]["bodies"]
+    e["rows"] -= 1
+    e["sha256"] = sha256_file(bp)
+    s.ledger.write_manifest()
+    assert check_parts(tmp_path / "s")["damaged"] == [
+        "chunk 0: bodies/part-00000.csv: 38 rows for 39 bodies"
+    ]
+
+
+def test_a_flat_body_at_exactly_two_pi_is_no_two_pi_orbit(tmp_path):  # P1
+    """A minimum of exactly 2 pi (a flat body) is no 2 pi orbit in the report."""
+    s = Survey.from_bodies(tmp_path / "s", [[0.3, 0.6, 0.9], [1.0, 1.7, 2.3]], 4)
+    report = s.run()
+    assert read_survey(tmp_path / "s")[0]["min_total_phase"][0] == 2 * np.pi
+    assert report["bodies_with_a_two_pi_orbit"] == 0
+
+
+def test_report_combines_chunk_summaries_in_chunk_order(tmp_path):  # P3
+    """The report's counterexamples come in chunk order, not in arrival order."""
+    from orbits.survey.report import bodies_summary, build_report
+
+    Survey.grid(tmp_path / "s", 12, 3, chunk=30).run()
+
+    def one(body):
+        return bodies_summary(
+            {
+                "min_at_end": np.array([False]),
+                "min_total_phase": np.array([7.0]),
+                "orbits": np.array([1]),
+                "unresolved": np.array([0]),
+                "body": np.array([body]),
+                "I1": np.array([0.3]),
+                "I2": np.array([0.6]),
+                "I3": np.array([0.7]),
+                "min_theta": np.array([1.0]),
+            }
+        )
+
+    report = build_report(tmp_path / "s", 3, 1, 0, verify=False, summaries={1: one(40), 0: one(3)})
+    assert [r["body"] for r in report["conjecture_minimum_at_the_ends"]["counterexamples"]] == [
+        3,
+        40,
+    ]
