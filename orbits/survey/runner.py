@@ -541,17 +541,20 @@ def _chunk_on_worker(expected, moments, n_max, q_max, first_id, columns):
             f"not this run's {expected[0]} (sources {expected[1][:12] or 'unknown'}): "
             "install the same orbits on the workers as here"
         )
+
+    def tables():
+        return compute.chunk_columns(
+            compute.search_chunk(moments, n_max, q_max), first_id, columns
+        )
+
     global _first_chunk_done
     if not _first_chunk_done:
-        with _FIRST_CHUNK:
+        with _FIRST_CHUNK:  # the first chunk alone on a worker (its kernels load once)
             if not _first_chunk_done:
-                tables = compute.chunk_columns(
-                    compute.search_chunk(moments, n_max, q_max), first_id, columns
-                )
+                first = tables()
                 _first_chunk_done = True
-                return tables
-    chunk = compute.search_chunk(moments, n_max, q_max)
-    return compute.chunk_columns(chunk, first_id, columns)
+                return first
+    return tables()
 
 
 class _Done:
