@@ -395,7 +395,8 @@ def format_bytes(count):
         return "more bytes than a double can count"
     for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
         if count < 1024 or unit == "PiB":
-            return f"{count:.3g} {unit}"
+            # 1000 to 1023 in whole units: %.3g would write 1e+03
+            return f"{count:.3g} {unit}" if count < 999.5 else f"{count:.0f} {unit}"
         count /= 1024
     return f"{count:.3g} EiB"
 

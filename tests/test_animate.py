@@ -1138,3 +1138,24 @@ def test_an_ffmpeg_that_cannot_be_found_is_one_line(tmp_path, monkeypatch):
     with pytest.raises(InputError, match=rf"^cannot write {target}: no usable ffmpeg \(No ffmpeg"):
         animate.poinsot_animation(Motion.from_spin(FIG6, 0.5), frames=4, dpi=30, out=target)
     assert list(tmp_path.iterdir()) == []
+
+
+# ------------------------------------------------------------------------
+# Each test below kills a mutant of orbits.animation_scene that passed the suite (a
+# mutation audit, 2026-11-29: 47 mutants of the figure, plotting, cell and
+# limit code; 14 survived, and 11 were caught only by the pixel baselines,
+# which skip on other matplotlib/FreeType versions).
+
+
+# M33: the space panel holds the herpolhode with a 15 % margin, also for a thin rod
+def test_space_panel_holds_a_thin_rods_herpolhode_with_its_margin():
+    from orbits.animation_scene import PoinsotScene
+
+    rod = Body((0.002, 0.998001, 1.0))
+    motion = orbits.Motion.from_spin(rod, 1.5613619707)
+    scene = PoinsotScene(motion, np.linspace(0.0, motion.period, 9))
+    half, reach = scene.extents()
+    radius = np.hypot(scene.rho_space[:, 0], scene.rho_space[:, 1]).max()
+    assert 1.15 * radius > reach  # the herpolhode, not the ellipsoid, sets the box
+    assert half == pytest.approx(1.15 * radius, rel=1e-12)
+    assert reach == pytest.approx(1.05 * scene.semi_axes.max(), rel=1e-12)

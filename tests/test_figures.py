@@ -4,6 +4,9 @@ import matplotlib
 
 matplotlib.use("Agg")
 
+import math  # noqa: E402
+import re  # noqa: E402
+
 import matplotlib.image as mpimg  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
@@ -11,6 +14,7 @@ import pytest  # noqa: E402
 import orbits  # noqa: E402
 from orbits import Body, figures  # noqa: E402
 from orbits.cli import main  # noqa: E402
+from orbits.errors import InputError  # noqa: E402
 
 FIG6 = Body.preset("fig6")
 
@@ -608,3 +612,204 @@ def test_contact_sheet_of_rows_without_closes_after(tmp_path):
         assert any("(2T)" in title for title in titles)
         row = next(table[table.q == 2].itertuples())
         assert plotting.orbit_label(row, "fig6").endswith("closes after 2 T (drawn once)")
+
+
+# ------------------------------------------------------------------------
+# Each test below kills a mutant of orbits.figures or orbits.cli.figures that passed the suite (a
+# mutation audit, 2026-11-29: 47 mutants of the figure, plotting, cell and
+# limit code; 14 survived, and 11 were caught only by the pixel baselines,
+# which skip on other matplotlib/FreeType versions).
+
+
+@pytest.fixture(scope="module")
+def fig6_catalog():
+    return orbits.closed_orbits(FIG6, n_max=3, q_max=2)
+
+
+# M10: the figure-set memory estimate must count the curves' samples
+def test_figure_set_memory_counts_the_curve_samples(monkeypatch):
+    # one orbit: the contact sheet (6.4 x 3.2 in at 150 dpi) is ~0.46 Mpx, a few
+    # RGBA buffers ~6 MB; a curve of 50,000 turns is drawn with >= 100 samples a
+    # turn = 5e6 samples, >= 16 bytes each (x, y doubles) = 80 MB at the least
+    monkeypatch.setattr(figures, "memory_budget", lambda: 50 * 2**20)
+    figures.check_figure_set(1, ("png",), turns=[1.0])  # the sheet alone fits
+    with pytest.raises(InputError, match="memory"):
+        figures.check_figure_set(1, ("png",), turns=[50_000.0])
+
+
+# M12: the turns drawn are those over closes_after (T/2 for odd n), not q periods
+def test_drawn_turns_follow_closes_after(fig6_catalog):
+    turns = figures.drawn_turns(fig6_catalog)
+    for row, got in zip(fig6_catalog.itertuples(), turns):
+        # Delta alpha = 2 pi n/q a period; odd n (q = 1) closes after T/2,
+        # p/q = 3/2 or 5/2 (p odd, q even) after q = 2 periods
+        expected = {(3, 1): 1.5, (2, 1): 2.0, (3, 2): 3.0, (5, 2): 5.0}[(row.n, row.q)]
+        assert got == pytest.approx(expected, rel=1e-12)
+
+
+# M15: the contact sheet's pixel height is bounded by Agg's 65535 (at most 1584 orbits)
+def test_contact_sheet_height_limit_is_1584_orbits(monkeypatch):
+    monkeypatch.setattr(figures, "memory_budget", lambda: 1 << 50)
+    # 1584 orbits: 8 columns, 198 rows, (2.2 * 198 + 1) in * 150 dpi = 65490 px
+    figures.check_figure_set(1584, ("png",))
+    # 1585: 199 rows, 65820 px > 65535
+    with pytest.raises(InputError, match="pixels tall"):
+        figures.check_figure_set(1585, ("png",))
+
+
+# M36: orbits figures --formats is honoured for a body's set
+def test_cli_figure_set_writes_only_the_formats_asked(tmp_path, capsys):
+    from orbits.cli import main
+
+    out = tmp_path / "set"
+    argv = [
+        "figures",
+        "--t-handle",
+        "8",
+        "4",
+        "1",
+        "--n-max",
+        "2",
+        "--formats",
+        "svg",
+        "--out",
+        str(out),
+    ]
+    assert main(argv) == 0
+    names = sorted(p.name for p in out.iterdir())
+    assert names and all(name.endswith(".svg") for name in names), names
+    assert "contact_sheet.svg" in names
+
+
+# M37: the figures' own search estimate takes --q-max into account
+def test_cli_figures_estimates_its_search_with_q_max(tmp_path, capsys, monkeypatch):
+    import orbits.search
+    from orbits.cli import main
+
+    def stop(*args, **kwargs):
+        raise InputError("stopped before the search")
+
+    monkeypatch.setattr(orbits.search, "closed_orbits", stop)
+    # n_max = 2, q_max = 800: 2 * 800 * 801 / 2 = 640,800 candidate fractions,
+    # at the measured 7 us each about 4.5 s: announced before the search
+    argv = [
+        "figures",
+        "--preset",
+        "fig6",
+        "--n-max",
+        "2",
+        "--q-max",
+        "800",
+        "--out",
+        str(tmp_path / "o"),
+    ]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "orbits figures: estimated" in err and "stopped before the search" in err
+    # a hopeless q_max is refused by the figures' search estimate itself
+    argv[6] = "1000000"
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "the figures' search" in err[0] and "q_max=1000000" in err[0]
+
+
+# M41: a row whose phase misses 2 pi n/q by far more than the catalog's 1e-10 is refused
+def test_a_row_that_misses_its_level_by_1e_8_is_refused():
+    from orbits.search import RESIDUAL_TOLERANCE
+
+    row = next(orbits.closed_orbits(FIG6, n_max=2).itertuples())
+    target = 2 * math.pi * row.n / row.q
+    # move dtheta until the phase misses by ~1e-8 relative (100x the tolerance)
+    step = 1e-9 * abs(row.dtheta)
+    for _ in range(60):
+        moved = row._replace(dtheta=row.dtheta + step)
+        miss = abs(float(orbits.total_phase(FIG6, dtheta=moved.dtheta)) - target) / target
+        if miss > 1e-8:
+            break
+        step *= 2
+    assert 50 * RESIDUAL_TOLERANCE < miss < 1e-6
+    with pytest.raises(InputError, match="no closed orbit of the body drawn"):
+        figures.check_orbits_of(FIG6, moved)
+    figures.check_orbits_of(FIG6, row)  # the row itself is drawn
+
+
+# M44: "no closed orbit" message gives the smallest total phase in turns (not radians)
+def test_cli_no_orbit_message_states_turns(tmp_path, capsys):
+    from orbits.cli import main
+
+    # fig6: Delta alpha > 2 pi for every spin, and the n = 2 orbits exist, so
+    # the smallest total phase is between 1 and 2 turns
+    argv = ["figures", "--preset", "fig6", "--n-max", "1", "--out", str(tmp_path / "o")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    found = re.search(r"smallest total phase is ([0-9.e+-]+) turns", err)
+    assert found, err
+    assert 1.0 < float(found.group(1)) < 2.0
+
+
+# M45: the search estimate's row bound covers a real catalog (two orbits a level)
+def test_search_estimate_row_bound_covers_a_real_catalog():
+    from orbits import limits
+
+    n_max = 10
+    rows = len(orbits.closed_orbits(FIG6, n_max=n_max))  # n = 2..10, SAM and LAM: 18
+    assert rows == 18
+    one, _ = limits.search_estimate(n_max, 1, 1)
+    none, _ = limits.search_estimate(n_max, 1, 0)
+    bound = (one - none - limits._BYTES_PER_BODY) / limits._BYTES_PER_ROW
+    assert bound >= rows
+
+
+# M06, M22: Fig. 3 states the T-handle's moments and its period (4 decimals)
+def test_fig3_states_the_moments_and_the_period():
+    figure = figures.figure3()
+    moments = _numbers(figure._suptitle.get_text())
+    np.testing.assert_allclose(moments, Body.preset("t-handle").normalized_moments, atol=5e-7)
+    period = orbits.Motion.from_spin(Body.preset("t-handle"), **figures.T_HANDLE_SPIN).period
+    labels = [
+        t.get_text()
+        for ax in figure.get_axes()
+        for child in ax.child_axes
+        for t in child.get_xticklabels()
+        if t.get_text().startswith("T = ")
+    ]
+    assert labels == [f"T = {period:.4f} s"]
+
+
+# M07: Fig. 1 (b) gives the equivalent ellipsoid's (a, b, c) in order
+def test_fig1_states_the_semi_axes_in_order():
+    figure = figures.figure1()
+    title = figure.get_axes()[1].get_title()
+    a, b, c = _numbers(title.split("=")[-1])
+    want = Body.t_handle(8.0, 4.0, 1.0).equivalent_ellipsoid()
+    np.testing.assert_allclose((a, b, c), want, atol=6e-6)
+    assert a > b > c
+
+
+# M05, M40, M08: contact sheet labels on the outer panels; every curve inside its view
+def test_contact_sheet_labels_and_view(fig6_catalog):
+    sheet = figures.contact_sheet(FIG6, fig6_catalog, columns=3)  # 7 panels: 3 rows
+    axes = [ax for ax in sheet.get_axes()]
+    grid = np.array(axes[:9]).reshape(3, 3)
+    for r in range(3):
+        assert "omega_y" in grid[r, 0].get_ylabel()
+        assert all(grid[r, c].get_ylabel() == "" for c in (1, 2))
+    # x labels under the lowest drawn panel of each column: row 2 col 0, row 1 cols 1-2
+    assert "omega_x" in grid[2, 0].get_xlabel()
+    assert "omega_x" in grid[1, 1].get_xlabel() and "omega_x" in grid[1, 2].get_xlabel()
+    for ax in axes[:7]:
+        xy = ax.get_lines()[0].get_xydata()
+        lo, hi = ax.get_xlim()
+        assert np.abs(xy).max() < hi and -hi == lo
+
+
+# M03: Fig. 6's inset titles give theta to 4 decimals
+def test_fig6_inset_titles_give_theta():
+    figure = figures.figure6()
+    for inset, row in figure.insets:
+        theta = re.search(r"\$\\theta\$=([0-9.]+)", inset.get_title()).group(1)
+        assert len(theta.split(".")[1]) == 4 and abs(float(theta) - row.theta) <= 5e-5
+
+
+def _numbers(text):
+    return [float(x) for x in re.findall(r"-?\d+\.\d+(?:e[+-]?\d+)?", text)]

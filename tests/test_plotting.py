@@ -4,12 +4,15 @@ import matplotlib
 
 matplotlib.use("Agg")
 
+import math  # noqa: E402
+import re  # noqa: E402
+
 import matplotlib as mpl  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
 import orbits  # noqa: E402
-from orbits import Body, plotting  # noqa: E402
+from orbits import Body, figures, plotting  # noqa: E402
 from orbits.figures import new_figure  # noqa: E402
 
 FIG6 = Body.preset("fig6")
@@ -531,3 +534,80 @@ def test_a_flag_that_is_not_a_bool_is_refused_before_drawing(draw):
     with pytest.raises(orbits.ArgumentTypeError, match="must be True or False"):
         draw(ax)
     assert not ax.get_lines() and not ax.collections and not ax.images
+
+
+# ------------------------------------------------------------------------
+# Each test below kills a mutant of orbits.plotting that passed the suite (a
+# mutation audit, 2026-11-29: 47 mutants of the figure, plotting, cell and
+# limit code; 14 survived, and 11 were caught only by the pixel baselines,
+# which skip on other matplotlib/FreeType versions).
+
+
+@pytest.fixture(scope="module")
+def fig6_catalog():
+    return orbits.closed_orbits(FIG6, n_max=3, q_max=2)
+
+
+# M19: the direction arrow runs along the curve for 0.18 r_max of arc length
+def test_direction_arrow_length_is_a_fraction_of_r_max(fig6_catalog):
+    checked = 0
+    for row in fig6_catalog.itertuples():
+        r_min, r_max = plotting.herpolhode_radii(FIG6, dtheta=row.dtheta)
+        if r_min > 0.8 * r_max:
+            continue
+        ax = new_figure().add_subplot()
+        marks = figures.draw_closed_herpolhode(ax, FIG6, row)
+        xy = marks["curve"].get_xydata()
+        head = np.array(marks["arrow"].xy)
+        k = int(np.flatnonzero((xy == head).all(axis=1))[0])
+        steps = np.hypot(*np.diff(xy, axis=0).T)
+        arc = steps[:k].sum()
+        assert 0.18 * r_max <= arc <= 0.18 * r_max + steps.max() + 1e-15
+        checked += 1
+    assert checked
+
+
+# M47: the total-phase plot spans theta over [0, pi/2], the whole curve in view
+def test_total_phase_plot_spans_zero_to_half_pi():
+    ax = new_figure().add_subplot()
+    drawn = plotting.plot_total_phase(ax, FIG6, points=400)
+    lo, hi = ax.get_xlim()
+    assert lo == 0.0 and hi == pytest.approx(math.pi / 2, rel=1e-15)
+    x = drawn["curve"].get_xdata()
+    assert x.max() <= hi and x.max() > 1.5
+
+
+# ---------------------------------------------------------------------------
+# Data-level guards for mutants killed here only by the pixel baselines
+# (tests/test_figure_images.py skips on any other matplotlib/FreeType pair).
+
+
+def _numbers(text):
+    return [float(x) for x in re.findall(r"-?\d+\.\d+(?:e[+-]?\d+)?", text)]
+
+
+# M16, M25: a closed orbit's title: theta to 6 decimals, and odd n "closes after 1/2 T"
+def test_orbit_label_theta_digits_and_half_period(fig6_catalog):
+    for row in fig6_catalog.itertuples():
+        text = plotting.orbit_label(row, "fig6")
+        theta = re.search(r"\$\\theta\$ = ([0-9.]+)", text).group(1)
+        assert len(theta.split(".")[1]) == 6 and abs(float(theta) - row.theta) <= 5e-7
+        closes = {(3, 1): "1/2", (2, 1): None, (3, 2): "2", (5, 2): "2"}[(row.n, row.q)]
+        if closes:
+            assert f"closes after {closes} T" in text
+        else:
+            assert "closes after" not in text
+
+
+# M24: the period axis of Fig. 5 is in seconds
+def test_phase_curves_period_axis_unit():
+    ax = new_figure().add_subplot()
+    lines = plotting.plot_phase_curves(ax, Body.preset("t-handle"), points=200)
+    assert lines["period_axes"].get_ylabel().startswith("period $T$ (s,")
+
+
+# M43: theta_text switches to theta - theta_c only when theta rounds to theta_c at 5 decimals
+def test_theta_text_switch_precision():
+    theta_c = orbits.critical_angle(FIG6)
+    dtheta = 2e-4  # 0.0002: differs at the 4th decimal, the same at 3
+    assert plotting.theta_text(theta_c + dtheta, dtheta) == rf"$\theta$ = {theta_c + dtheta:.5f}"
