@@ -42,7 +42,7 @@ def _solve(moments, targets, what, reachable=None):
     total phase itself).
     """
     from .core import search as _kernels
-    from .search import UnresolvedOrbitsWarning, find_roots
+    from .search import UnresolvedOrbitsWarning, branch_minima, find_roots
 
     found = []
     unreached = 0
@@ -54,6 +54,14 @@ def _solve(moments, targets, what, reachable=None):
             continue
         branches, _, offsets, info = find_roots(moments, np.array([target]))
         found.append([_polished(moments, float(x), target) for x in offsets[branches == sign]])
+        if not found[-1]:
+            # the branch's minimum itself, to its rounding (at an end, the
+            # limit eqn:alphamin1/2 is a few ulps from the phase computed
+            # there): the search wants the level strictly inside; a target
+            # equal to the minimum it reports was refused as below it
+            low, at = branch_minima(info)[branch]
+            if abs(target - low) <= 4.0 * np.spacing(target):
+                found[-1] = [at]
         slot = _kernels.INFO_UNREACHED_SAM if sign == 1 else _kernels.INFO_UNREACHED_LAM
         unreached += int(info[slot])
     offsets = np.sort(np.concatenate(found)) if found else np.empty(0)
@@ -216,7 +224,10 @@ def spins_with_total_phase(body_or_moments, total_phase):
         ``dtheta``, plus ``target`` and ``residual = total_phase - target``:
         the search's root (``|residual| <= 1e-10 target``) refined to the
         doubles' resolution, a few ulps of ``target`` (where the phase is
-        flat, next to an axis, the ulps of ``dtheta`` set it).
+        flat, next to an axis, the ulps of ``dtheta`` set it).  A target
+        within 4 ulps of a branch's smallest total phase (the minimum
+        itself, e.g. :func:`orbits.phase_limits` at an end) gives the spin
+        of that minimum (``theta = 0`` or ``pi/2`` at an end).
 
     Raises
     ------
