@@ -214,3 +214,62 @@ def test_block_path_near_the_unstable_axis(moments, omega0, points):
     omega, _, space = exact_motion_mpmath(body.moments, motion.omega0, times[sample], dps=60)
     assert np.abs(fast[1][sample] - omega).max() <= tolerance
     assert np.abs(fast[5][sample] - space).max() <= tolerance
+
+
+# ------------------------------------------------------------------------
+# Each test below kills a mutant of orbits/core/grid.py that passed the suite (a
+# mutation audit of the core kernels, 2026-11-29: 49 mutants, 11 survivors
+# that changed an output).
+
+FIG6_UNIT = Body(Body.preset("fig6").normalized_moments)
+EPS = np.finfo(float).eps
+
+
+def test_block_end_check_compares_sn_cn_dn():
+    """G9: a block whose added sn/cn/dn disagree with the exact ones at the
+    next anchor must fail its end check and be recomputed (mutant: only P is
+    compared).  Only the table entry at j = BLOCK is corrupted, which enters
+    nothing but the end check's sn, cn, dn."""
+    motion = Motion.from_spin(FIG6_UNIT, 0.9)
+    orbit = motion._orbit
+    times = np.linspace(0.0, motion.period, 2001)
+    delta, substeps = grid.grid_plan(orbit, times)
+    offsets, nodes, weights = grid.grid_tables(orbit, delta, substeps)
+    pieces = np.empty((grid.PIECES, grid.BLOCK))
+    assert grid.block_pieces(orbit, times, delta, offsets, nodes, weights, 3, pieces)
+    for row in range(3):
+        bad = offsets.copy()
+        bad[row, grid.BLOCK] += 1e-9
+        assert not grid.block_pieces(orbit, times, delta, bad, nodes, weights, 3, pieces), row
+        for i in range(grid.BLOCK):
+            u = orbit[SLOT_TAU0] + orbit[SLOT_RATE] * times[3 * grid.BLOCK + i]
+            assert pieces[grid.PIECE_PI, i] == pi_of_u(orbit, u)[0]
+
+
+@pytest.mark.parametrize(
+    "spin", [{"theta": 0.9}, {"theta": 0.3}, {"theta": 1.3}, {"dtheta": -1e-3}, {"dtheta": 1e-2}]
+)
+def test_running_p_within_12_eps_on_the_coarsest_split_grid(spin):
+    """G13: at a step of 3.9 y / 20 (y: pole distance) the quadrature is split
+    into 4 substeps (ratio y / h >= 20 each) and the running P stays within
+    12 eps max(|P|, 1) of pi_of_u (measured <= 5.5).  Mutant POLE_MARGIN = 4:
+    one substep, ratio 5, errors 18-30 eps that pass the 64-eps end check
+    silently."""
+    motion = Motion.from_spin(FIG6_UNIT, **spin)
+    orbit = motion._orbit
+    y = grid.pole_distance(orbit)
+    times = np.arange(1024) * (3.9 * y / 20.0 / orbit[SLOT_RATE])
+    delta, substeps = grid.grid_plan(orbit, times)
+    assert substeps == 4
+    offsets, nodes, weights = grid.grid_tables(orbit, delta, substeps)
+    pieces = np.empty((grid.PIECES, grid.BLOCK))
+    worst = 0.0
+    for b in range(times.size // grid.BLOCK):
+        assert grid.block_pieces(orbit, times, delta, offsets, nodes, weights, b, pieces)
+        for i in range(grid.BLOCK):
+            u = orbit[SLOT_TAU0] + orbit[SLOT_RATE] * times[b * grid.BLOCK + i]
+            exact = pi_of_u(orbit, u)[0]
+            worst = max(
+                worst, abs(pieces[grid.PIECE_PI, i] - exact) / (EPS * max(abs(exact), 1.0))
+            )
+    assert worst <= 12.0, worst

@@ -149,3 +149,43 @@ def test_a_private_temporary_cache_where_no_other_can_be_written(tmp_path, monke
     root.symlink_to(tmp_path / "real")
     again = kernel_cache.PackageLocator.from_function(function, source).get_cache_path()
     assert Path(again).parent == own
+
+
+# ------------------------------------------------------------------------
+# Each test below kills a mutant of orbits/core/launch.py that passed the suite (a
+# mutation audit of the core kernels, 2026-11-29: 49 mutants, 11 survivors
+# that changed an output).
+
+
+def test_serial_twin_never_loads_the_parallel_code_from_the_cache(tmp_path):
+    """L1: the serial twin is compiled under its own name ``<name>_serial``,
+    so it never shares numba's on-disk cache entry with the parallel one
+    (whose key does not include ``parallel``).  Process 1 runs the parallel
+    kernel (filling the cache); process 2 runs only the serial twin and must
+    not start numba's threading layer (mutant: same name, the serial twin
+    loads the cached parallel code and starts the layer)."""
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    first = (
+        "import numpy as np\n"
+        "from orbits.core.tasks import start_threads\n"
+        "out = np.zeros(64); start_threads.parallel(out); assert (out == 1).all()\n"
+    )
+    second = (
+        "import numpy as np, numba\n"
+        "from orbits.core.tasks import start_threads\n"
+        "out = np.zeros(64); start_threads.serial(out); assert (out == 1).all()\n"
+        "try:\n"
+        "    numba.threading_layer(); print('STARTED')\n"
+        "except ValueError:\n"
+        "    print('NOT STARTED')\n"
+    )
+    for code in (first, second):
+        done = subprocess.run(
+            [sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=300
+        )
+        assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "NOT STARTED"

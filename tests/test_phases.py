@@ -990,3 +990,47 @@ def test_only_rounding_is_raised_to_two_pi():
         table = orbits.spin_phases(orbits.Body(moments), spins)
         assert (table["total_phase"] >= two_pi).all()
         np.testing.assert_allclose(table["total_phase"], two_pi, rtol=1e-12)
+
+
+# ------------------------------------------------------------------------
+# Each test below kills a mutant of orbits/core/phase_table.py that passed the suite (a
+# mutation audit of the core kernels, 2026-11-29: 49 mutants, 11 survivors
+# that changed an output).
+
+FIG6_UNIT = Body(Body.preset("fig6").normalized_moments)
+
+
+def test_phases_total_phase_is_clamped_to_two_pi_on_the_flat_edge():
+    """P1: orbits.phases must clamp Delta alpha to >= 2 pi like
+    orbits.total_phase (mutant: the clamp is dropped; this flat body gives
+    2 pi - 1.8e-15 at theta -> 0).  Found by a scan of flat bodies."""
+    import warnings
+
+    import orbits
+
+    moments = (0.125046575449237, 0.6362417052997271, 0.7612882807489642)
+    angles = np.array([0.0, 1e-300, 1e-12])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        table = orbits.phases(moments, angles)
+        direct = np.asarray(orbits.total_phase(moments, angles), float)
+    total = np.asarray(table["total_phase"], float)
+    assert (total >= 2.0 * math.pi).all(), total - 2.0 * math.pi
+    np.testing.assert_array_equal(total, direct)
+
+
+def test_one_body_with_many_azimuths():
+    """P2: one body and an array of phi: row k must use phi[k] (mutant: the
+    azimuth index follows the body count, so every row takes phi[0])."""
+    import orbits
+
+    phis = np.array([0.0, 0.7, 1.4])
+    table = orbits.phases(FIG6_UNIT, np.full(3, 0.5), phi=phis)
+    np.testing.assert_array_equal(np.asarray(table["phi"], float), phis)
+    separate = [
+        float(np.asarray(orbits.phases(FIG6_UNIT, 0.5, phi=p)["total_phase"]).ravel()[0])
+        for p in phis
+    ]
+    np.testing.assert_array_equal(np.asarray(table["total_phase"], float), separate)
+    # the three differ (7.1273, 7.0946, 7.0553): phi matters at theta = 0.5
+    assert np.ptp(separate) > 0.05

@@ -1,5 +1,7 @@
 """The survey's grid of bodies (orbits.core.region) against the array reference."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -40,3 +42,49 @@ def test_grid_rows_run_in_i1_then_i2():
     grid = orbits.region_grid(64)
     order = np.lexsort((grid[:, 1], grid[:, 0]))
     np.testing.assert_array_equal(order, np.arange(len(grid)))
+
+
+# ------------------------------------------------------------------------
+# Each test below kills a mutant of orbits/core/region.py that passed the suite (a
+# mutation audit of the core kernels, 2026-11-29: 49 mutants, 11 survivors
+# that changed an output).
+
+EPS = np.finfo(float).eps
+
+
+def test_region_kernels_keep_i1_strictly_below_i2():
+    """R2: the predicate is strict, I1 < I2 (mutant: I1 <= I2).  A box whose two
+    axes coincide puts cells on the diagonal I1 = I2; plain-Python reference."""
+    from orbits.core import region
+
+    lo, hi, n = 0.2, 0.6, 4
+    centres = [lo + ((k + 0.5) * (hi - lo)) / n for k in range(n)]
+    expected = []
+    for i1 in centres:
+        count = 0
+        for i2 in centres:
+            rest = 1.0 - i1 * i1 - i2 * i2
+            i3 = math.sqrt(max(rest, 0.0))
+            count += rest > 0 and 0 < i1 < i2 < i3 <= (i1 + i2)
+        expected.append(count)
+    counts = np.empty(n, dtype=np.int64)
+    region.row_counts(n, lo, hi, lo, hi, 0.0, counts)
+    assert counts.tolist() == expected == [1, 1, 1, 0]
+
+
+def test_region_kernels_accept_the_flat_edge_within_the_slack():
+    """R3: a cell centre beyond the flat edge by 1 eps (relative) is inside with
+    FLAT_SLACK = 8 eps (mutant: the slack is dropped and the body is lost)."""
+    from orbits.bodies import FLAT_SLACK
+    from orbits.core import region
+
+    i1, i2 = 0.05, 0.6807797106746551
+    i3 = math.sqrt(1.0 - i1 * i1 - i2 * i2)
+    excess = i3 / (i1 + i2) - 1.0
+    assert 0.0 < excess <= 2 * EPS  # beyond the edge by rounding only
+    counts = np.empty(1, dtype=np.int64)
+    region.row_counts(1, i1, i1, i2, i2, FLAT_SLACK, counts)
+    assert counts.tolist() == [1]
+    out = np.empty((1, 3))
+    region.fill_rows(1, i1, i1, i2, i2, FLAT_SLACK, np.zeros(1, dtype=np.int64), out)
+    assert out[0].tolist() == [i1, i2, i3]

@@ -381,3 +381,41 @@ def test_hypothesis_spin_vectors(body, omega):
     except orbits.SeparatrixError:
         return
     assert got == pytest.approx(mp_omega(_as_computed(body), omega=omega), rel=BOUND)
+
+
+# ------------------------------------------------------------------------
+# Each test below kills a mutant of orbits/core/solid_angle.py that passed the suite (a
+# mutation audit of the core kernels, 2026-11-29: 49 mutants, 11 survivors
+# that changed an output).
+
+FIG6_UNIT = Body(Body.preset("fig6").normalized_moments)
+
+
+def test_solid_angle_many_marks_invalid_angles_nan():
+    """S4: solid_angle_many must write NaN where the angle is not valid (mutant:
+    leaves whatever was in ``out``).  The valid entry equals orbits.phases."""
+    import orbits
+    from orbits.core.solid_angle import solid_angle_many
+
+    moments = np.asarray(FIG6_UNIT.moments, float)
+    n = 4
+    out = np.full(n, 7.0)
+    angles = np.array([0.5, 2.0, np.inf, np.nan])
+    solid_angle_many(*(np.full(n, m) for m in moments), np.zeros(n), angles, False, out)
+    expected = float(np.asarray(orbits.phases(FIG6_UNIT, 0.5)["geometric_phase"]).ravel()[0])
+    assert out[0] == pytest.approx(expected, rel=1e-15)
+    assert np.isnan(out[1:]).all(), out
+
+
+@pytest.mark.parametrize("omega", [[1e-3, 0.0, 1.0], [0.3, 0.2, 0.9]])
+@pytest.mark.parametrize("scale", [3e-154, 1.3e154])
+def test_geometric_phase_of_a_spin_vector_is_scale_free(omega, scale):
+    """S5: solid_angle_from_vector_array must scale the spin by 2**-speed
+    (mutant: speed 0).  Omega does not depend on |omega|; at |omega| ~ 3e-154
+    the unscaled gaps are subnormal (mutant: 1.0e-10 relative error near I3)."""
+    import orbits
+
+    omega = np.asarray(omega)
+    unit = float(np.asarray(orbits.spin_phases(FIG6_UNIT, omega)["geometric_phase"])[0])
+    scaled = float(np.asarray(orbits.spin_phases(FIG6_UNIT, omega * scale)["geometric_phase"])[0])
+    assert scaled == pytest.approx(unit, rel=1e-14, abs=0)

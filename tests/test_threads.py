@@ -289,3 +289,33 @@ def test_concurrent_calls_under_the_workqueue_layer():
     assert result.returncode == 0, result.stderr
     assert "layer: workqueue" in result.stdout.splitlines()
     assert "threads agree: True" in result.stdout.splitlines()
+
+
+# ------------------------------------------------------------------------
+# Each test below kills a mutant of orbits/threads.py that passed the suite (a
+# mutation audit of the core kernels, 2026-11-29: 49 mutants, 11 survivors
+# that changed an output).
+
+
+def test_using_threads_restores_the_count():
+    """TH1: using_threads(count) must restore the previous count on exit, also
+    after an exception (mutant: the restore is dropped)."""
+    import numba
+
+    from orbits.threads import get_num_threads, set_num_threads, using_threads
+
+    top = numba.config.NUMBA_NUM_THREADS
+    if top < 2:
+        pytest.skip("needs NUMBA_NUM_THREADS >= 2")
+    before = get_num_threads()
+    try:
+        set_num_threads(top)
+        with using_threads(1):
+            assert get_num_threads() == 1
+        assert get_num_threads() == top and numba.get_num_threads() == top
+        with pytest.raises(RuntimeError):
+            with using_threads(1):
+                raise RuntimeError("inside")
+        assert get_num_threads() == top
+    finally:
+        set_num_threads(before)

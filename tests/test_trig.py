@@ -52,3 +52,29 @@ def test_small_polynomials_within_two_ulps_on_their_range():
         for value in x:
             assert ulps(sin_small(value), mp.sin(mp.mpf(value))) <= 2.0
             assert ulps(cos_small(value), mp.cos(mp.mpf(value))) <= 2.0
+
+
+# ------------------------------------------------------------------------
+# Each test below kills a mutant of orbits/core/angles.py that passed the suite (a
+# mutation audit of the core kernels, 2026-11-29: 49 mutants, 11 survivors
+# that changed an output).
+
+EPS = np.finfo(float).eps
+
+
+def test_fold_angle_folds_values_just_above_pi_over_2():
+    """A4: all_folded must test against pi/2 exactly (mutant: a slightly larger
+    bound, 1.5708, which returns 1.5708 unfolded).  Reference: mpmath."""
+    import mpmath as mp
+
+    from orbits.core.angles import all_folded
+    from orbits.phases import fold_angle
+
+    given = np.array([1.5708, 0.5 * math.pi + 1e-9, 1.0])
+    got = fold_angle(given)
+    with mp.workdps(40):
+        exact = [float(mp.pi - mp.mpf(x)) for x in given[:2]] + [1.0]
+    np.testing.assert_allclose(got, exact, rtol=0, atol=2 * EPS)
+    assert (got <= 0.5 * math.pi).all()
+    assert not all_folded(np.array([0.5 * math.pi + 1e-9]))
+    assert all_folded(np.array([0.0, 0.5 * math.pi]))
