@@ -391,22 +391,6 @@ def test_hypothesis_spin_vectors(body, omega):
 FIG6_UNIT = Body(Body.preset("fig6").normalized_moments)
 
 
-def test_solid_angle_many_marks_invalid_angles_nan():
-    """S4: solid_angle_many must write NaN where the angle is not valid (mutant:
-    leaves whatever was in ``out``).  The valid entry equals orbits.phases."""
-    import orbits
-    from orbits.core.solid_angle import solid_angle_many
-
-    moments = np.asarray(FIG6_UNIT.moments, float)
-    n = 4
-    out = np.full(n, 7.0)
-    angles = np.array([0.5, 2.0, np.inf, np.nan])
-    solid_angle_many(*(np.full(n, m) for m in moments), np.zeros(n), angles, False, out)
-    expected = float(np.asarray(orbits.phases(FIG6_UNIT, 0.5)["geometric_phase"]).ravel()[0])
-    assert out[0] == pytest.approx(expected, rel=1e-15)
-    assert np.isnan(out[1:]).all(), out
-
-
 @pytest.mark.parametrize("omega", [[1e-3, 0.0, 1.0], [0.3, 0.2, 0.9]])
 @pytest.mark.parametrize("scale", [3e-154, 1.3e154])
 def test_geometric_phase_of_a_spin_vector_is_scale_free(omega, scale):

@@ -61,11 +61,8 @@ from .launch import parallel_kernel
 from .phase import (
     BRANCH_SAM,
     BRANCH_SEPARATRIX,
-    STATUS_OK,
-    body_constants,
     orbit_constants,
     scaled_spin,
-    spin_from_angle,
 )
 
 
@@ -127,25 +124,6 @@ def solid_angle_from_spin(i1, i2, i3, w1, w2, w3, scale, offset, closing):
         i1, i2, i3, w1, w2, w3, scale, offset, closing
     )
     return solid_angle_from_invariants(i1, i2, i3, branch, m_sq, gap_m1, gap_3m, kc)
-
-
-@parallel_kernel(cache=True, nogil=True)
-def solid_angle_many(i1, i2, i3, phi, angles, from_offset, out):
-    """``Omega`` with every input an array of the same length.
-
-    ``angles`` holds ``theta`` or, with ``from_offset``, ``dtheta``; the
-    spin is set up exactly as for the total phase
-    (``phase.spin_from_angle``).  ``out`` is NaN where the angle is not
-    valid (out of range, not finite, or on the separatrix).
-    """
-    for k in prange(angles.shape[0]):
-        code, _, _, _, w1, w2, w3, scale, offset, closing = spin_from_angle(
-            body_constants(i1[k], i2[k], i3[k], phi[k]), angles[k], from_offset
-        )
-        if code != STATUS_OK:
-            out[k] = math.nan
-            continue
-        out[k] = solid_angle_from_spin(i1[k], i2[k], i3[k], w1, w2, w3, scale, offset, closing)
 
 
 @parallel_kernel(cache=True, nogil=True)
