@@ -505,8 +505,9 @@ def flip_motion(body=None, *, offset=0.05, speed=1.0):
     ``(1e-12, 1, 1 + 1e-12)``, whose orbit is far more sensitive to the
     rounding of ``cos(offset)^2``, to 4.5e-7 at 1e-6 and 7.5e-7 at 1e-8;
     the motion is exact for the ``omega0`` it returns) down to where the
-    orbit's ``k_c = sqrt(1 - k^2)`` would fall below ``orbits.core.phase.KC_FLOOR`` (4.9e-312): an offset of 3.5e-312
-    on the T-handle, 3.5e-306 on a thin rod; a smaller one is refused
+    orbit's ``k_c = sqrt(1 - k^2)`` would fall below
+    ``orbits.core.phase.KC_FLOOR`` (4.9e-312): an offset of 3.5e-312 on
+    the T-handle, 3.5e-306 on a thin rod; a smaller one is refused
     (:class:`~orbits.SeparatrixError`).
 
     Parameters
