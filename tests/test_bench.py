@@ -5,6 +5,8 @@ row is re-timed beside a CPU-bound child, that the child is stopped, and
 that the table prints the check.
 """
 
+import contextlib
+import importlib.util
 import inspect
 import math
 import os
@@ -12,6 +14,8 @@ import signal
 import subprocess
 import sys
 import time
+import types
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -839,3 +843,427 @@ def test_only_help_names_every_row():
 
     assert cli_bench.ROW_NAMES == tuple(bench.BENCHMARKS)
     assert cli_bench.CUDA_ROW_NAMES == tuple(bench.CUDA_BENCHMARKS)
+
+
+# ------------------------------------------------------------------------
+# Each test below kills a mutant of orbits/bench.py, orbits/cli/bench.py or
+# benchmarks/scale.py that passed the suite (a mutation audit, 2026-11-29:
+# 47 mutants, 28 survivors that printed a misleading figure with exit 0).
+# No test asserts on measured speed: the timing functions are replaced by
+# fakes returning fixed figures; what is asserted is which work each arm
+# did and how the row turns the figures into its fields.
+
+
+ROOT = Path(bench.__file__).resolve().parents[1]
+
+
+def _queue_best_time(monkeypatch, figures, call=True):
+    """bench.best_time replaced: each call runs ``function`` once (so spies see
+    the work) and returns the next of ``figures``."""
+    figures = list(figures)
+    seen = []
+
+    def fake(function, repeats):
+        if call:
+            function()
+        seen.append(repeats)
+        return figures.pop(0)
+
+    monkeypatch.setattr(bench, "best_time", fake)
+    return seen
+
+
+class _FakeClock:
+    """A stand-in for the ``time`` module inside orbits.bench."""
+
+    def __init__(self):
+        self.now = 0.0
+
+    def perf_counter(self):
+        return self.now
+
+    def sleep(self, seconds):
+        pass
+
+
+# ------------------------------------------------------------------ in-process rows
+def test_phase_ratio_is_baseline_over_ours(monkeypatch):
+    _queue_best_time(monkeypatch, [1.0, 2.0, 4.0], call=False)  # ours, scalar, scipy
+    row = bench.bench_total_phase(points=200, repeats=1)
+    assert (row["ours_s"], row["scalar_s"], row["baseline_s"]) == (1.0, 2.0, 4.0)
+    assert row["speedup"] == 4.0
+
+
+def test_motion_both_arms_time_the_same_grid(monkeypatch):
+    import orbits.motion as motion_module
+
+    monkeypatch.setitem(sys.modules, "mpmath", None)  # no accuracy reference
+    sizes, points = [], []
+    real_ivp, real_herp = bench._herpolhode_by_integration, motion_module.herpolhode
+
+    def ivp(motion, times):
+        sizes.append(times.size)
+        return real_ivp(motion, times)
+
+    def herp(body, theta, points=None, **kw):
+        sizes_ours.append(points)
+        return real_herp(body, theta, points=points, **kw)
+
+    sizes_ours = points
+    monkeypatch.setattr(bench, "_herpolhode_by_integration", ivp)
+    monkeypatch.setattr(motion_module, "herpolhode", herp)
+    _queue_best_time(monkeypatch, [1.0, 3.0, 0.5])  # ours, solve_ivp, direct
+    row = bench.bench_motion(points=41, repeats=1)
+    assert sizes == [41] and points == [41]
+    assert row["ours_s"] == 1.0 and row["baseline_s"] == 3.0
+    assert row["speedup"] == 3.0
+
+
+def test_search_baseline_times_the_same_n_max(monkeypatch):
+    seen = []
+    real = bench._roots_by_scipy
+
+    def spy(body, n_max, *args):
+        seen.append(n_max)
+        return real(body, n_max, *args)
+
+    monkeypatch.setattr(bench, "_roots_by_scipy", spy)
+    _queue_best_time(monkeypatch, [1.0, 0.1, 5.0])  # ours, kernel, baseline
+    row = bench.bench_search(repeats=1)
+    assert seen and set(seen) == {bench.SEARCH_N_MAX}
+    assert row["agrees"] is True
+    assert row["baseline_s"] == 5.0 and row["speedup"] == 5.0
+
+
+def test_search_evaluations_arms_time_the_same_bodies(monkeypatch):
+    from orbits.bodies import region_grid
+    from orbits.core import search as kernels
+
+    real = bench._search_counts
+    timed = []
+
+    def spy(function, bodies, levels, keep=None):
+        _, evaluations, roots = real(function, bodies, levels, keep)
+        if keep is None and len(bodies) > 2:
+            timed.append((function is kernels.search_body, len(bodies)))
+        return (1.0 if function is kernels.search_body else 3.0), evaluations, roots
+
+    monkeypatch.setattr(bench, "_search_counts", spy)
+    row = bench.bench_search_evaluations(resolution=8, n_max=3)
+    count = len(region_grid(8))
+    assert timed == [(True, count), (False, count)]
+    assert row["speedup"] == 3.0 and row["agrees"] is True
+
+
+def test_search_evaluations_nan_offsets_disagree(monkeypatch):
+    """A kernel that returns NaN offsets must not pass the agreement check."""
+    from orbits.core import search as kernels
+
+    real = kernels.search_body
+
+    def nan_offsets(i1, i2, i3, levels, branch, level, offset, info):
+        found = real(i1, i2, i3, levels, branch, level, offset, info)
+        offset[:found] = np.nan
+        return found
+
+    monkeypatch.setattr(kernels, "search_body", nan_offsets)
+    row = bench.bench_search_evaluations(resolution=8, n_max=3)
+    assert row["agrees"] is False and "DISAGREE: " in row["note"]
+    body = (np.array([1], np.int8), np.array([0]), np.array([0.1]))
+    nan = (np.array([1], np.int8), np.array([0]), np.array([np.nan]))
+    assert bench.roots_agreement([nan], [body])[0] == 1
+
+
+def test_survey_figures_scale_the_sample_to_the_grid(monkeypatch):
+    from orbits.bodies import region_grid
+
+    monkeypatch.setattr(bench, "SURVEY_SAMPLE", 5)
+    _queue_best_time(monkeypatch, [2.0, 1.0, 0.5])  # csv, parquet, loop over the sample
+    row = bench.bench_survey(resolution=12, n_max=2)
+    count = len(region_grid(12))
+    sample = row["baseline_sample"]
+    assert sample < count
+    assert row["ours_s"] == 1.0
+    assert row["baseline_s"] == pytest.approx(0.5 / sample * count, rel=1e-12)
+    assert row["speedup"] == pytest.approx(0.5 / sample * count / 1.0, rel=1e-12)
+    assert row["bodies_per_s"] == pytest.approx(count / 1.0, rel=1e-12)
+    assert row["agrees"] is True
+
+
+# ------------------------------------------------------------------ under-load check
+def test_load_check_counts_a_failing_row(monkeypatch):
+    figures = iter([1.0, 5.0])  # idle, loaded: 5x
+    monkeypatch.setattr(bench, "_median_time", lambda function, repeats: next(figures))
+    monkeypatch.setattr(
+        bench, "_busy_process", lambda: types.SimpleNamespace(kill=lambda: None, wait=lambda: None)
+    )
+    monkeypatch.setattr(bench, "time", _FakeClock())
+    monkeypatch.setattr(
+        bench,
+        "BENCHMARKS",
+        {
+            "a": lambda **kw: {
+                "task": "a",
+                "timed": "t",
+                "ours_s": 1.0,
+                "baseline": "b",
+                "baseline_s": 1.0,
+                "speedup": 1.0,
+                "note": "n",
+                "_ours": (lambda: None, 5),
+            }
+        },
+    )
+    report = bench.run(["a"])
+    load = report["results"][0]["load"]
+    assert load["slowdown"] == 5.0 and load["holds"] is False
+    assert report["load_check"] == {"limit": 2.0, "rows": 1, "held": 0, "passed": False}
+    assert bench.load_failures(report) == report["results"]
+
+
+def test_load_check_runs_at_least_three_for_a_two_run_row(monkeypatch):
+    monkeypatch.setattr(
+        bench, "_busy_process", lambda: types.SimpleNamespace(kill=lambda: None, wait=lambda: None)
+    )
+    calls = []
+    rows = [{"task": "m", "_ours": (lambda: calls.append(1), 2)}]
+    bench.load_check(rows)
+    assert rows[0]["load"]["runs"] == 3
+    assert len(calls) == 2 * (1 + 3)
+
+
+# ------------------------------------------------------------------ fresh-process rows
+def test_cold_compile_ratio_is_warm_over_cold(monkeypatch):
+    figures = iter([(10.0, 12.0), (2.0, 2.5)])  # cold, warm
+    monkeypatch.setattr(bench, "_fresh_interpreter", lambda args, env=None: next(figures))
+    row = bench.bench_cold_compile()
+    assert row["ours_s"] == 10.0 and row["baseline_s"] == 2.0
+    assert row["speedup"] == pytest.approx(0.2, rel=1e-15)
+
+
+def test_survey_scaling_arms_cpus_threads_and_figures(monkeypatch):
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1, 2, 3}, raising=False)
+    monkeypatch.setattr(os, "sched_setaffinity", lambda pid, cpus: None, raising=False)
+    monkeypatch.setattr(bench, "get_num_threads", lambda: 4)
+    calls = []
+
+    def wall(resolution, n_max, cpus, threads=1, extra=()):
+        calls.append((resolution, n_max, frozenset(cpus), threads))
+        if resolution == 2:
+            return 0.5, 4, 400
+        return (4.0 if len(cpus) == 1 else 2.5), 100, 12345
+
+    monkeypatch.setattr(bench, "_survey_command_wall", wall)
+    row = bench.bench_survey_scaling(resolution=9, n_max=5, repeats=2)
+    timed = [c for c in calls if c[0] == 9]
+    one, everything = frozenset({0}), frozenset({0, 1, 2, 3})
+    assert timed == [(9, 5, one, 1), (9, 5, everything, 4)] * 2
+    assert all(c == (2, 1, one, 1) for c in calls if c[0] == 2)
+    assert row["ours_s"] == 2.5 and row["baseline_s"] == 4.0
+    assert row["speedup"] == pytest.approx(1.6, rel=1e-15)
+    assert row["fixed_s"] == 0.5
+    assert row["bound"] == pytest.approx(4.0 / (0.5 + 3.5 / 4), rel=1e-15)
+    assert row["bytes_per_body"] == pytest.approx(123.45, rel=1e-15)
+    assert row["bodies_per_s"] == pytest.approx(40.0, rel=1e-15)
+
+
+def test_survey_command_is_pinned_to_its_cpus(monkeypatch):
+    import subprocess
+
+    pinned, options_seen = [], []
+    monkeypatch.setattr(
+        os, "sched_setaffinity", lambda pid, cpus: pinned.append((pid, set(cpus))), raising=False
+    )
+
+    def fake(argv, **options):
+        options_seen.append(options)
+        if options.get("preexec_fn"):
+            options["preexec_fn"]()
+        return subprocess.CompletedProcess(argv, 0, stdout='{"bodies": 7}', stderr="")
+
+    monkeypatch.setattr(subprocess, "run", fake)
+    wall, bodies, size = bench._survey_command_wall(4, 2, {1}, threads=1)
+    assert bodies == 7 and size == 0
+    assert pinned == [(0, {1})]
+
+
+def test_survey_scaling_needs_two_cpus(monkeypatch):
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0}, raising=False)
+    monkeypatch.setattr(os, "sched_setaffinity", lambda pid, cpus: None, raising=False)
+    assert bench.unavailable("survey_scaling") == "only one CPU is available to this process"
+    with pytest.raises(bench.BenchError, match="only one CPU"):
+        bench.bench_survey_scaling(resolution=4, n_max=2, repeats=1)
+
+
+# ------------------------------------------------------------------ thread rows
+@pytest.fixture
+def fake_threads(monkeypatch):
+    """using_threads recorded (not applied); a fake clock in orbits.bench; four threads."""
+    import orbits.threads as threads_module
+
+    state = {"threads": None, "used": []}
+    clock = _FakeClock()
+
+    @contextlib.contextmanager
+    def using(count):
+        before = state["threads"]
+        state["threads"] = count
+        state["used"].append(count)
+        try:
+            yield
+        finally:
+            state["threads"] = before
+
+    monkeypatch.setattr(threads_module, "using_threads", using)
+    monkeypatch.setattr(bench, "get_num_threads", lambda: 4)
+    monkeypatch.setattr(bench, "time", clock)
+    state["clock"] = clock
+    return state
+
+
+def test_search_scaling_compares_all_threads_with_one(monkeypatch, fake_threads):
+    from orbits.bodies import region_grid
+    from orbits.survey import compute
+
+    def chunk_work(chunk, n_max):
+        if fake_threads["threads"]:
+            fake_threads["clock"].now += len(chunk) / fake_threads["threads"]
+
+    monkeypatch.setattr(compute, "search_chunk", chunk_work)
+    row = bench.bench_search_scaling(resolution=12, n_max=3, repeats=2)
+    bodies = len(region_grid(12))
+    assert fake_threads["used"] == [1, 4, 1, 4]
+    assert row["baseline_s"] == bodies and row["ours_s"] == bodies / 4
+    assert row["speedup"] == 4.0 and row["threads"] == 4
+
+
+def test_survey_threads_compares_all_threads_with_one(monkeypatch, fake_threads):
+    from orbits.survey import Survey
+
+    def run(self, *args, **kwargs):
+        fake_threads["clock"].now += self.moments.shape[0] / fake_threads["threads"]
+
+    monkeypatch.setattr(Survey, "run", run)
+    row = bench.bench_survey_threads(resolution=8, n_max=3)
+    assert fake_threads["used"] == [4, 1, 4]
+    assert row["baseline_s"] == 25.0 and row["ours_s"] == 25.0 / 4
+    assert row["speedup"] == 4.0
+
+
+def test_survey_tables_pools_and_body_count(monkeypatch, tmp_path):
+    import concurrent.futures
+    import tempfile
+
+    from orbits.bodies import region_grid
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    monkeypatch.setattr(bench, "get_num_threads", lambda: 3)
+    pools = []
+    real = concurrent.futures.ThreadPoolExecutor
+
+    class Spy(real):
+        def __init__(self, workers, *args, **kwargs):
+            pools.append(workers)
+            super().__init__(workers, *args, **kwargs)
+
+    monkeypatch.setattr(concurrent.futures, "ThreadPoolExecutor", Spy)
+    # 56 bodies in chunks of 20: the last chunk has 16
+    row = bench.bench_survey_tables(resolution=12, n_max=3, chunks=10, chunk=20, repeats=2)
+    assert pools == [3, 1, 3, 1, 3]
+    bodies = len(region_grid(12))
+    assert bodies == 56
+    assert row["bodies_per_s"] == pytest.approx(bodies / row["ours_s"], rel=1e-12)
+
+
+def test_survey_bytes_figures_per_layout(monkeypatch):
+    from orbits.survey import Survey
+
+    clock = _FakeClock()
+    monkeypatch.setattr(bench, "time", clock)
+    written = {"compact": (1.0, 1000), "all": (3.0, 5000)}
+
+    def run(self, *args, **kwargs):
+        seconds, size = written[self.columns]
+        clock.now += seconds
+        self.out_dir.mkdir(parents=True)
+        (self.out_dir / "part").write_bytes(b"0" * size)
+
+    monkeypatch.setattr(Survey, "run", run)
+    row = bench.bench_survey_bytes(resolution=8, n_max=3)
+    assert row["ours_s"] == 1.0 and row["baseline_s"] == 3.0 and row["speedup"] == 3.0
+    assert row["bytes_per_body"] == 1000 / 25 and row["baseline_bytes_per_body"] == 5000 / 25
+
+
+# ------------------------------------------------------------------ GPU row (simulator)
+def test_cuda_search_compares_the_gpu_with_the_cpu():
+    """cuda_search's agreement check must compare the GPU's roots with the CPU's."""
+    import subprocess
+    import textwrap
+
+    if importlib.util.find_spec("numba_cuda") is None:
+        pytest.skip("numba-cuda not installed")
+    env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1")
+    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
+    code = """
+        import json
+        import orbits.search as search
+        from orbits import bench
+        real = search.search_bodies
+        def off(moments, levels, **kw):
+            rows = real(moments, levels, **kw)
+            if kw.get("device") == "cpu":
+                rows.offset[:] *= 1.001
+            return rows
+        search.search_bodies = off
+        print(json.dumps(bench.bench_cuda_search(resolution=4, n_max=3, repeats=1)))
+    """
+    done = subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code)],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=ROOT,
+        timeout=600,
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    import json
+
+    row = json.loads(done.stdout.strip().splitlines()[-1])
+    assert row["agrees"] is False and "DISAGREE: " in row["note"]
+
+
+# ------------------------------------------------------------------ benchmarks/scale.py
+def _scale_module():
+    spec = importlib.util.spec_from_file_location("scale_script", ROOT / "benchmarks" / "scale.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_scale_script_pins_each_set_and_reports_median_ratio(monkeypatch, capsys):
+    scale = _scale_module()
+    monkeypatch.setattr(os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
+    walls = {frozenset({0}): iter([4.0, 6.0, 5.0]), frozenset({0, 1}): iter([2.0, 3.0, 2.5])}
+    pinned = []
+
+    def run_once(resolution, n_max, cpus):
+        pinned.append(frozenset(cpus))
+        return next(walls[frozenset(cpus)])
+
+    monkeypatch.setattr(scale, "run_once", run_once)
+    assert scale.main(["40", "5", "3", "0", "0,1"]) == 0
+    assert pinned == [frozenset({0}), frozenset({0, 1})] * 3
+    lines = {
+        line.split()[0]: line.split()
+        for line in capsys.readouterr().out.splitlines()
+        if line.startswith(("0 ", "0,1 "))
+    }
+    assert lines["0"][-1] == "1.00x" and lines["0,1"][-1] == "2.00x"
+    assert lines["0,1"][1] == "2.500" and lines["0,1"][3] == "2.000"
+
+
+def test_scale_script_parses_cpu_ranges():
+    scale = _scale_module()
+    assert scale.parse_cpus("0") == {0}
+    assert scale.parse_cpus("0-1") == {0, 1}
+    assert scale.parse_cpus("0-3,8") == {0, 1, 2, 3, 8}
