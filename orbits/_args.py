@@ -237,6 +237,29 @@ def path_argument(name, value):
     raise ArgumentTypeError(f"{name} must be a path (str or os.PathLike), got {_describe(value)}")
 
 
+def given_besides(**values):
+    """Names of the arguments given other than as their defaults, in order.
+
+    Each keyword is ``(value, default)``: with a default of None an argument
+    counts as given when it is not None; with a number, when it is not equal
+    to it (anything that does not compare as a number counts as given, to be
+    refused by its own check).  For refusing options that would be ignored
+    (angles given beside a :class:`orbits.Motion`, which has its own spin).
+    """
+
+    def equal(value, default):
+        try:
+            return bool(value == default)
+        except (TypeError, ValueError):
+            return False
+
+    return [
+        name
+        for name, (value, default) in values.items()
+        if not (value is default or (default is not None and equal(value, default)))
+    ]
+
+
 def broadcast(names_and_shapes):
     """The broadcast shape of named arrays, or an InputError naming them."""
     try:

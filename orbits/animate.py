@@ -55,6 +55,7 @@ from ._args import (
     caller_stacklevel,
     finite_array,
     flag,
+    given_besides,
     held_warnings,
     integer,
     path_argument,
@@ -1260,16 +1261,9 @@ def animation_motion(source, theta=None, *, dtheta=None, phi=0.0, speed=1.0, bod
     row = None if isinstance(source, Motion) else _as_row(source)
     if isinstance(source, Motion) or row is not None:
         # the spin is the Motion's or the row's: a spin given too would be ignored
-        given = [
-            name
-            for name, value, default in (
-                ("theta", theta, None),
-                ("dtheta", dtheta, None),
-                ("phi", phi, 0.0),
-                ("speed", speed, 1.0),
-            )
-            if not (value is default or (default is not None and _equals(value, default)))
-        ]
+        given = given_besides(
+            theta=(theta, None), dtheta=(dtheta, None), phi=(phi, 0.0), speed=(speed, 1.0)
+        )
         if given:
             what = "a Motion" if row is None else "a catalog row"
             raise InputError(
@@ -1332,14 +1326,6 @@ def _row_name(row):
     NA of a catalog (``read_csv(comment="#")``) as an int, a float and NaN."""
     name = row.get("body")
     return None if _missing(name) else str(name)
-
-
-def _equals(value, default):
-    """``value == default`` for a number; False for anything else (refused later)."""
-    try:
-        return bool(value == default)
-    except (TypeError, ValueError):
-        return False
 
 
 def _row_level(row, motion, rounded=False):

@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from ._args import flag, integer, positive_finite, real_array, real_scalar
+from ._args import flag, given_besides, integer, positive_finite, real_array, real_scalar
 from .bodies import REGION_BOX, Body, region_moments
 from .cells import literal_text
 from .errors import InputError
@@ -89,27 +89,12 @@ def _no_angles_with_motion(theta, dtheta, phi, where):
     """Refuse angles given with a :class:`orbits.Motion`, which has its own spin
     (they were ignored: ``plot_herpolhode(ax, motion, 1.2)`` drew the motion's
     theta = 0.5 curve; an audit)."""
-    given = [
-        name
-        for name, value, default in (
-            ("theta", theta, None),
-            ("dtheta", dtheta, None),
-            ("phi", phi, 0.0),
-        )
-        if not (value is default or (default is not None and _is_zero(value)))
-    ]
+    given = given_besides(theta=(theta, None), dtheta=(dtheta, None), phi=(phi, 0.0))
     if given:
         raise InputError(
             f"{where}: {' and '.join(given)} given with a Motion, which has its own spin; "
             "give the body and the angles, or the Motion alone"
         )
-
-
-def _is_zero(value):
-    try:
-        return float(value) == 0.0
-    except (TypeError, ValueError):
-        return False
 
 
 def plot_herpolhode(

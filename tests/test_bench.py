@@ -516,29 +516,18 @@ def test_long_task_names_keep_the_columns_aligned():
     assert len({len(line.rstrip()) for line in second}) == 1, second
 
 
-def test_cuda_phase_labels_under_the_simulator():
-    """F7/F8: the cuda_phase row says what is timed (the CPU on fewer points,
-    scaled), where theta is folded, and the CPU's thread count (one thread
-    under 20,000 points)."""
-    import importlib.util
+def _rows_under_the_simulator(code, count):
+    """The last ``count`` JSON lines printed by ``code`` (dedented) in a fresh
+    interpreter on the CUDA simulator, this tree first on the path."""
     import json
-    import os
     import subprocess
-    import sys
     import textwrap
-    from pathlib import Path
 
     if importlib.util.find_spec("numba_cuda") is None:
         pytest.skip("numba-cuda not installed")
     root = Path(__file__).resolve().parents[1]
     env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1")
     env["PYTHONPATH"] = str(root) + os.pathsep + env.get("PYTHONPATH", "")
-    code = """
-        import json
-        from orbits import bench
-        print(json.dumps(bench.bench_cuda_total_phase(points=48, repeats=1)))
-        print(json.dumps(bench.bench_cuda_search(resolution=4, n_max=3, repeats=1)))
-    """
     done = subprocess.run(
         [sys.executable, "-c", textwrap.dedent(code)],
         capture_output=True,
@@ -548,7 +537,20 @@ def test_cuda_phase_labels_under_the_simulator():
         timeout=600,
     )
     assert done.returncode == 0, done.stderr[-3000:]
-    row, search_row = (json.loads(line) for line in done.stdout.strip().splitlines()[-2:])
+    return [json.loads(line) for line in done.stdout.strip().splitlines()[-count:]]
+
+
+def test_cuda_phase_labels_under_the_simulator():
+    """F7/F8: the cuda_phase row says what is timed (the CPU on fewer points,
+    scaled), where theta is folded, and the CPU's thread count (one thread
+    under 20,000 points)."""
+    code = """
+        import json
+        from orbits import bench
+        print(json.dumps(bench.bench_cuda_total_phase(points=48, repeats=1)))
+        print(json.dumps(bench.bench_cuda_search(resolution=4, n_max=3, repeats=1)))
+    """
+    row, search_row = _rows_under_the_simulator(code, 2)
     assert row["threads"] == 1 and "(1 thread)" in row["baseline"]
     assert "timed on all the angles" in row["timed"]
     assert "theta folded and checked in the kernel" in row["note"]
@@ -1197,13 +1199,6 @@ def test_survey_bytes_figures_per_layout(monkeypatch):
 # ------------------------------------------------------------------ GPU row (simulator)
 def test_cuda_search_compares_the_gpu_with_the_cpu():
     """cuda_search's agreement check must compare the GPU's roots with the CPU's."""
-    import subprocess
-    import textwrap
-
-    if importlib.util.find_spec("numba_cuda") is None:
-        pytest.skip("numba-cuda not installed")
-    env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1")
-    env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
     code = """
         import json
         import orbits.search as search
@@ -1217,18 +1212,7 @@ def test_cuda_search_compares_the_gpu_with_the_cpu():
         search.search_bodies = off
         print(json.dumps(bench.bench_cuda_search(resolution=4, n_max=3, repeats=1)))
     """
-    done = subprocess.run(
-        [sys.executable, "-c", textwrap.dedent(code)],
-        capture_output=True,
-        text=True,
-        env=env,
-        cwd=ROOT,
-        timeout=600,
-    )
-    assert done.returncode == 0, done.stderr[-3000:]
-    import json
-
-    row = json.loads(done.stdout.strip().splitlines()[-1])
+    (row,) = _rows_under_the_simulator(code, 1)
     assert row["agrees"] is False and "DISAGREE: " in row["note"]
 
 

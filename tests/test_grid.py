@@ -164,15 +164,21 @@ def test_pole_distance_is_the_first_zero_of_the_denominator(spin):
             assert mp.re(denominator(fraction * mp.mpf(y))) > 1e-3 * (1 - fraction)
 
 
-def test_a_failed_block_is_recomputed_point_by_point():
-    """Corrupted quadrature weights fail the end check; the block is then exact."""
-    motion = Motion.from_spin(FIG6, 0.9)
+def _block_of(body):
+    """A grid's block 3 on one period of ``body`` at theta = 0.9, and its tables."""
+    motion = Motion.from_spin(body, 0.9)
     orbit = motion._orbit
     times = np.linspace(0.0, motion.period, 2001)
     delta, substeps = grid.grid_plan(orbit, times)
     offsets, nodes, weights = grid.grid_tables(orbit, delta, substeps)
     pieces = np.empty((grid.PIECES, grid.BLOCK))
     assert grid.block_pieces(orbit, times, delta, offsets, nodes, weights, 3, pieces)
+    return orbit, times, delta, offsets, nodes, weights, pieces
+
+
+def test_a_failed_block_is_recomputed_point_by_point():
+    """Corrupted quadrature weights fail the end check; the block is then exact."""
+    orbit, times, delta, offsets, nodes, weights, pieces = _block_of(FIG6)
     good = pieces.copy()
     assert not grid.block_pieces(orbit, times, delta, offsets, nodes, weights * 1.0001, 3, pieces)
     for i in range(grid.BLOCK):
@@ -230,13 +236,7 @@ def test_block_end_check_compares_sn_cn_dn():
     next anchor must fail its end check and be recomputed (mutant: only P is
     compared).  Only the table entry at j = BLOCK is corrupted, which enters
     nothing but the end check's sn, cn, dn."""
-    motion = Motion.from_spin(FIG6_UNIT, 0.9)
-    orbit = motion._orbit
-    times = np.linspace(0.0, motion.period, 2001)
-    delta, substeps = grid.grid_plan(orbit, times)
-    offsets, nodes, weights = grid.grid_tables(orbit, delta, substeps)
-    pieces = np.empty((grid.PIECES, grid.BLOCK))
-    assert grid.block_pieces(orbit, times, delta, offsets, nodes, weights, 3, pieces)
+    orbit, times, delta, offsets, nodes, weights, pieces = _block_of(FIG6_UNIT)
     for row in range(3):
         bad = offsets.copy()
         bad[row, grid.BLOCK] += 1e-9
