@@ -6,6 +6,7 @@ matplotlib.use("Agg")
 
 import math  # noqa: E402
 import os  # noqa: E402
+import re  # noqa: E402
 import sys  # noqa: E402
 import warnings  # noqa: E402
 from pathlib import Path  # noqa: E402
@@ -14,6 +15,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
 from PIL import Image, ImageSequence  # noqa: E402
+from scipy.special import ellipk  # noqa: E402
 
 import orbits  # noqa: E402
 from orbits import Body, Motion, animate  # noqa: E402
@@ -1159,3 +1161,283 @@ def test_space_panel_holds_a_thin_rods_herpolhode_with_its_margin():
     assert 1.15 * radius > reach  # the herpolhode, not the ellipsoid, sets the box
     assert half == pytest.approx(1.15 * radius, rel=1e-12)
     assert reach == pytest.approx(1.05 * scene.semi_axes.max(), rel=1e-12)
+
+
+# ------------------------------------------------------------------------
+# Each test below kills a mutant of orbits/animate.py or orbits/cli/animate.py
+# that passed the suite (a mutation audit, 2026-11-29: 47 mutants, 17
+# survivors that changed the animation or its text with exit 0), or guards
+# a refusal that another check also makes.
+
+
+def flip_period(moments, offset, speed=1.0):
+    """Eq. 16a in plain floats (scipy's K): the period of the flip spin
+    speed (sin o cos o, cos^2 o, sin o), independent of orbits' own phase code."""
+    i1, i2, i3 = moments
+    w = speed * np.array(
+        [math.sin(offset) * math.cos(offset), math.cos(offset) ** 2, math.sin(offset)]
+    )
+    two_e = i1 * w[0] ** 2 + i2 * w[1] ** 2 + i3 * w[2] ** 2
+    m_sq = (i1 * w[0]) ** 2 + (i2 * w[1]) ** 2 + (i3 * w[2]) ** 2
+    if m_sq > two_e * i2:
+        k2 = (i2 - i1) * (two_e * i3 - m_sq) / ((i3 - i2) * (m_sq - two_e * i1))
+        rate = math.sqrt((i3 - i2) * (m_sq - two_e * i1) / (i1 * i2 * i3))
+    else:
+        k2 = (i3 - i2) * (m_sq - two_e * i1) / ((i2 - i1) * (two_e * i3 - m_sq))
+        rate = math.sqrt((i2 - i1) * (two_e * i3 - m_sq) / (i1 * i2 * i3))
+    return 4.0 * ellipk(k2) / rate
+
+
+def cli_span(tmp_path, capsys, argv):
+    """Run `orbits animate` (2-3 frames, tiny dpi); the stderr summary's
+    (frames, span in s, periods)."""
+    out = tmp_path / "a.gif"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert main(["animate", *argv, "--dpi", "10", "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    found = re.search(r"(\d+) frames over (\S+) s = (\S+) period", err)
+    assert found, err
+    return int(found.group(1)), float(found.group(2)), float(found.group(3))
+
+
+def spy_on_animations(monkeypatch):
+    """The PoinsotAnimation objects the command line builds, in a list."""
+    drawn = []
+    original = animate.poinsot_animation
+
+    def spy(*args, **kwargs):
+        drawn.append(original(*args, **kwargs))
+        return drawn[-1]
+
+    monkeypatch.setattr(animate, "poinsot_animation", spy)
+    return drawn
+
+
+# M02: clock decimals: one digit finer than the frame interval's magnitude
+def test_clock_resolves_a_tenth_of_a_sub_millisecond_frame_interval():
+    times = np.linspace(0.0, 7.5e-4, 4)  # 0.25 ms frames
+    shown = [animate.clock_text(t, times) for t in times]
+    assert shown == ["0.00000", "0.00025", "0.00050", "0.00075"]
+
+
+# M03: the clock's decimals come from the *smallest* frame interval
+def test_clock_tells_apart_unevenly_spaced_frames():
+    times = [0.0, 1e-4, 0.5, 1.0]
+    shown = [animate.clock_text(t, times) for t in times]
+    assert len(set(shown)) == 4, shown
+    assert shown[1] == "0.00010"
+
+
+# M07: the row chosen matches p AND q
+def test_orbit_row_from_a_catalog_matches_q_too():
+    table = orbits.closed_orbits(FIG6, n_max=3, q_max=3)
+    # SAM has no 2 pi 2/3 (its lowest level is above 2 pi 4/3); 2 pi 2/1 must not stand in
+    with pytest.raises(InputError, match="no closed orbit"):
+        animate.orbit_row(FIG6, p=2, q=3, branch="SAM", orbits=table)
+    # 5/3 and 5/2 are both SAM rows of the table: only 5/3 is the one asked for
+    row = animate.orbit_row(FIG6, p=5, q=3, branch="SAM", orbits=table)
+    assert (row["n"], row["q"], row["branch"]) == (5, 3, "SAM")
+
+
+# M17: flip_motion's speed is |omega0|
+def test_flip_motion_speed_scales_omega_and_period():
+    slow = animate.flip_motion(offset=0.1)
+    fast = animate.flip_motion(offset=0.1, speed=2.5)
+    assert np.linalg.norm(fast.omega0) == pytest.approx(2.5, rel=1e-15)
+    np.testing.assert_allclose(fast.omega0, 2.5 * slow.omega0, rtol=1e-15)
+    assert fast.period == pytest.approx(flip_period(T_HANDLE.moments, 0.1, 2.5), rel=1e-10)
+
+
+# M18: the FuncAnimation plays at the animation's own fps
+def test_player_interval_follows_fps():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        anim = animate.poinsot_animation(FIG6, 0.5, frames=2, fps=5, dpi=10)
+    player = anim.animation
+    assert player.event_source.interval == pytest.approx(200.0)
+    player._draw_was_started = True
+
+
+# C02: --flip OFFSET is the offset drawn
+def test_cli_flip_offset_is_drawn(tmp_path, capsys):
+    frames, span, turns = cli_span(
+        tmp_path, capsys, ["--preset", "t-handle", "--flip", "0.2", "--frames", "2"]
+    )
+    assert (frames, turns) == (2, 1.0)
+    assert span == pytest.approx(flip_period(T_HANDLE.moments, 0.2), rel=1e-3)
+
+
+# C03: --speed is applied to --flip
+def test_cli_flip_speed_is_drawn(tmp_path, capsys):
+    _, span, _ = cli_span(
+        tmp_path, capsys, ["--preset", "t-handle", "--flip", "--speed", "4", "--frames", "2"]
+    )
+    assert span == pytest.approx(flip_period(T_HANDLE.moments, 0.05, 4.0), rel=1e-3)
+
+
+# C04: --speed is in --units
+def test_cli_speed_takes_its_units(tmp_path, capsys):
+    period = Motion.from_spin(FIG6, 0.5).period  # at 1 rad/s
+    _, span, _ = cli_span(
+        tmp_path,
+        capsys,
+        ["--preset", "fig6", "--theta", "0.5", "--speed", "60", "--units", "rpm", "--frames", "2"],
+    )
+    # 60 rpm = 2 pi rad/s: the period scales as 1/|omega0|
+    assert span == pytest.approx(period / (2.0 * math.pi), rel=1e-3)
+
+
+# C06: --periods is the duration of a --theta/--dtheta/--flip/--n animation
+def test_cli_periods_sets_the_duration(tmp_path, capsys):
+    period = Motion.from_spin(FIG6, 0.5).period
+    frames, span, turns = cli_span(
+        tmp_path,
+        capsys,
+        ["--preset", "fig6", "--theta", "0.5", "--periods", "2.5", "--frames", "3"],
+    )
+    assert (frames, turns) == (3, 2.5)
+    assert span == pytest.approx(2.5 * period, rel=1e-3)
+
+
+# M20: an MP4 plays at the animation's fps
+@pytest.mark.skipif(not animate.mp4_available(), reason="imageio-ffmpeg not installed")
+def test_mp4_plays_at_its_fps(tmp_path):
+    import imageio_ffmpeg
+
+    out = tmp_path / "a.mp4"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        animate.poinsot_animation(FIG6, 0.5, frames=3, fps=5, dpi=10, out=out)
+    reader = imageio_ffmpeg.read_frames(str(out))
+    meta = next(reader)
+    reader.close()
+    assert meta["fps"] == pytest.approx(5.0)
+    assert meta["duration"] == pytest.approx(3 / 5, abs=0.05)
+
+
+# C07: a catalog row of a real body keeps its solid on the command line
+def test_cli_catalog_row_draws_the_bodys_solid(tmp_path, capsys, monkeypatch):
+    drawn = spy_on_animations(monkeypatch)
+    cli_span(
+        tmp_path,
+        capsys,
+        [
+            "--box",
+            "0.071",
+            "0.147",
+            "0.0078",
+            "--mass",
+            "0.17",
+            "--n",
+            "3",
+            "--branch",
+            "SAM",
+            "--frames",
+            "2",
+        ],
+    )
+    (anim,) = drawn
+    assert anim.solid_kind == "box"
+    np.testing.assert_allclose(
+        anim.motion.body.moments, Body.box(0.071, 0.147, 0.0078, 0.17).moments, rtol=1e-12
+    )
+
+
+# M21: the default heading states |omega0|, the branch and T
+def test_default_heading_states_the_spin_rate():
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        anim = animate.poinsot_animation(FIG6, 0.5, speed=3.0, frames=2, dpi=10)
+    period = Motion.from_spin(FIG6, 0.5).period / 3.0
+    heading = anim._title.get_text()
+    assert heading.endswith(f"T = {period:.4g} s at |omega0| = 3 rad/s"), heading
+    assert f", {anim.motion.branch}," in heading
+
+
+# C08: the flip's title: T and the flip every T/2
+def test_cli_flip_title_states_half_the_period(tmp_path, capsys, monkeypatch):
+    drawn = spy_on_animations(monkeypatch)
+    cli_span(tmp_path, capsys, ["--preset", "t-handle", "--flip", "0.1", "--frames", "2"])
+    title = drawn[0]._title.get_text()
+    found = re.search(r"T = (\S+) s, flips every T/2 = (\S+) s", title)
+    assert found, title
+    whole, half = float(found.group(1)), float(found.group(2))
+    assert whole == pytest.approx(flip_period(T_HANDLE.moments, 0.1), rel=1e-3)
+    assert half == pytest.approx(whole / 2, rel=1e-3)
+    assert "tipped 0.1 rad" in title and "|omega0| = 1 rad/s" in title
+
+
+# M22: the body panel's caption states the solid's scale (length units -> ellipsoid units)
+def test_caption_states_the_solids_scale():
+    a, b, c, mass = 0.071, 0.147, 0.0078, 0.17
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        anim = animate.poinsot_animation(Body.box(a, b, c, mass), 0.5, frames=2, dpi=10)
+    # the box's corners are drawn on x.I.x = 0.95^2: s^2 sum I_k (side_k / 2)^2 = 0.95^2
+    moments = mass / 12 * np.array([b * b + c * c, a * a + c * c, a * a + b * b])
+    scale = 0.95 / math.sqrt(float(np.sum(moments * (np.array([a, b, c]) / 2) ** 2)))
+    (caption,) = [t.get_text() for t in anim.figure.texts if "drawn x" in t.get_text()]
+    shown = float(caption.split("drawn x")[1])
+    assert caption.split("\n")[1].startswith("box drawn x")
+    assert shown == pytest.approx(scale, rel=1e-2)  # 1.07e+03
+
+
+# C09: the title states --speed in its own --units
+def test_cli_title_states_speed_in_its_units(tmp_path, capsys, monkeypatch):
+    drawn = spy_on_animations(monkeypatch)
+    cli_span(
+        tmp_path,
+        capsys,
+        ["--preset", "fig6", "--theta", "0.5", "--speed", "60", "--units", "rpm", "--frames", "2"],
+    )
+    assert drawn[0]._title.get_text().endswith("at |omega0| = 60 rpm")
+
+
+# C10 (guard; C10 was equivalent, C10b/C10c -- count-1, times[-2] -- are killed here and by the suite)
+def test_cli_summary_counts_a_rows_q_periods(tmp_path, capsys):
+    row = animate.orbit_row(FIG6, p=7, q=2, branch="SAM")
+    period = Motion.from_spin(Body((row["I1"], row["I2"], row["I3"])), dtheta=row["dtheta"]).period
+    frames, span, turns = cli_span(
+        tmp_path,
+        capsys,
+        ["--preset", "fig6", "--p", "7", "--q", "2", "--branch", "SAM", "--frames", "2"],
+    )
+    assert (frames, turns) == (2, 2.0)
+    assert span == pytest.approx(2 * period, rel=1e-3)
+
+
+# C12 (equivalent: the applicability layer refuses first) -- kept as a guard of the refusal
+@pytest.mark.parametrize("spin", [["--n", "5", "--branch", "SAM"], ["--omega", "0.1", "1", "0.1"]])
+def test_cli_speed_with_an_orbit_or_throw_is_refused(tmp_path, capsys, monkeypatch, spin):
+    monkeypatch.chdir(tmp_path)
+    code = main(["animate", "--preset", "fig6", *spin, "--speed", "3", "--out", "a.gif"])
+    assert code == 2
+    assert "--speed applies to --theta, --dtheta and --flip" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+# C14: --units with neither --omega nor --speed is refused, not ignored
+def test_cli_units_without_a_rate_is_refused(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    code = main(
+        ["animate", "--preset", "fig6", "--theta", "0.5", "--units", "rpm", "--out", "a.gif"]
+    )
+    assert code == 2
+    assert "--units applies to --omega and --speed" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+# C16: --phi is part of the --theta spin
+def test_cli_phi_is_drawn(tmp_path, capsys, monkeypatch):
+    drawn = spy_on_animations(monkeypatch)
+    _, span, _ = cli_span(
+        tmp_path,
+        capsys,
+        ["--moments", "2", "3", "4", "--theta", "0.5", "--phi", "1.0", "--frames", "2"],
+    )
+    expected = np.array(
+        [math.sin(0.5) * math.cos(1.0), math.sin(0.5) * math.sin(1.0), math.cos(0.5)]
+    )
+    np.testing.assert_allclose(drawn[0].motion.omega0, expected, rtol=0, atol=1e-15)
+    assert span == pytest.approx(Motion(Body((2.0, 3.0, 4.0)), expected).period, rel=1e-3)
