@@ -204,7 +204,7 @@ def test_real_bodies_are_drawn_as_their_solids(tmp_path):
         assert form.max() == pytest.approx(0.95**2, rel=1e-12)
 
 
-def test_catalog_row_of_a_real_body_keeps_its_solid_and_units(tmp_path):
+def test_catalog_row_of_a_real_body_keeps_its_solid_and_units(tmp_path, monkeypatch):
     phone = Body.box(0.071, 0.147, 0.0078, 0.17, name="phone")
     row = animate.orbit_row(phone, n=3, branch="SAM")
     anim = animate.poinsot_animation(row, frames=3, dpi=20, body=phone)
@@ -215,6 +215,7 @@ def test_catalog_row_of_a_real_body_keeps_its_solid_and_units(tmp_path):
     with pytest.raises(InputError, match="not of the given body"):
         animate.poinsot_animation(row, frames=3, body=FIG6)
     out = tmp_path / "phone_n3.gif"
+    drawn = spy_on_animations(monkeypatch)
     assert (
         main(
             [
@@ -240,6 +241,11 @@ def test_catalog_row_of_a_real_body_keeps_its_solid_and_units(tmp_path):
         == 0
     )
     assert out.stat().st_size > 0
+    # the command line draws the row with the box's solid and moments (a
+    # mutant that dropped the body drew an ellipsoid; an audit)
+    (anim,) = drawn
+    assert anim.solid_kind == "box"
+    np.testing.assert_allclose(anim.motion.body.moments, phone.moments, rtol=1e-12)
 
 
 def test_flip_turns_the_intermediate_axis_over():
@@ -1314,34 +1320,6 @@ def test_mp4_plays_at_its_fps(tmp_path):
     reader.close()
     assert meta["fps"] == pytest.approx(5.0)
     assert meta["duration"] == pytest.approx(3 / 5, abs=0.05)
-
-
-# C07: a catalog row of a real body keeps its solid on the command line
-def test_cli_catalog_row_draws_the_bodys_solid(tmp_path, capsys, monkeypatch):
-    drawn = spy_on_animations(monkeypatch)
-    cli_span(
-        tmp_path,
-        capsys,
-        [
-            "--box",
-            "0.071",
-            "0.147",
-            "0.0078",
-            "--mass",
-            "0.17",
-            "--n",
-            "3",
-            "--branch",
-            "SAM",
-            "--frames",
-            "2",
-        ],
-    )
-    (anim,) = drawn
-    assert anim.solid_kind == "box"
-    np.testing.assert_allclose(
-        anim.motion.body.moments, Body.box(0.071, 0.147, 0.0078, 0.17).moments, rtol=1e-12
-    )
 
 
 # M21: the default heading states |omega0|, the branch and T

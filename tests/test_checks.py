@@ -8,6 +8,7 @@ import mpmath as mp
 import numpy as np
 import pytest
 from mp_formulas import period_and_total_phase
+from verify_faults import wrong_closed_form
 
 import orbits
 from orbits import Body, checks
@@ -136,22 +137,6 @@ def test_verify_small_run_and_report():
         assert 0.0 <= report.summary["checks"][name]["max_abs_error"] <= 1e-9
 
 
-def _mutate_closed_form(monkeypatch, factor):
-    """Make verify's kernel return the closed form (of omega0 and of theta)
-    ``factor`` times the true one, as a wrong formula would: every check is
-    then compared with a wrong value."""
-    from orbits.core import checks as kernel
-
-    original = kernel.check_batch
-    columns = [kernel.CHECK_COLUMNS.index(name) for name in ("closed_form", "closed_form_theta")]
-
-    def mutated(moments, theta, phi, ode_rtol, ode_atol, quad_rtol, out):
-        original(moments, theta, phi, ode_rtol, ode_atol, quad_rtol, out)
-        out[:, columns] *= factor
-
-    monkeypatch.setattr(kernel, "check_batch", mutated)
-
-
 def test_verify_at_a_tiny_tolerance_holds_each_check_to_its_own_floor(monkeypatch):
     """At tolerance 1e-18 (below what doubles can hold) each check is held to
     its floor: (b), (c) to 16 ulps of the phase, (a) to its integrator's error
@@ -164,7 +149,7 @@ def test_verify_at_a_tiny_tolerance_holds_each_check_to_its_own_floor(monkeypatc
         assert (report.table[column] <= checks.PHASE_ULPS * spacing).all()
     ode = report.summary["checks"]["ode_rotation"]
     assert ode["within_integrator_error_only"] == 15 and ode["max_fraction_of_allowance"] < 0.1
-    _mutate_closed_form(monkeypatch, 1.0 + 1e-12)
+    wrong_closed_form(monkeypatch, 1.0 + 1e-12)
     report = checks.verify(5, 3, tolerance=1e-18)
     assert not report.passed
     for name in ("montgomery", "exact_motion"):
@@ -195,7 +180,7 @@ def test_cli_verify_paper_count_and_ten_times(capsys, bodies, expected):
 
 def test_cli_verify_exit_code_and_table(capsys, tmp_path, monkeypatch):
     path = tmp_path / "ics.csv"
-    _mutate_closed_form(monkeypatch, 1.0 + 1e-9)
+    wrong_closed_form(monkeypatch, 1.0 + 1e-9)
     assert (
         main(
             [
@@ -984,7 +969,7 @@ def test_check_a_still_catches_a_closed_form_wrong_by_1e9(body, monkeypatch):
         assert (table["ode_allowance"] == 1e-9).all()
         assert (table["ode_allowance"] <= shift / 6.5).all()
         assert (table["ode_allowance"] <= shift / 10)[table["closed_form"].abs() >= 10].all()
-    _mutate_closed_form(monkeypatch, 1.0 + 1e-9)
+    wrong_closed_form(monkeypatch, 1.0 + 1e-9)
     wrong = checks.verify_body(body, 22)
     ode = wrong.summary["checks"]["ode_rotation"]
     assert not wrong.passed and not ode["passed"]

@@ -11,6 +11,7 @@ import sys
 import numpy as np
 import pandas as pd
 import pytest
+from verify_faults import wrong_closed_form
 
 import orbits
 from orbits.atomic import csv_float_options
@@ -456,20 +457,6 @@ LABELS = {
 }
 
 
-def _wrong_closed_form(monkeypatch, factor):
-    """verify's kernel returns the closed form `factor` times the true one."""
-    from orbits.core import checks as kernel
-
-    original = kernel.check_batch
-    columns = [kernel.CHECK_COLUMNS.index(n) for n in ("closed_form", "closed_form_theta")]
-
-    def mutated(moments, theta, phi, ode_rtol, ode_atol, quad_rtol, out):
-        original(moments, theta, phi, ode_rtol, ode_atol, quad_rtol, out)
-        out[:, columns] *= factor
-
-    monkeypatch.setattr(kernel, "check_batch", mutated)
-
-
 def _summary_lines(text):
     return {
         key: line
@@ -482,7 +469,7 @@ def _summary_lines(text):
 def test_verify_text_of_a_failing_run_agrees_with_its_json(capsys, monkeypatch):
     """V02 ('result: ok' always), V03 (.3f discrepancies: 0.000), V04 ('ok' for
     a failed check): the text summary's numbers and verdicts are the JSON's."""
-    _wrong_closed_form(monkeypatch, 1.0 + 1e-9)
+    wrong_closed_form(monkeypatch, 1.0 + 1e-9)
     argv = ["verify", "--bodies", 3, "--angles", 2, "--no-progress"]
     code, out, _ = run(capsys, *argv, "--json")
     assert code == 1
