@@ -394,8 +394,10 @@ def format_bytes(count):
     if not math.isfinite(count):
         return "more bytes than a double can count"
     for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
-        if count < 1024 or unit == "PiB":
-            # 1000 to 1023 in whole units: %.3g would write 1e+03
+        if unit == "PiB":
+            return f"{count:.3g} {unit}"
+        if count < 1023.5:  # else it would print as 1024 of this unit
+            # 999.5 to 1023.5 in whole units: %.3g would write 1e+03
             return f"{count:.3g} {unit}" if count < 999.5 else f"{count:.0f} {unit}"
         count /= 1024
     return f"{count:.3g} EiB"

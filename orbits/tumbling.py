@@ -1,7 +1,7 @@
 """Spins with a given total phase, or a given observed period ratio.
 
 :func:`spins_with_total_phase` finds every initial spin (``phi = 0``,
-``theta`` in (0, pi/2), both branches) whose total phase ``Delta alpha``
+``theta`` in [0, pi/2], both branches) whose total phase ``Delta alpha``
 (eqn:GeometricPhase) equals any given value, not only ``2 pi p/q``: it runs
 the closed-orbit search kernel (:mod:`orbits.core.search`) with that one
 level.  :func:`spins_with_period_ratio` turns an observed ratio

@@ -169,6 +169,9 @@ def test_serial_twin_never_loads_the_parallel_code_from_the_cache(tmp_path):
     import sys
 
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    # this tree's orbits first (not whatever the environment installed)
+    tree = str(Path(__file__).resolve().parents[1])
+    env["PYTHONPATH"] = tree + os.pathsep + env.get("PYTHONPATH", "")
     first = (
         "import numpy as np\n"
         "from orbits.core.tasks import start_threads\n"

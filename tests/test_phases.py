@@ -1016,7 +1016,9 @@ def test_phases_total_phase_is_clamped_to_two_pi_on_the_flat_edge():
         direct = np.asarray(orbits.total_phase(moments, angles), float)
     total = np.asarray(table["total_phase"], float)
     assert (total >= 2.0 * math.pi).all(), total - 2.0 * math.pi
-    np.testing.assert_array_equal(total, direct)
+    # the two routes agree to their kernels' spread (equal here; the clamp
+    # makes them so wherever the raw value rounds below 2 pi)
+    np.testing.assert_allclose(total, direct, rtol=8 * np.finfo(float).eps, atol=0)
 
 
 def test_one_body_with_many_azimuths():
