@@ -1064,10 +1064,16 @@ def test_min_at_end_tolerances_of_the_survey():  # C8 C9
 
 
 def test_estimate_counts_a_partial_last_chunk():  # C10
-    """The estimate counts the last, partial chunk."""
-    assert compute.survey_estimate(15, 3, 1, 10)[1] == pytest.approx(
-        0.0047544713439166865, rel=1e-12
-    )
+    """The estimate counts the last, partial chunk: 15 bodies in chunks of 10
+    are two chunks, as 20 are (the per-body terms cancel in each difference,
+    leaving the cost of a second chunk)."""
+
+    def seconds(bodies, chunk):
+        return compute.survey_estimate(bodies, 3, 1, chunk)[1]
+
+    partial = seconds(15, 10) - seconds(15, 15)
+    whole = seconds(20, 10) - seconds(20, 20)
+    assert whole > 0.0 and partial == pytest.approx(whole, rel=1e-12)
 
 
 def test_the_advised_chunk_fits(monkeypatch):  # C11
