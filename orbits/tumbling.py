@@ -60,7 +60,7 @@ def _solve(moments, targets, what, reachable=None):
             # there): the search wants the level strictly inside; a target
             # equal to the minimum it reports was refused as below it
             low, at = branch_minima(info)[branch]
-            if abs(target - low) <= 4.0 * np.spacing(target):
+            if abs(target - low) <= 4.0 * math.ulp(target):
                 found[-1] = [at]
         slot = _kernels.INFO_UNREACHED_SAM if sign == 1 else _kernels.INFO_UNREACHED_LAM
         unreached += int(info[slot])

@@ -174,6 +174,11 @@ def test_a_total_phase_at_a_branch_minimum_gives_the_end_spin():
     assert np.all(np.abs(table["residual"]) <= 8 * np.spacing(lam_end))
     with pytest.raises(InputError, match="at least 6.589020292142196"):
         spins_with_total_phase(FIG6, sam_end - 1e-14)
+    # the largest double: refused, without an overflow warning from its ulp
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(InputError, match="closer than"):
+            spins_with_total_phase(FIG6, np.finfo(float).max)
 
 
 def test_unreachable_ratio_states_each_branch_in_ratio_terms():
