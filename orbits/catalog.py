@@ -821,7 +821,7 @@ def _parameter_holds(column, sam, in_range=True):
     first test alone (a row written before m was kept <= 1).
     """
     i1, i2, i3, d, m = (column[name] for name in ("I1", "I2", "I3", "D", "m"))
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(all="ignore"):  # an edited cell of 1e308 or 0 is refused, not warned of
         quotient = np.where(
             sam,
             (i2 - i1) * (i3 - d) / ((i3 - i2) * (d - i1)),

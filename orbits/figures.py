@@ -290,7 +290,7 @@ def check_orbits_of(body, orbits, n_max=None, q_max=None):
             f"catalog rows that are no closed orbits of the body drawn ({error}); "
             "rows of another body? draw them with that body"
         ) from None
-    with np.errstate(invalid="ignore"):
+    with np.errstate(all="ignore"):
         miss = np.abs(phase - target)
         off = ~(miss <= RESIDUAL_TOLERANCE * target * (1.0 + 1e-6) + 4.0 * np.spacing(target))
     if off.any():

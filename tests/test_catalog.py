@@ -152,6 +152,8 @@ def test_csv_round_trip_is_bit_exact(tmp_path):
         (lambda f: f.assign(m=f["m"] * (1 + 1e-9)), "its m is not k\\^2"),
         (lambda f: f.assign(m=1.0 + 2.0**-52), "its m is not k\\^2"),
         (lambda f: f.assign(m=1.0 + 2.0**-40), "its m is not k\\^2"),
+        # the largest double: refused, not an overflow warning from its ulp
+        (lambda f: f.assign(m=np.finfo(float).max), "its m is not k\\^2"),
     ],
 )
 def test_read_catalog_checks_schema(tmp_path, mutate, message):
