@@ -300,6 +300,20 @@ def below_normal(values):
     return (magnitude > 0.0) & (magnitude < SMALLEST_NORMAL)
 
 
+def read_as_zero(text, value):
+    """How a decimal that reads as 0 is out of range, or None when it is not one.
+
+    ``1e-400`` parses to 0.0 though it is not zero: ``""`` (below the
+    smallest normal double), ``"negative and "`` for ``-1e-400``; None for
+    a value that is not 0.0 or a text that is a zero (``0.0e5``).  For the
+    command line's ``--moments`` and a ``--bodies`` file alike, which name
+    the value as typed rather than "moments (0, ...)".
+    """
+    if value != 0.0 or not any(digit in text.lower().split("e")[0] for digit in "123456789"):
+        return None
+    return "negative and " if text.strip().startswith("-") else ""
+
+
 def below_normal_message(text):
     """Why a subnormal moment ``text`` is refused (one line)."""
     return (

@@ -41,6 +41,7 @@ from ._args import (
     integer,
     listlike,
     path_argument,
+    read_as_zero,
     real_array,
     utf8_text,
     warn,
@@ -755,7 +756,7 @@ def _identity_problems(frame):
     ``n/q`` (:func:`orbits.search.closes_after`): an edited moment, period,
     energy, |L|, D, m or phase shows, though the phases are not evaluated again;
     and ``m`` is ``k^2`` of eqn:TK from the row's moments and ``D``
-    (:func:`_parameter_holds`).
+    (:func:`_is_k_squared`), in ``(0, 1]``.
     """
     from .search import closes_after
 
@@ -770,6 +771,8 @@ def _identity_problems(frame):
     }
     norm = np.sqrt(column["I1"] ** 2 + column["I2"] ** 2 + column["I3"] ** 2)
     energy, momentum = column["energy"], column["momentum"]
+    m = column["m"]
+    k_squared = _is_k_squared(column, frame["branch"].to_numpy() == "SAM")
     return [
         (~close(norm, np.ones_like(norm)), "its moments I1, I2, I3 are not of unit norm"),
         (
@@ -786,15 +789,13 @@ def _identity_problems(frame):
         ),
         (~close(momentum * momentum / (2.0 * energy), column["D"]), "its D is not M^2 / (2E)"),
         (
-            (column["m"] > 1.0)
-            & (column["m"] <= 1.0 + 16.0 * _EPS_ONE)
-            & _parameter_holds(column, frame["branch"].to_numpy() == "SAM", in_range=False),
+            k_squared & (m > 1.0) & (m <= 1.0 + 16.0 * _EPS_ONE),
             "its m is above 1 by rounding, as orbits wrote it before 2026-11-29 near "
             "the separatrix (now m <= 1); regenerate the catalog with the command "
             "in its header",
         ),
         (
-            ~_parameter_holds(column, frame["branch"].to_numpy() == "SAM"),
+            ~(k_squared & (m > 0.0) & (m <= 1.0)),
             "its m is not k^2 of its moments and D (eqn:TK), in (0, 1]",
         ),
         (
@@ -809,16 +810,16 @@ def _identity_problems(frame):
 _EPS_ONE = float(np.spacing(1.0))
 
 
-def _parameter_holds(column, sam, in_range=True):
-    """Whether each row's ``m`` is ``k^2`` of eqn:TK from its ``I1, I2, I3, D``, in ``(0, 1]``.
+def _is_k_squared(column, sam):
+    """Whether each row's ``m`` is ``k^2`` of eqn:TK from its ``I1, I2, I3, D``.
 
     ``m = (I2-I1)(I3-D) / ((I3-I2)(D-I1))`` on SAM, its ``1 <-> 3`` image on
     LAM, to :data:`IDENTITY_ULPS` ulps of ``m`` times the quotient's
     condition number ``I3/|I3-D| + D/|D-I1| + I2/(I2-I1) + I3/(I3-I2)``
     (the rounding of the moment and ``D`` columns; at most 2.2 of those
     measured on 5,032 rows of the committed catalogs and of near-symmetric,
-    near-flat and thin bodies up to n = 60).  ``in_range=False``: the
-    first test alone (a row written before m was kept <= 1).
+    near-flat and thin bodies up to n = 60).  The range ``(0, 1]`` is
+    checked beside it (:func:`_identity_problems`).
     """
     i1, i2, i3, d, m = (column[name] for name in ("I1", "I2", "I3", "D", "m"))
     with np.errstate(all="ignore"):  # an edited cell of 1e308 or 0 is refused, not warned of
@@ -828,8 +829,7 @@ def _parameter_holds(column, sam, in_range=True):
             (i3 - i2) * (d - i1) / ((i2 - i1) * (i3 - d)),
         )
         condition = i3 / np.abs(i3 - d) + d / np.abs(d - i1) + i2 / (i2 - i1) + i3 / (i3 - i2)
-        near = np.abs(quotient - m) <= IDENTITY_ULPS * np.spacing(m) * condition
-    return near & (m > 0.0) & (m <= 1.0) if in_range else near
+        return np.abs(quotient - m) <= IDENTITY_ULPS * np.spacing(m) * condition
 
 
 def _one_line(error):
@@ -1128,15 +1128,14 @@ def _arrow_numbers(column, given, problems, whole=None):
             if whole is None or whole[k]:
                 problems.setdefault(int(k), f"{column} {cell!r} is not a number")
     for k in np.flatnonzero(values == 0.0):
-        _note_underflow(column, given[int(k)].as_py(), int(k), problems, whole)
+        _note_underflow(column, given[int(k)].as_py(), 0.0, int(k), problems, whole)
     return values
 
 
-def _note_underflow(column, cell, k, problems, whole):
+def _note_underflow(column, cell, value, k, problems, whole):
     """A cell such as ``1e-400`` reads as 0: say so, not "moments (0, ...)"."""
-    mantissa = cell.strip().lower().split("e")[0]
-    if any(digit in mantissa for digit in "123456789") and (whole is None or whole[k]):
-        sign = "negative and " if mantissa.startswith("-") else ""
+    sign = read_as_zero(cell, value)
+    if sign is not None and (whole is None or whole[k]):
         problems.setdefault(
             k,
             f"{column} {cell.strip()} is {sign}below the smallest normal double "
@@ -1179,8 +1178,7 @@ def _python_cells(path, rest, header, start=0):
             for k, cell in enumerate(values):
                 if NUMBER.fullmatch(cell.strip()):
                     numbers[k] = float(cell)
-                    if numbers[k] == 0.0:
-                        _note_underflow(column, cell, k, problems, whole)
+                    _note_underflow(column, cell, numbers[k], k, problems, whole)
                 elif whole[k]:
                     problems.setdefault(k, f"{column} {cell!r} is not a number")
         columns.append(numbers)

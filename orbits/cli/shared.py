@@ -13,7 +13,7 @@ import math
 import re
 import sys
 
-from .._args import below_normal, below_normal_message
+from .._args import below_normal, below_normal_message, read_as_zero
 from ..bodies import PRESETS, Body
 from ..cells import numbers_label
 from ..errors import InputError
@@ -191,9 +191,8 @@ def moment(text):
     body computed would silently differ from the one typed.
     """
     value = finite(text)
-    if value == 0.0 and any(d in text.lower().split("e")[0] for d in "123456789"):
-        # 1e-400 reads as 0: say so, not "moments (0, 2, 2.5)"
-        sign = "negative and " if text.strip().startswith("-") else ""
+    sign = read_as_zero(text, value)
+    if sign is not None:  # 1e-400 reads as 0: say so, not "moments (0, 2, 2.5)"
         raise argparse.ArgumentTypeError(
             f"{text!r} is {sign}below the smallest normal double (2.2e-308): it reads as "
             "0; give the moments in larger units"
